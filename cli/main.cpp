@@ -1,0 +1,30 @@
+// hsi: harmonic shape interpolation of 2D shapes with holes, from the command line.
+#include <cstdio>
+#include <exception>
+
+#include "commands.h"
+#include "hsi/domain.h"
+
+int main(int argc, char** argv) {
+  CLI::App app{
+      "hsi - harmonic shape interpolation of 2D shapes with holes (Shi & Chen, SGP 2022).\n"
+      "Every frame is a harmonic map of the shape, certified locally injective.\n"
+      "Run 'hsi <command> --help' for the options of a command."};
+  app.require_subcommand(1);
+  app.set_version_flag("--version", "hsi 0.1.0");
+  hsi::cli::register_info(app);
+  hsi::cli::register_import_png(app);
+  hsi::cli::register_import_glyph(app);
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e);
+  } catch (const hsi::InputError& e) {
+    std::fprintf(stderr, "hsi: error: %s\n", e.what());
+    return 2;
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "hsi: error: %s\n", e.what());
+    return 1;
+  }
+  return 0;
+}

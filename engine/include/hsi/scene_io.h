@@ -1,0 +1,73 @@
+// Scene files: a shape, its cage, its texture, handles and keyframes, as JSON.
+//
+// Format (version 1; coordinates in any unit, y up):
+// {
+//   "hsi_scene": 1,                              // required format version
+//   "name": "annulus",                           // optional
+//   "shape": { "outer": [[x, y], ...],           // required, ≥ 3 vertices, any orientation
+//              "holes": [[[x, y], ...], ...] },  // optional
+//   "texture": "annulus.png",                    // optional, relative to the scene file
+//   "texture_rect": [x0, y0, x1, y1],            // optional: the source rectangle the texture
+//                                                //   covers (default: the shape's bounding box)
+//   "cage": { "clearance": 0.06,                 // optional: automatic cage options, or
+//             "max_vertices_per_loop": 32,
+//             "loops": [[[x, y], ...], ...],     //   a user cage: one loop per shape loop
+//             "hole_points": [[x, y], ...] },    //   and one point per hole (both or neither)
+//   "samples": 10000,                            // optional |G|
+//   "hessian_ratio": 0.2,                        // optional r
+//   "handles": [[x, y], ...],                    // optional handle positions on the shape
+//   "keyframes": [ { "time": 0.0,                // keyframes, in increasing time
+//                    "targets": [[x, y], ...],   //   one per handle, and/or
+//                    "phi": [[re, im], ...],     //   coefficients over the cage (m + N each)
+//                    "psi": [[re, im], ...] } ]
+// }
+// Every error names the file, the JSON path and, for syntax errors, line and column.
+#pragma once
+
+#include <array>
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "hsi/cage.h"
+#include "hsi/harmonic_map.h"
+
+namespace hsi {
+
+inline constexpr int kSceneVersion = 1;
+
+struct Keyframe {
+  double time = 0;
+  std::vector<cd> targets;             // one per handle (may be empty if coefficients given)
+  std::optional<HarmonicMap> coefficients;
+};
+
+struct Scene {
+  std::string name;
+  Shape shape;                          // normalized orientation after loading
+  std::filesystem::path texture;        // absolute or relative to base_dir; empty if none
+  std::optional<std::array<double, 4>> texture_rect;
+  CageOptions cage_options;
+  std::optional<Cage> cage;             // user-given cage
+  int samples = 10000;
+  double hessian_ratio = 0.2;
+  std::vector<cd> handles;
+  std::vector<Keyframe> keyframes;
+  std::filesystem::path base_dir;       // directory of the scene file
+
+  std::filesystem::path texture_path() const;  // resolved against base_dir
+};
+
+// Parses and validates (shape, cage if given, keyframe sizes). Throws InputError.
+Scene parse_scene(const std::string& json_text, const std::filesystem::path& base_dir,
+                  const std::string& source_name = "scene");
+Scene load_scene(const std::filesystem::path& path);
+std::string scene_to_json(const Scene& scene);
+// Writes atomically (temporary file, then rename), so a failed write leaves no partial file.
+void save_scene(const Scene& scene, const std::filesystem::path& path);
+
+// The cage a scene uses: its user cage (checked), or one built from its options.
+Cage scene_cage(const Scene& scene);
+
+}  // namespace hsi

@@ -1,0 +1,277 @@
+// Scene JSON reading and writing (format documented in hsi/scene_io.h).
+#include "hsi/scene_io.h"
+
+#include <cmath>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+
+namespace hsi {
+namespace {
+using json = nlohmann::json;
+
+struct Ctx {
+  std::string source;
+  [[noreturn]] void fail(const std::string& path, const std::string& what) const {
+    throw InputError(source + ": " + (path.empty() ? "" : path + ": ") + what);
+  }
+};
+
+std::string type_name(const json& j) { return j.type_name(); }
+
+double number(const Ctx& c, const json& j, const std::string& path) {
+  if (!j.is_number()) c.fail(path, "expected a number, got " + type_name(j));
+  const double v = j.get<double>();
+  if (!std::isfinite(v)) c.fail(path, "is not a finite number");
+  return v;
+}
+
+cd point(const Ctx& c, const json& j, const std::string& path) {
+  if (!j.is_array() || j.size() != 2) c.fail(path, "expected a point [x, y], got " + (j.is_array() ? "an array of " + std::to_string(j.size()) : type_name(j)));
+  return {number(c, j[0], path + "[0]"), number(c, j[1], path + "[1]")};
+}
+
+std::vector<cd> points(const Ctx& c, const json& j, const std::string& path) {
+  if (!j.is_array()) c.fail(path, "expected an array of points [[x, y], ...], got " + type_name(j));
+  std::vector<cd> out;
+  for (size_t i = 0; i < j.size(); ++i) out.push_back(point(c, j[i], path + "[" + std::to_string(i) + "]"));
+  return out;
+}
+
+VectorXcd coefficients(const Ctx& c, const json& j, const std::string& path) {
+  const std::vector<cd> v = points(c, j, path);
+  VectorXcd out(static_cast<Eigen::Index>(v.size()));
+  for (size_t i = 0; i < v.size(); ++i) out(static_cast<Eigen::Index>(i)) = v[i];
+  return out;
+}
+
+const json* field(const json& obj, const char* key) {
+  auto it = obj.find(key);
+  return it == obj.end() ? nullptr : &*it;
+}
+
+json to_json(const std::vector<cd>& pts) {
+  json a = json::array();
+  for (const cd& p : pts) a.push_back({p.real(), p.imag()});
+  return a;
+}
+json to_json(const VectorXcd& v) {
+  json a = json::array();
+  for (Eigen::Index i = 0; i < v.size(); ++i) a.push_back({v(i).real(), v(i).imag()});
+  return a;
+}
+
+std::string line_col(const std::string& text, size_t byte) {
+  size_t line = 1, col = 1;
+  for (size_t i = 0; i < std::min(byte, text.size()); ++i) {
+    if (text[i] == '\n') {
+      ++line;
+      col = 1;
+    } else {
+      ++col;
+    }
+  }
+  return "line " + std::to_string(line) + ", column " + std::to_string(col);
+}
+}  // namespace
+
+std::filesystem::path Scene::texture_path() const {
+  if (texture.empty() || texture.is_absolute()) return texture;
+  return base_dir / texture;
+}
+
+Scene parse_scene(const std::string& text, const std::filesystem::path& base_dir, const std::string& source) {
+  const Ctx c{source};
+  json j;
+  try {
+    j = json::parse(text);
+  } catch (const json::parse_error& e) {
+    std::string msg = e.what();
+    if (auto p = msg.find("]: "); p != std::string::npos) msg = msg.substr(p + 3);
+    c.fail("", "invalid JSON at " + line_col(text, e.byte > 0 ? e.byte - 1 : 0) + ": " + msg);
+  }
+  if (!j.is_object()) c.fail("", "expected a JSON object at the top level, got " + type_name(j));
+  const json* version = field(j, "hsi_scene");
+  if (!version) c.fail("", "missing \"hsi_scene\" (the format version); is this an hsi scene file?");
+  if (!version->is_number_integer()) c.fail("hsi_scene", "expected an integer version, got " + type_name(*version));
+  if (version->get<int>() != kSceneVersion)
+    c.fail("hsi_scene", "unsupported version " + std::to_string(version->get<int>()) + " (this hsi reads version " +
+                            std::to_string(kSceneVersion) + ")");
+  Scene s;
+  s.base_dir = base_dir;
+  if (const json* n = field(j, "name")) {
+    if (!n->is_string()) c.fail("name", "expected a string");
+    s.name = n->get<std::string>();
+  }
+  const json* shape = field(j, "shape");
+  if (!shape) c.fail("", "missing \"shape\"");
+  if (!shape->is_object()) c.fail("shape", "expected an object with \"outer\" and optional \"holes\"");
+  const json* outer = field(*shape, "outer");
+  if (!outer) c.fail("shape", "missing \"outer\"");
+  s.shape.outer = points(c, *outer, "shape.outer");
+  if (const json* holes = field(*shape, "holes")) {
+    if (!holes->is_array()) c.fail("shape.holes", "expected an array of loops");
+    for (size_t h = 0; h < holes->size(); ++h)
+      s.shape.holes.push_back(points(c, (*holes)[h], "shape.holes[" + std::to_string(h) + "]"));
+  }
+  try {
+    validate(s.shape);
+  } catch (const InputError& e) {
+    c.fail("shape", e.what());
+  }
+  s.shape = normalize(std::move(s.shape));
+
+  if (const json* t = field(j, "texture")) {
+    if (!t->is_string()) c.fail("texture", "expected a file path string");
+    s.texture = t->get<std::string>();
+  }
+  if (const json* r = field(j, "texture_rect")) {
+    if (!r->is_array() || r->size() != 4) c.fail("texture_rect", "expected [x0, y0, x1, y1]");
+    std::array<double, 4> rect{};
+    for (size_t i = 0; i < 4; ++i) rect[i] = number(c, (*r)[i], "texture_rect[" + std::to_string(i) + "]");
+    if (!(rect[2] > rect[0] && rect[3] > rect[1])) c.fail("texture_rect", "needs x1 > x0 and y1 > y0");
+    s.texture_rect = rect;
+  }
+  if (const json* cg = field(j, "cage")) {
+    if (!cg->is_object()) c.fail("cage", "expected an object");
+    if (const json* v = field(*cg, "clearance")) s.cage_options.clearance = number(c, *v, "cage.clearance");
+    if (const json* v = field(*cg, "max_vertices_per_loop")) {
+      if (!v->is_number_integer() || v->get<int>() < 4) c.fail("cage.max_vertices_per_loop", "expected an integer ≥ 4");
+      s.cage_options.max_vertices_per_loop = v->get<int>();
+    }
+    const json* loops = field(*cg, "loops");
+    const json* holes = field(*cg, "hole_points");
+    if (loops || holes) {
+      if (!loops || !holes) c.fail("cage", "a user cage needs both \"loops\" and \"hole_points\" (use [] for no holes)");
+      if (!loops->is_array()) c.fail("cage.loops", "expected an array of loops");
+      Cage cage;
+      for (size_t k = 0; k < loops->size(); ++k)
+        cage.loops.push_back(points(c, (*loops)[k], "cage.loops[" + std::to_string(k) + "]"));
+      cage.hole_points = points(c, *holes, "cage.hole_points");
+      for (size_t k = 0; k < cage.loops.size(); ++k) {
+        if (cage.loops[k].size() < 3) c.fail("cage.loops[" + std::to_string(k) + "]", "needs at least 3 vertices");
+        if ((signed_area(cage.loops[k]) > 0) != (k == 0)) std::reverse(cage.loops[k].begin(), cage.loops[k].end());
+      }
+      try {
+        check_cage(s.shape, cage);
+      } catch (const InputError& e) {
+        c.fail("cage", e.what());
+      }
+      s.cage = std::move(cage);
+    }
+  }
+  if (const json* v = field(j, "samples")) {
+    if (!v->is_number_integer() || v->get<long long>() < 100 || v->get<long long>() > 10000000)
+      c.fail("samples", "expected an integer between 100 and 10,000,000");
+    s.samples = v->get<int>();
+  }
+  if (const json* v = field(j, "hessian_ratio")) {
+    s.hessian_ratio = number(c, *v, "hessian_ratio");
+    if (!(s.hessian_ratio > 0 && s.hessian_ratio <= 1)) c.fail("hessian_ratio", "must lie in (0, 1]");
+  }
+  if (const json* v = field(j, "handles")) s.handles = points(c, *v, "handles");
+  for (size_t i = 0; i < s.handles.size(); ++i)
+    if (!point_in_shape(s.shape, s.handles[i]) && boundary_distance(s.shape, s.handles[i]) > 1e-9 * bounding_box(s.shape).diagonal())
+      c.fail("handles[" + std::to_string(i) + "]", "lies outside the shape");
+  if (const json* kfs = field(j, "keyframes")) {
+    if (!kfs->is_array()) c.fail("keyframes", "expected an array");
+    const int full = s.cage ? basis_size(*s.cage) : -1;
+    for (size_t k = 0; k < kfs->size(); ++k) {
+      const std::string p = "keyframes[" + std::to_string(k) + "]";
+      const json& kf = (*kfs)[k];
+      if (!kf.is_object()) c.fail(p, "expected an object");
+      Keyframe key;
+      const json* t = field(kf, "time");
+      if (!t) c.fail(p, "missing \"time\"");
+      key.time = number(c, *t, p + ".time");
+      if (!s.keyframes.empty() && key.time <= s.keyframes.back().time)
+        c.fail(p + ".time", "keyframe times must increase (previous keyframe is at " + std::to_string(s.keyframes.back().time) + ")");
+      if (const json* tg = field(kf, "targets")) {
+        key.targets = points(c, *tg, p + ".targets");
+        if (key.targets.size() != s.handles.size())
+          c.fail(p + ".targets", "has " + std::to_string(key.targets.size()) + " targets; the scene has " +
+                                     std::to_string(s.handles.size()) + " handles");
+      }
+      const json* phi = field(kf, "phi");
+      const json* psi = field(kf, "psi");
+      if (phi || psi) {
+        if (!phi || !psi) c.fail(p, "coefficients need both \"phi\" and \"psi\"");
+        HarmonicMap m{coefficients(c, *phi, p + ".phi"), coefficients(c, *psi, p + ".psi")};
+        if (m.phi.size() != m.psi.size()) c.fail(p, "\"phi\" and \"psi\" differ in length");
+        if (full < 0) c.fail(p, "coefficients need the scene's cage (\"cage\": {\"loops\", \"hole_points\"}) to be given");
+        if (m.phi.size() != full)
+          c.fail(p + ".phi", "has " + std::to_string(m.phi.size()) + " coefficients; the cage needs " + std::to_string(full) +
+                                 " (its vertices plus one per hole)");
+        key.coefficients = std::move(m);
+      }
+      if (key.targets.empty() && !key.coefficients && !s.handles.empty())
+        c.fail(p, "needs \"targets\" (one per handle) or coefficients \"phi\"/\"psi\"");
+      s.keyframes.push_back(std::move(key));
+    }
+  }
+  return s;
+}
+
+Scene load_scene(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw InputError(path.string() + ": cannot open the scene file");
+  std::ostringstream ss;
+  ss << in.rdbuf();
+  if (in.bad()) throw InputError(path.string() + ": read error");
+  return parse_scene(ss.str(), path.parent_path(), path.string());
+}
+
+std::string scene_to_json(const Scene& s) {
+  json j;
+  j["hsi_scene"] = kSceneVersion;
+  if (!s.name.empty()) j["name"] = s.name;
+  j["shape"]["outer"] = to_json(s.shape.outer);
+  j["shape"]["holes"] = json::array();
+  for (const Loop& h : s.shape.holes) j["shape"]["holes"].push_back(to_json(h));
+  if (!s.texture.empty()) j["texture"] = s.texture.generic_string();
+  if (s.texture_rect) j["texture_rect"] = *s.texture_rect;
+  j["cage"]["clearance"] = s.cage_options.clearance;
+  j["cage"]["max_vertices_per_loop"] = s.cage_options.max_vertices_per_loop;
+  if (s.cage) {
+    j["cage"]["loops"] = json::array();
+    for (const Loop& l : s.cage->loops) j["cage"]["loops"].push_back(to_json(l));
+    j["cage"]["hole_points"] = to_json(s.cage->hole_points);
+  }
+  j["samples"] = s.samples;
+  j["hessian_ratio"] = s.hessian_ratio;
+  if (!s.handles.empty()) j["handles"] = to_json(s.handles);
+  if (!s.keyframes.empty()) {
+    j["keyframes"] = json::array();
+    for (const Keyframe& k : s.keyframes) {
+      json kj;
+      kj["time"] = k.time;
+      if (!k.targets.empty()) kj["targets"] = to_json(k.targets);
+      if (k.coefficients) {
+        kj["phi"] = to_json(k.coefficients->phi);
+        kj["psi"] = to_json(k.coefficients->psi);
+      }
+      j["keyframes"].push_back(kj);
+    }
+  }
+  return j.dump(1) + "\n";
+}
+
+void save_scene(const Scene& scene, const std::filesystem::path& path) {
+  const std::string text = scene_to_json(scene);
+  std::filesystem::path tmp = path;
+  tmp += ".tmp";
+  {
+    std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
+    if (!out) throw InputError(path.string() + ": cannot write the scene file");
+    out << text;
+    if (!out.flush()) {
+      std::filesystem::remove(tmp);
+      throw InputError(path.string() + ": write failed");
+    }
+  }
+  std::filesystem::rename(tmp, path);
+}
+
+Cage scene_cage(const Scene& scene) { return scene.cage ? *scene.cage : build_cage(scene.shape, scene.cage_options); }
+
+}  // namespace hsi

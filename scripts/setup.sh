@@ -1,0 +1,21 @@
+#!/usr/bin/env bash
+# Installs the Debian 12 packages hsi needs (idempotent; skips what is present).
+set -euo pipefail
+pkgs=(
+  build-essential cmake ninja-build pkg-config
+  libeigen3-dev catch2 nlohmann-json3-dev libcli11-dev libstb-dev libpng-dev
+  libfreetype-dev fonts-dejavu-core libcgal-dev libpolyclipping-dev libcairo2-dev
+)
+missing=()
+for p in "${pkgs[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+if ((${#missing[@]})); then
+  echo "[setup] installing: ${missing[*]}"
+  SUDO=""; [ "$(id -u)" = 0 ] || SUDO="sudo"
+  export DEBIAN_FRONTEND=noninteractive
+  $SUDO apt-get update -qq
+  $SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}"
+else
+  echo "[setup] all packages present"
+fi

@@ -1,0 +1,7 @@
+#!/usr/bin/env bash
+# Set up, build (warnings as errors) and run the whole test suite through CTest.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+bash scripts/build.sh -DHSI_WARNINGS_AS_ERRORS=ON
+cd build
+ctest --output-on-failure -j"$(nproc)" --timeout 900
