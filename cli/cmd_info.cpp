@@ -24,7 +24,7 @@ void register_info(CLI::App& app) {
     const Cage cage = scene_cage(scene);
     const BoundarySamples G = sample_boundary(scene.shape, scene.samples);
     const std::vector<int> H = hessian_subset(G, scene.hessian_ratio);
-    const MapSpace map_space(cage, Gauge::Map), metric_space(cage, Gauge::Metric);
+    const MapSpace map_space(cage, Gauge::Map), metric_space(cage, Gauge::ModuloRigid);
     // Conditioning of the reduced basis on 2000 boundary points (more rows than unknowns).
     const BoundarySamples dense = sample_boundary(scene.shape, std::max(2000, map_space.dim()));
     const BasisRows rows = evaluate_basis(cage, dense.points, kBasisC | kBasisD);

@@ -5,6 +5,7 @@ pkgs=(
   build-essential cmake ninja-build pkg-config
   libeigen3-dev catch2 nlohmann-json3-dev libcli11-dev libstb-dev libpng-dev
   libfreetype-dev fonts-dejavu-core libcgal-dev libpolyclipping-dev libcairo2-dev
+  python3 python3-numpy
 )
 missing=()
 for p in "${pkgs[@]}"; do

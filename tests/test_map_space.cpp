@@ -33,7 +33,7 @@ int expected_n(const Cage& cage) {
 
 TEST_CASE("dimensions of the reduced space", "[map_space]") {
   const Cage cage = build_cage(test::bar_with_holes());
-  const MapSpace map(cage, Gauge::Map), metric(cage, Gauge::Metric);
+  const MapSpace map(cage, Gauge::Map), metric(cage, Gauge::ModuloRigid);
   const int n = expected_n(cage), N = cage.hole_count();
   CHECK(map.n() == n);
   CHECK(map.dim() == 4 * n - 2 * N - 2);
@@ -85,7 +85,7 @@ TEST_CASE("reduce/expand round trips (map gauge keeps f exactly)", "[map_space]"
 TEST_CASE("metric gauge: same f up to a rigid motion, same metric", "[map_space]") {
   const Shape s = test::annulus();
   const Cage cage = build_cage(s);
-  const MapSpace space(cage, Gauge::Metric);
+  const MapSpace space(cage, Gauge::ModuloRigid);
   const auto pts = test::interior_points(s, 300);
   const BasisRows rows = evaluate_basis(cage, pts);
   const HarmonicMap m = transform_image(cage, random_map(cage, 11), std::polar(1.0, 2.1), cd(5, -3));
@@ -121,7 +121,7 @@ TEST_CASE("every asset: n, and full rank of the reduced basis in both gauges", "
   for (const auto& path : scenes) {
     const Scene scene = load_scene(path);
     const Cage cage = scene_cage(scene);
-    const MapSpace map(cage, Gauge::Map), metric(cage, Gauge::Metric);
+    const MapSpace map(cage, Gauge::Map), metric(cage, Gauge::ModuloRigid);
     CHECK(map.n() == expected_n(cage));
     const BoundarySamples dense = sample_boundary(scene.shape, std::max(2000, 2 * map.dim()));
     const BasisRows rows = evaluate_basis(cage, dense.points, kBasisC | kBasisD);

@@ -50,8 +50,17 @@ Loop offset_loop(const Loop& loop, double delta) {
 // simple, every new edge stays at least min_dist from `boundary`, and (for the
 // outer cage) the removed triangle does not swallow the shape.
 Loop decimate(Loop cage, const Loop& boundary, double min_dist, int target, bool outer) {
+  // Near-duplicate vertices would give nearly dependent basis columns: merge them first.
+  Loop merged;
+  for (const cd& p : cage)
+    if (merged.empty() || std::abs(p - merged.back()) > 1e-4 * min_dist) merged.push_back(p);
+  while (merged.size() > 3 && std::abs(merged.front() - merged.back()) <= 1e-4 * min_dist) merged.pop_back();
+  cage = std::move(merged);
   const int n = static_cast<int>(cage.size());
   if (n <= target) return cage;
+  // Cap edge lengths so that vertices spread along long straight sides instead of
+  // gathering at rounded corners (the basis can then bend a long stroke).
+  const double max_edge = 2.0 * perimeter(cage) / target;
   std::vector<int> prev(static_cast<size_t>(n)), next(static_cast<size_t>(n)), version(static_cast<size_t>(n), 0);
   std::vector<char> alive(static_cast<size_t>(n), 1);
   for (int i = 0; i < n; ++i) {
@@ -70,14 +79,16 @@ Loop decimate(Loop cage, const Loop& boundary, double min_dist, int target, bool
   std::priority_queue<Item> heap;
   for (int i = 0; i < n; ++i) heap.push({tri_area(i), i, 0});
 
+  // Strictly inside: a vertex on the new edge is caught by the edge test below, and
+  // collinear vertices along a straight stroke must not block each other's removal.
   auto in_triangle = [](cd p, cd a, cd b, cd c) {
     const double d1 = cross(b - a, p - a), d2 = cross(c - b, p - b), d3 = cross(a - c, p - c);
-    const bool neg = d1 < 0 || d2 < 0 || d3 < 0, pos = d1 > 0 || d2 > 0 || d3 > 0;
-    return !(neg && pos);
+    return (d1 > 0 && d2 > 0 && d3 > 0) || (d1 < 0 && d2 < 0 && d3 < 0);
   };
   auto feasible = [&](int v) {
     const int a = prev[static_cast<size_t>(v)], b = next[static_cast<size_t>(v)];
     const cd pa = P(a), pb = P(b), pv = P(v);
+    if (std::abs(pb - pa) > max_edge) return false;
     const int nb = static_cast<int>(boundary.size());
     for (int i = 0; i < nb; ++i)
       if (segment_segment_distance(pa, pb, boundary[static_cast<size_t>(i)], boundary[static_cast<size_t>((i + 1) % nb)]) <

@@ -36,13 +36,13 @@ MapSpace::MapSpace(const Cage& cage, Gauge gauge) : gauge_(gauge) {
   std::vector<Eigen::Triplet<double>> t;
   int col = 0;
   for (int a = 0; a < n; ++a) {  // Re φ_a
-    if (gauge_ == Gauge::Metric && (a == 0 || a == 1)) continue;
+    if (gauge_ == Gauge::ModuloRigid && (a == 0 || a == 1)) continue;
     t.emplace_back(a, col, 1.0);
     if (is_log(a)) t.emplace_back(2 * n + a, col, 1.0);  // Re ψ_log = Re φ_log
     ++col;
   }
   for (int a = 0; a < n; ++a) {  // Im φ_a
-    if (gauge_ == Gauge::Metric && a == 0) continue;
+    if (gauge_ == Gauge::ModuloRigid && a == 0) continue;
     t.emplace_back(n + a, col, 1.0);
     if (is_log(a)) t.emplace_back(3 * n + a, col, -1.0);  // Im ψ_log = −Im φ_log
     ++col;
@@ -108,7 +108,7 @@ MapSpace::Canonical MapSpace::reduce(const HarmonicMap& input) const {
     map.phi(j) += std::conj(psi0);
   }
   Canonical out;
-  if (gauge_ == Gauge::Metric) {
+  if (gauge_ == Gauge::ModuloRigid) {
     out.translation = map.phi(0);
     for (int j = 0; j < outer_vertices_; ++j) map.phi(j) -= out.translation;
     const cd p1 = map.phi(1);

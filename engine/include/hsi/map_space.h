@@ -22,7 +22,7 @@ namespace hsi {
 
 enum class Gauge {
   Map,    // x determines f exactly: dim = 4n − 2N − 2
-  Metric  // x determines f up to a rigid motion: dim = 4n − 2N − 5
+  ModuloRigid  // x determines f up to a rigid motion: dim = 4n − 2N − 5
 };
 
 class MapSpace {
@@ -43,7 +43,7 @@ class MapSpace {
   HarmonicMap expand(const Eigen::VectorXd& x) const;
 
   // An equivalent map in this gauge: for Gauge::Map the same f exactly; for
-  // Gauge::Metric f_original(w) = rotation · f_canonical(w) + translation, |rotation| = 1.
+  // Gauge::ModuloRigid f_original(w) = rotation · f_canonical(w) + translation, |rotation| = 1.
   struct Canonical {
     Eigen::VectorXd x;
     cd rotation{1.0, 0.0};
@@ -69,7 +69,7 @@ class MapSpace {
 namespace hsi {
 
 // The real-linear map from reduced x to values at points: f (Gauge::Map) or
-// (f_z, conj f_zbar) (Gauge::Metric), as a real matrix with rows
+// (f_z, conj f_zbar) (Gauge::ModuloRigid), as a real matrix with rows
 // (Re, Im) per point and value. Its full column rank is what makes the
 // reduction free of redundancy (math.md §3).
 Eigen::MatrixXd reduced_evaluation_matrix(const MapSpace& space, const BasisRows& full_rows);
