@@ -14,7 +14,12 @@ MapSpace::MapSpace(const Cage& cage, Gauge gauge) : gauge_(gauge) {
   if (outer_vertices_ < 3) throw InputError("the cage's outer loop needs at least 3 vertices");
   for (const Loop& l : cage.loops)
     for (const cd& z : l) cage_vertices_.push_back(z);
-  for (int j = 0; j < outer_vertices_; ++j) active_.push_back(j);
+  for (int j = 0; j < outer_vertices_; ++j) {
+    active_.push_back(j);
+    if (std::abs(cage_vertices_[static_cast<size_t>(j)] - cage_vertices_[0]) >
+        std::abs(cage_vertices_[static_cast<size_t>(rotation_vertex_)] - cage_vertices_[0]))
+      rotation_vertex_ = j;
+  }
   for (int k = 1; k < static_cast<int>(cage.loops.size()); ++k) {
     const int off = cage.loop_offset(k);
     const int size = static_cast<int>(cage.loops[static_cast<size_t>(k)].size());
@@ -36,7 +41,7 @@ MapSpace::MapSpace(const Cage& cage, Gauge gauge) : gauge_(gauge) {
   std::vector<Eigen::Triplet<double>> t;
   int col = 0;
   for (int a = 0; a < n; ++a) {  // Re φ_a
-    if (gauge_ == Gauge::ModuloRigid && (a == 0 || a == 1)) continue;
+    if (gauge_ == Gauge::ModuloRigid && (a == 0 || a == rotation_vertex_)) continue;
     t.emplace_back(a, col, 1.0);
     if (is_log(a)) t.emplace_back(2 * n + a, col, 1.0);  // Re ψ_log = Re φ_log
     ++col;
@@ -111,8 +116,8 @@ MapSpace::Canonical MapSpace::reduce(const HarmonicMap& input) const {
   if (gauge_ == Gauge::ModuloRigid) {
     out.translation = map.phi(0);
     for (int j = 0; j < outer_vertices_; ++j) map.phi(j) -= out.translation;
-    const cd p1 = map.phi(1);
-    const cd r = std::abs(p1) > 0 ? cd(0, 1) * std::conj(p1) / std::abs(p1) : cd(1);  // r φ_1 ∈ i R+
+    const cd p1 = map.phi(rotation_vertex_);
+    const cd r = std::abs(p1) > 0 ? cd(0, 1) * std::conj(p1) / std::abs(p1) : cd(1);  // r φ_r ∈ i R+
     map.phi *= r;
     map.psi *= std::conj(r);
     out.rotation = std::conj(r);

@@ -9,8 +9,10 @@
 // The active real vector is v = (Re φ_a, Im φ_a, Re ψ_a, Im ψ_a) ∈ R^{4n} (the
 // paper's Appendix B order) and v = T x with the remaining constraints built in:
 //   ψ_log = conj φ_log (per hole), ψ_0 = 0 at outer vertex 0 (Φ and conj Ψ share
-//   constants); in the Metric gauge also φ_0 = 0 (translation) and Re φ_1 = 0
-//   (rotation), since the interpolation energy sees only f_z and conj f_zbar.
+//   constants); in the ModuloRigid gauge also φ_0 = 0 (translation) and
+//   Re φ_r = 0 (rotation; the paper's Re φ_1 = 0, with r the outer vertex farthest
+//   from vertex 0 so that the rotation is pinned firmly), since the interpolation
+//   energy sees only f_z and conj f_zbar.
 #pragma once
 
 #include <Eigen/SparseCore>
@@ -34,6 +36,7 @@ class MapSpace {
   int n() const { return static_cast<int>(active_.size()); }
   int dim() const { return static_cast<int>(T_.cols()); }
   const std::vector<int>& active() const { return active_; }  // active full-column indices
+  int rotation_vertex() const { return rotation_vertex_; }
   const Eigen::SparseMatrix<double>& T() const { return T_; } // 4n × dim, entries ±1
 
   // Restricts full basis rows to the active columns.
@@ -56,6 +59,7 @@ class MapSpace {
   Gauge gauge_;
   int full_size_ = 0;
   int outer_vertices_ = 0;
+  int rotation_vertex_ = 1;                   // outer vertex whose Re φ is fixed (ModuloRigid)
   std::vector<int> active_;
   std::vector<std::vector<int>> hole_loops_;  // full indices of each hole loop's vertices
   std::vector<cd> hole_vertices_;             // their positions (same order, flattened per hole)

@@ -1,0 +1,58 @@
+// The local injectivity certificate (paper Theorem 2 and §4.3.3; CW17 §8; math.md
+// §6). A harmonic map on Ω is locally injective iff f_z has no zero in Ω (the
+// argument principle on ∂Ω) and |f_z| > |f_zbar| on all of ∂Ω. Condition (b) is
+// proved between samples with a Lipschitz bound on every boundary segment and
+// adaptive subdivision; nothing is certified that the bound does not prove.
+//
+// This is the CPU reference that every other backend is checked against.
+#pragma once
+
+#include <memory>
+#include <string>
+
+#include "hsi/harmonic_map.h"
+#include "hsi/samples.h"
+
+namespace hsi {
+
+struct CertificateOptions {
+  int max_depth = 14;              // subdivision levels per segment before giving up
+  bool stop_at_first_failure = false;  // for line searches: the verdict is all that matters
+};
+
+struct CertificateResult {
+  bool certified = false;
+  std::string reason;   // empty when certified; otherwise what failed and where
+  // Where (b) could not be proved: loop, polygon edge, point; -1 if not applicable.
+  int fail_loop = -1, fail_edge = -1;
+  cd fail_point{0, 0};
+  int winding = 0;      // zeros of f_z inside Ω by the argument principle
+  // Certified bounds over ∂Ω (so over Ω by Theorem 2), valid when certified:
+  double min_margin = 0;      // min over ∂Ω of (lower |f_z| − upper |f_zbar|) = lower bound of σ2
+  double sigma1_max = 0;      // upper bound of the large singular value |f_z| + |f_zbar|
+  double sigma2_min = 0;      // lower bound of the small singular value |f_z| − |f_zbar|
+  double k_max = 0;           // upper bound of the dilatation |f_zbar| / |f_z| (< 1)
+  double conformal_max = 0;   // upper bound of σ1/σ2 = (1 + k)/(1 − k)
+  // Observed at the breakpoints (samples and polygon vertices), for reports:
+  double observed_sigma1_max = 0, observed_sigma2_min = 0, observed_k_max = 0;
+  long segments = 0, subdivisions = 0;
+};
+
+// Precomputed per shape and cage: the boundary broken at polygon vertices and
+// samples, the basis rows there, and the distance weights of the Lipschitz bound.
+class Certifier {
+ public:
+  Certifier(const Shape& shape, const Cage& cage, const BoundarySamples& samples);
+  ~Certifier();
+  Certifier(Certifier&&) noexcept;
+  Certifier& operator=(Certifier&&) noexcept;
+
+  CertificateResult certify(const HarmonicMap& map, const CertificateOptions& options = {}) const;
+  int breakpoint_count() const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace hsi

@@ -1,0 +1,232 @@
+// Local injectivity certificate: Lipschitz bounds on boundary segments with adaptive
+// subdivision, and the argument principle for f_z (math.md §6).
+#include "hsi/certificate.h"
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <limits>
+#include <numbers>
+#include <sstream>
+
+namespace hsi {
+
+struct Certifier::Impl {
+  const Cage cage;
+  int m = 0, N = 0;
+  // Breakpoints, loop by loop; segment i joins breakpoint i to its successor in the loop.
+  std::vector<cd> points;
+  std::vector<int> next, loop, edge;
+  MatrixXcd D, E;               // basis rows at the breakpoints (full columns)
+  Eigen::MatrixXd W;            // segments × m: 1 / dist(z_j, σ)²
+  Eigen::MatrixXd Wh;           // segments × N: 1 / dist(ρ_i, σ)³
+  std::vector<std::vector<int>> cage_loop_index;  // full index of each cage loop's vertices
+
+  Impl(const Shape& shape, const Cage& c, const BoundarySamples& s) : cage(c) {
+    m = cage.vertex_count();
+    N = cage.hole_count();
+    for (int l = 0; l < shape.loop_count(); ++l) {
+      const Loop& L = shape.loop(l);
+      const int first = static_cast<int>(points.size());
+      size_t k = static_cast<size_t>(s.loop_begin[static_cast<size_t>(l)]);
+      const size_t end = static_cast<size_t>(s.loop_begin[static_cast<size_t>(l) + 1]);
+      for (int e = 0; e < static_cast<int>(L.size()); ++e) {
+        points.push_back(L[static_cast<size_t>(e)]);
+        edge.push_back(e);
+        for (; k < end && s.edge[k] == e; ++k) {
+          if (std::abs(s.points[k] - points.back()) < 1e-14 * std::abs(points.back()) + 1e-300) continue;
+          points.push_back(s.points[k]);
+          edge.push_back(e);
+        }
+      }
+      const int count = static_cast<int>(points.size()) - first;
+      for (int i = 0; i < count; ++i) {
+        next.push_back(first + (i + 1) % count);
+        loop.push_back(l);
+      }
+    }
+    const BasisRows rows = evaluate_basis(cage, points, kBasisD | kBasisE);
+    D = rows.D;
+    E = rows.E;
+    const Eigen::Index S = static_cast<Eigen::Index>(points.size());
+    W.resize(S, m);
+    Wh.resize(S, N);
+    std::vector<cd> z;
+    for (const Loop& l : cage.loops) z.insert(z.end(), l.begin(), l.end());
+#pragma omp parallel for schedule(static)
+    for (Eigen::Index i = 0; i < S; ++i) {
+      const cd p = points[static_cast<size_t>(i)], q = points[static_cast<size_t>(next[static_cast<size_t>(i)])];
+      for (int j = 0; j < m; ++j) {
+        const double d = segment_distance(z[static_cast<size_t>(j)], p, q);
+        W(i, j) = 1 / (d * d);
+      }
+      for (int h = 0; h < N; ++h) {
+        const double d = segment_distance(cage.hole_points[static_cast<size_t>(h)], p, q);
+        Wh(i, h) = 1 / (d * d * d);
+      }
+    }
+    int off = 0;
+    for (const Loop& l : cage.loops) {
+      cage_loop_index.emplace_back();
+      for (size_t j = 0; j < l.size(); ++j) cage_loop_index.back().push_back(off++);
+    }
+  }
+
+  // |S_j| of summation by parts: f_zz = 1/(2πi) Σ S_j/(z_j − w) − Σ φ_log/(w − ρ)².
+  Eigen::VectorXd jump_magnitudes(const VectorXcd& c) const {
+    Eigen::VectorXd out(m);
+    for (size_t l = 0; l < cage.loops.size(); ++l) {
+      const Loop& z = cage.loops[l];
+      const auto& idx = cage_loop_index[l];
+      const size_t k = z.size();
+      auto delta = [&](size_t j) {  // slope on the edge ending at vertex j
+        const size_t jm = (j + k - 1) % k;
+        return (c(idx[j]) - c(idx[jm])) / (z[j] - z[jm]);
+      };
+      for (size_t j = 0; j < k; ++j) out(idx[j]) = std::abs(delta((j + 1) % k) - delta(j));
+    }
+    return out;
+  }
+};
+
+Certifier::Certifier(const Shape& shape, const Cage& cage, const BoundarySamples& samples)
+    : impl_(std::make_unique<Impl>(shape, cage, samples)) {}
+Certifier::~Certifier() = default;
+Certifier::Certifier(Certifier&&) noexcept = default;
+Certifier& Certifier::operator=(Certifier&&) noexcept = default;
+int Certifier::breakpoint_count() const { return static_cast<int>(impl_->points.size()); }
+
+namespace {
+
+struct Values {
+  cd a, b, a1, b1;  // f_z, conj f_zbar and their z-derivatives
+};
+
+struct SegmentOutcome {
+  bool ok = true;
+  double arg = 0;  // change of arg f_z along the segment
+  double margin = std::numeric_limits<double>::infinity();
+  double sigma1 = 0, sigma2 = std::numeric_limits<double>::infinity(), k = 0;
+  long pieces = 0;
+  cd fail_point{0, 0};
+};
+
+}  // namespace
+
+CertificateResult Certifier::certify(const HarmonicMap& map, const CertificateOptions& opt) const {
+  const Impl& I = *impl_;
+  if (map.phi.size() != I.m + I.N || map.psi.size() != I.m + I.N)
+    throw InputError("certificate: the map has " + std::to_string(map.phi.size()) + " coefficients; the cage needs " +
+                     std::to_string(I.m + I.N));
+  CertificateResult r;
+  if (!map.phi.allFinite() || !map.psi.allFinite()) {
+    r.reason = "the map's coefficients are not finite";
+    return r;
+  }
+  const VectorXcd a = I.D * map.phi, b = I.D * map.psi, a1 = I.E * map.phi, b1 = I.E * map.psi;
+  // Lipschitz constants of f_zz and of (conj f_zbar)' per segment (bounds on the third derivatives).
+  const double inv2pi = 1 / (2 * std::numbers::pi);
+  Eigen::VectorXd logmag(I.N);
+  for (int h = 0; h < I.N; ++h) logmag(h) = std::abs(map.phi(I.m + h));
+  const Eigen::VectorXd La = inv2pi * (I.W * I.jump_magnitudes(map.phi)) + 2 * (I.Wh * logmag);
+  const Eigen::VectorXd Lb = inv2pi * (I.W * I.jump_magnitudes(map.psi)) + 2 * (I.Wh * logmag);
+
+  const Eigen::Index S = static_cast<Eigen::Index>(I.points.size());
+  std::vector<SegmentOutcome> out(static_cast<size_t>(S));
+  std::atomic<bool> stop{false};
+
+  // Proves (b) and the arg condition on [p, q] from values at its ends, subdividing
+  // (new basis rows at midpoints; the parent's Lipschitz constants stay valid).
+  auto prove = [&](auto&& self, cd p, cd q, const Values& vp, const Values& vq, double lipA, double lipB, int depth,
+                   SegmentOutcome& o) -> void {
+    const double len = std::abs(q - p);
+    const double fzz_max = (std::abs(vp.a1) + std::abs(vq.a1)) / 2 + lipA * len / 2;  // bound of |f_zz| on σ
+    const double bz_max = (std::abs(vp.b1) + std::abs(vq.b1)) / 2 + lipB * len / 2;
+    const double a_lo = (std::abs(vp.a) + std::abs(vq.a)) / 2 - fzz_max * len / 2;
+    const double a_hi = (std::abs(vp.a) + std::abs(vq.a)) / 2 + fzz_max * len / 2;
+    const double b_hi = (std::abs(vp.b) + std::abs(vq.b)) / 2 + bz_max * len / 2;
+    // The image of σ under f_z stays in the disc |w − f_z(p)| ≤ fzz_max·len, which must exclude 0
+    // for the principal arg increment to be the true one.
+    const bool arg_ok = fzz_max * len < std::abs(vp.a);
+    if (a_lo > b_hi && arg_ok) {
+      o.pieces++;
+      o.arg += std::arg(vq.a / vp.a);
+      o.margin = std::min(o.margin, a_lo - b_hi);
+      o.sigma1 = std::max(o.sigma1, a_hi + b_hi);
+      o.sigma2 = std::min(o.sigma2, a_lo - b_hi);
+      o.k = std::max(o.k, b_hi / a_lo);
+      return;
+    }
+    if (depth >= opt.max_depth || stop.load(std::memory_order_relaxed)) {
+      o.ok = false;
+      o.pieces++;
+      o.margin = std::min(o.margin, a_lo - b_hi);
+      o.fail_point = (p + q) / 2.0;
+      return;
+    }
+    const cd mid = (p + q) / 2.0;
+    const cd w[1] = {mid};
+    const BasisRows rows = evaluate_basis(I.cage, w, kBasisD | kBasisE);
+    const Values vm{(rows.D * map.phi)(0), (rows.D * map.psi)(0), (rows.E * map.phi)(0), (rows.E * map.psi)(0)};
+    self(self, p, mid, vp, vm, lipA, lipB, depth + 1, o);
+    if (!o.ok) return;
+    self(self, mid, q, vm, vq, lipA, lipB, depth + 1, o);
+  };
+
+#pragma omp parallel for schedule(dynamic, 64)
+  for (Eigen::Index i = 0; i < S; ++i) {
+    if (stop.load(std::memory_order_relaxed)) continue;
+    const size_t u = static_cast<size_t>(i), v = static_cast<size_t>(I.next[u]);
+    const Values vp{a(i), b(i), a1(i), b1(i)};
+    const Eigen::Index j = static_cast<Eigen::Index>(v);
+    const Values vq{a(j), b(j), a1(j), b1(j)};
+    SegmentOutcome& o = out[u];
+    prove(prove, I.points[u], I.points[v], vp, vq, La(i), Lb(i), 0, o);
+    if (!o.ok && opt.stop_at_first_failure) stop.store(true, std::memory_order_relaxed);
+  }
+
+  r.certified = true;
+  double arg_total = 0;
+  r.min_margin = std::numeric_limits<double>::infinity();
+  r.sigma2_min = std::numeric_limits<double>::infinity();
+  r.observed_sigma2_min = std::numeric_limits<double>::infinity();
+  for (Eigen::Index i = 0; i < S; ++i) {
+    const SegmentOutcome& o = out[static_cast<size_t>(i)];
+    r.segments++;
+    r.subdivisions += std::max<long>(0, o.pieces - 1);
+    if (!o.ok && r.certified) {
+      r.certified = false;
+      r.fail_loop = I.loop[static_cast<size_t>(i)];
+      r.fail_edge = I.edge[static_cast<size_t>(i)];
+      r.fail_point = o.fail_point;
+    }
+    arg_total += o.arg;
+    r.min_margin = std::min(r.min_margin, o.margin);
+    r.sigma1_max = std::max(r.sigma1_max, o.sigma1);
+    r.sigma2_min = std::min(r.sigma2_min, o.sigma2);
+    r.k_max = std::max(r.k_max, o.k);
+    const double aa = std::abs(a(i)), bb = std::abs(b(i));
+    r.observed_sigma1_max = std::max(r.observed_sigma1_max, aa + bb);
+    r.observed_sigma2_min = std::min(r.observed_sigma2_min, aa - bb);
+    r.observed_k_max = std::max(r.observed_k_max, bb / aa);
+  }
+  if (!r.certified) {
+    std::ostringstream s;
+    s.precision(6);
+    s << "|f_z| > |f_zbar| could not be proved on " << loop_name(r.fail_loop) << " edge " << r.fail_edge << " near ("
+      << r.fail_point.real() << ", " << r.fail_point.imag() << ")";
+    if (r.observed_sigma2_min <= 0) s << "; the map folds there (|f_zbar| >= |f_z| at a sample)";
+    r.reason = s.str();
+    return r;
+  }
+  r.winding = static_cast<int>(std::lround(arg_total / (2 * std::numbers::pi)));
+  if (r.winding != 0) {
+    r.certified = false;
+    r.reason = "f_z has " + std::to_string(r.winding) + " zero(s) inside the shape (argument principle): the map folds inside";
+    return r;
+  }
+  r.conformal_max = (1 + r.k_max) / (1 - r.k_max);
+  return r;
+}
+
+}  // namespace hsi

@@ -1,0 +1,199 @@
+// The Newton machinery: the CPU core's energy, gradient and Hessian against finite
+// differences and against a naive assembly, PSD-ness, the safe step, convergence.
+#include <catch2/catch.hpp>
+
+#include <Eigen/Eigenvalues>
+#include <random>
+
+#include "hsi/newton.h"
+#include "hsi/shape_setup.h"
+#include "test_shapes.h"
+
+using namespace hsi;
+
+namespace {
+
+struct Fixture {
+  ShapeSetup setup;
+  std::unique_ptr<NewtonCore> core;
+  explicit Fixture(Shape s, int samples = 300, double ratio = 1.0)
+      : setup(s, build_cage(s), samples, ratio), core(make_cpu_newton_core(setup.D_G, setup.H)) {}
+  const MapSpace& space() const { return setup.metric_space; }
+  Eigen::VectorXd perturbed_identity(unsigned seed, double amp) const {
+    Eigen::VectorXd x = space().reduce(identity_map(setup.cage)).x;
+    std::mt19937 rng(seed);
+    std::normal_distribution<double> g(0, amp);
+    for (Eigen::Index i = 0; i < x.size(); ++i) x(i) += g(rng);
+    return x;
+  }
+  // Target metrics: the pull-back metric of a map at every sample.
+  std::vector<Metric> metrics_of(const Eigen::VectorXd& x) const {
+    const HarmonicMap m = space().expand(x);
+    const MapValues v = evaluate_map(evaluate_basis(setup.cage, setup.G.points, kBasisD), m);
+    std::vector<Metric> g;
+    for (Eigen::Index i = 0; i < v.f_z.size(); ++i) g.push_back(pullback_metric(v.f_z(i), v.fzbar_conj(i)));
+    return g;
+  }
+  double E(const Eigen::VectorXd& x) {
+    core->set_coefficients(space().T() * x);
+    return core->energy();
+  }
+  Eigen::VectorXd grad(const Eigen::VectorXd& x) {
+    core->set_coefficients(space().T() * x);
+    return space().T().transpose() * core->gradient();
+  }
+};
+
+}  // namespace
+
+TEST_CASE("core gradient matches finite differences of the energy", "[newton]") {
+  Fixture fx(test::annulus());
+  fx.core->set_targets(fx.metrics_of(fx.perturbed_identity(1, 0.02)));
+  const Eigen::VectorXd x = fx.perturbed_identity(2, 0.02);
+  const Eigen::VectorXd g = fx.grad(x);
+  const double h = 1e-6;
+  double worst = 0;
+  for (Eigen::Index i = 0; i < x.size(); ++i) {
+    Eigen::VectorXd dx = Eigen::VectorXd::Zero(x.size());
+    dx(i) = h;
+    worst = std::max(worst, std::abs(g(i) - (fx.E(x + dx) - fx.E(x - dx)) / (2 * h)));
+  }
+  INFO("max abs error " << worst << ", |g| = " << g.norm());
+  CHECK(worst < 1e-6 * std::max(1.0, g.norm()));
+}
+
+TEST_CASE("core exact Hessian matches finite differences of the gradient", "[newton]") {
+  Fixture fx(test::bar_with_holes(), 300, 1.0);  // H = G so the Hessian averages what the gradient does
+  fx.core->set_targets(fx.metrics_of(fx.perturbed_identity(3, 0.01)));
+  const Eigen::VectorXd x = fx.perturbed_identity(4, 0.01);
+  fx.core->set_coefficients(fx.space().T() * x);
+  const Eigen::MatrixXd Hx = fx.space().T().transpose() * fx.core->hessian(HessianProjection::PartProj, true) * fx.space().T();
+  const double h = 1e-6;
+  double worst = 0;
+  for (Eigen::Index i = 0; i < x.size(); ++i) {
+    Eigen::VectorXd dx = Eigen::VectorXd::Zero(x.size());
+    dx(i) = h;
+    const Eigen::VectorXd col = (fx.grad(x + dx) - fx.grad(x - dx)) / (2 * h);
+    worst = std::max(worst, (Hx.col(i) - col).cwiseAbs().maxCoeff());
+  }
+  INFO("max abs error " << worst << ", |H| = " << Hx.norm());
+  CHECK(worst < 1e-5 * std::max(1.0, Hx.cwiseAbs().maxCoeff()));
+}
+
+TEST_CASE("structured Hessian assembly equals the naive 4n x 4n sum", "[newton]") {
+  Fixture fx(test::annulus(), 200, 0.5);
+  fx.core->set_targets(fx.metrics_of(fx.perturbed_identity(5, 0.03)));
+  const Eigen::VectorXd v = fx.space().T() * fx.perturbed_identity(6, 0.03);
+  fx.core->set_coefficients(v);
+  const int n = fx.core->n();
+  const Eigen::VectorXcd phi = v.segment(0, n).cast<cd>() + cd(0, 1) * v.segment(n, n).cast<cd>();
+  const Eigen::VectorXcd psi = v.segment(2 * n, n).cast<cd>() + cd(0, 1) * v.segment(3 * n, n).cast<cd>();
+  const std::vector<Metric> g = fx.metrics_of(fx.perturbed_identity(5, 0.03));
+  for (HessianProjection p : {HessianProjection::Delete, HessianProjection::FullProj, HessianProjection::PartProj}) {
+    Eigen::MatrixXd naive = Eigen::MatrixXd::Zero(4 * n, 4 * n);
+    for (int s : fx.setup.H) {
+      const Eigen::RowVectorXcd D = fx.setup.D_G.row(s);
+      Eigen::MatrixXd B = Eigen::MatrixXd::Zero(4, 4 * n);  // Eq. 13, block-diagonal for φ and ψ
+      B.block(0, 0, 1, n) = D.real();
+      B.block(0, n, 1, n) = -D.imag();
+      B.block(1, 0, 1, n) = D.imag();
+      B.block(1, n, 1, n) = D.real();
+      B.block(2, 2 * n, 2, 2 * n) = B.block(0, 0, 2, 2 * n);
+      const SampleDerivatives d = isometric_derivatives(g[static_cast<size_t>(s)], D * phi, D * psi, p);
+      naive += B.transpose() * d.hess * B;
+    }
+    naive /= static_cast<double>(fx.setup.H.size());
+    const Eigen::MatrixXd fast = fx.core->hessian(p);
+    CHECK((fast - naive).cwiseAbs().maxCoeff() < 1e-10 * naive.cwiseAbs().maxCoeff());
+  }
+}
+
+TEST_CASE("assembled projected Hessians are PSD on random states", "[newton]") {
+  Fixture fx(test::bar_with_holes(), 400, 0.2);
+  for (unsigned seed = 10; seed < 16; ++seed) {
+    fx.core->set_targets(fx.metrics_of(fx.perturbed_identity(seed, 0.05)));
+    fx.core->set_coefficients(fx.space().T() * fx.perturbed_identity(seed + 100, 0.05));
+    for (HessianProjection p : {HessianProjection::Delete, HessianProjection::FullProj, HessianProjection::PartProj}) {
+      const Eigen::MatrixXd H = fx.core->hessian(p);
+      const Eigen::VectorXd ev = Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(H).eigenvalues();
+      INFO(to_string(p) << ": eigenvalues in [" << ev.minCoeff() << ", " << ev.maxCoeff() << "]");
+      CHECK(ev.minCoeff() >= -1e-10 * ev.maxCoeff());
+    }
+  }
+}
+
+TEST_CASE("the reduced Hessian is positive definite (Cholesky succeeds) on every asset", "[newton][assets]") {
+  for (const auto& path : test::asset_scenes()) {
+    INFO(path.filename().string());
+    const Scene scene = load_scene(path);
+    const auto setup = make_shape_setup(scene, 2000, 0.2);
+    auto core = make_cpu_newton_core(setup->D_G, setup->H);
+    core->set_coefficients(setup->metric_space.T() * setup->metric_space.reduce(identity_map(setup->cage)).x);
+    const Eigen::MatrixXd Hr =
+        setup->metric_space.T().transpose() * core->hessian(HessianProjection::PartProj) * setup->metric_space.T();
+    CHECK(Eigen::LLT<Eigen::MatrixXd>(Hr).info() == Eigen::Success);
+  }
+}
+
+TEST_CASE("max safe step is where a sample first reaches |f_z| = |f_zbar|", "[newton]") {
+  Fixture fx(test::annulus());
+  const Eigen::VectorXd x = fx.perturbed_identity(20, 0.01);
+  fx.core->set_coefficients(fx.space().T() * x);
+  std::mt19937 rng(21);
+  std::normal_distribution<double> g(0, 1);
+  Eigen::VectorXd d(x.size());
+  for (Eigen::Index i = 0; i < d.size(); ++i) d(i) = g(rng);
+  fx.core->set_direction(fx.space().T() * d);
+  const double s = fx.core->max_safe_step();
+  REQUIRE(std::isfinite(s));
+  auto min_gap = [&](double t) {
+    const MapValues v = evaluate_map(evaluate_basis(fx.setup.cage, fx.setup.G.points, kBasisD), fx.space().expand(x + t * d));
+    return (v.f_z.cwiseAbs() - v.fzbar_conj.cwiseAbs()).minCoeff();
+  };
+  CHECK(min_gap(0.999 * s) > 0);
+  CHECK(std::abs(min_gap(s)) < 1e-8);
+  CHECK(std::isfinite(fx.core->energy_at(0.99 * s)));
+  CHECK(std::isinf(fx.core->energy_at(1.01 * s)));
+}
+
+TEST_CASE("Newton recovers a map from its own metric (energy 2, same map up to rigid motion)", "[newton]") {
+  for (const Shape& s : {test::annulus(), test::bar_with_holes()}) {
+    Fixture fx(s, 1000, 1.0);
+    const Eigen::VectorXd x_star = fx.perturbed_identity(30, 0.03);
+    REQUIRE(fx.setup.certifier.certify(fx.space().expand(x_star)).certified);
+    fx.core->set_targets(fx.metrics_of(x_star));
+    const Eigen::VectorXd x0 = fx.space().reduce(identity_map(fx.setup.cage)).x;
+    NewtonOptions o;
+    o.tolerance = 1e-12;
+    const NewtonResult r = newton_solve(*fx.core, fx.space(), &fx.setup.certifier, nullptr, x0, o);
+    INFO(r.message << ", iterations " << r.iterations << ", energy " << r.energy);
+    CHECK(r.converged);
+    CHECK(r.certified);
+    CHECK(r.iterations <= 25);
+    CHECK(r.energy == Approx(2.0).epsilon(1e-9));
+    // The metric fixes the map up to a rigid motion. The coefficients themselves are
+    // only weakly identifiable (near-null directions of the Cauchy basis), so compare
+    // maps, not coefficients: a least-squares rigid fit at interior points.
+    const auto pts = test::interior_points(s, 300);
+    const VectorXcd fa = evaluate_map(fx.setup.cage, fx.space().expand(r.x), pts).f;
+    const VectorXcd fb = evaluate_map(fx.setup.cage, fx.space().expand(x_star), pts).f;
+    const cd ma = fa.mean(), mb = fb.mean();
+    const cd dot = ((fa.array() - ma) * (fb.array() - mb).conjugate()).sum();
+    const cd R = dot / std::abs(dot);
+    CHECK(((fa.array() - ma) - R * (fb.array() - mb)).abs().maxCoeff() < 1e-5 * bounding_box(s).diagonal());
+    // Quadratic convergence: the last steps are full Newton steps.
+    CHECK(r.log.back().step == 1.0);
+  }
+}
+
+TEST_CASE("Newton refuses to start from a folded map", "[newton]") {
+  Fixture fx(test::annulus());
+  HarmonicMap m = identity_map(fx.setup.cage);
+  // f = w + 1.5 conj(w): orientation-reversing, |f_zbar| > |f_z| everywhere.
+  m = affine_map(fx.setup.cage, 1.0, 1.5, 0.0);
+  const Eigen::VectorXd x0 = fx.space().reduce(m).x;
+  const NewtonResult r = newton_solve(*fx.core, fx.space(), &fx.setup.certifier, nullptr, x0, {});
+  CHECK(r.iterations == 0);
+  CHECK_FALSE(r.converged);
+  CHECK_THAT(r.message, Catch::Matchers::Contains("folds") || Catch::Matchers::Contains("not certified"));
+}
