@@ -1,0 +1,53 @@
+// Importing a shape from the alpha channel of a PNG sprite.
+//
+// The boundary is the iso-line of alpha at `alpha_threshold`, traced by marching
+// squares on the pixel centres (the image is padded with one transparent pixel so
+// that every contour closes), with vertices interpolated linearly along cell edges.
+// Saddle cells (two opposite corners opaque, the other two transparent) are decided
+// by the average of the four corners, i.e. the bilinear interpolant at the cell
+// centre: above the threshold the opaque corners are joined, otherwise they are
+// separated. Loops are classified as boundaries (opaque on their inside) or holes,
+// each hole is given to the smallest boundary that contains it, and only the
+// largest piece (boundary area minus its holes) is kept; smaller pieces and holes
+// under 4 px² are dropped with a warning. Each loop is then simplified with
+// Douglas–Peucker for closed polylines; a loop whose simplification would cross
+// itself or another loop is simplified again at a smaller tolerance, down to no
+// simplification at all (the traced loops are simple and disjoint).
+//
+// Coordinates: pixel (i, j) (column i, row j from the top) covers the output square
+// [i, i+1] × [H−j−1, H−j] times pixel_size, so y points up and texture_rect, which
+// covers the whole image, maps the sprite onto the shape unchanged.
+#pragma once
+
+#include <array>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "hsi/domain.h"
+
+namespace hsi {
+
+struct PngImportOptions {
+  double alpha_threshold = 0.5;  // in (0,1); the contour is the iso-line of alpha at this level
+  double tolerance = 0.75;       // simplification tolerance in pixels (Douglas–Peucker on closed loops)
+  double pixel_size = 1.0;       // output units per pixel
+};
+
+struct PngShape {
+  Shape shape;                          // normalized (outer CCW, holes CW) and validated
+  int width = 0, height = 0;            // image size in pixels
+  std::array<double, 4> texture_rect{};  // [x0,y0,x1,y1]: the whole image in output units
+  std::vector<std::string> warnings;    // e.g. "dropped 2 smaller pieces (largest kept: 93% of the opaque area)"
+};
+
+// Largest accepted image side, in pixels.
+inline constexpr int kPngMaxSide = 16384;
+
+// Reads RGBA, grey+alpha, or any PNG with a tRNS chunk (palette, grey or RGB),
+// 8 or 16 bits. Throws InputError naming the file and the problem: missing file,
+// not a PNG, corrupt or truncated data, no alpha channel, no opaque pixels, image
+// too large, bad options, or a shape that fails validate().
+PngShape import_png_alpha(const std::filesystem::path& png, const PngImportOptions& options = {});
+
+}  // namespace hsi
