@@ -9,5 +9,6 @@ namespace hsi::cli {
 void register_info(CLI::App& app);
 void register_import_png(CLI::App& app);
 void register_import_glyph(CLI::App& app);
+void register_keyframes(CLI::App& app);
 
 }  // namespace hsi::cli

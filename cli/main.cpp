@@ -15,6 +15,7 @@ int main(int argc, char** argv) {
   hsi::cli::register_info(app);
   hsi::cli::register_import_png(app);
   hsi::cli::register_import_glyph(app);
+  hsi::cli::register_keyframes(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <memory>
 
 namespace hsi::cli {
@@ -84,6 +85,115 @@ void plot_cage(const std::filesystem::path& png, const Shape& shape, const Cage&
       cairo_arc(cr, q.real(), q.imag(), 1.2, 0, 2 * M_PI);
       cairo_fill(cr);
     }
+  }
+  cairo_surface_flush(surf.get());
+  if (cairo_surface_write_to_png(surf.get(), png.string().c_str()) != CAIRO_STATUS_SUCCESS)
+    throw std::runtime_error("cannot write " + png.string());
+}
+
+}  // namespace hsi::cli
+
+namespace hsi::cli {
+
+void plot_map(const std::filesystem::path& png, const Shape& shape, const Cage& cage, const HarmonicMap& map,
+              const MapPlot& extras, int width_px) {
+  // Boundary images (dense) and grid lines inside the rest shape.
+  const BoundarySamples dense = sample_boundary(shape, 4000);
+  std::vector<std::vector<cd>> lines;
+  const BoundingBox bb = bounding_box(shape);
+  const int count = 24;
+  const double step = std::max(bb.hi.real() - bb.lo.real(), bb.hi.imag() - bb.lo.imag()) / count;
+  const double fine = step / 12;
+  for (int dir = 0; dir < 2; ++dir) {
+    const double lo = dir == 0 ? bb.lo.real() : bb.lo.imag(), hi = dir == 0 ? bb.hi.real() : bb.hi.imag();
+    const double lo2 = dir == 0 ? bb.lo.imag() : bb.lo.real(), hi2 = dir == 0 ? bb.hi.imag() : bb.hi.real();
+    for (double u = lo + step / 2; u < hi; u += step) {
+      std::vector<cd> run;
+      for (double w = lo2; w <= hi2 + fine / 2; w += fine) {
+        const cd p = dir == 0 ? cd(u, w) : cd(w, u);
+        if (point_in_shape(shape, p)) {
+          run.push_back(p);
+        } else if (!run.empty()) {
+          lines.push_back(run);
+          run.clear();
+        }
+      }
+      if (!run.empty()) lines.push_back(run);
+    }
+  }
+  std::vector<cd> pts = dense.points;
+  for (const auto& l : lines) pts.insert(pts.end(), l.begin(), l.end());
+  const VectorXcd f = evaluate_map(evaluate_basis(cage, pts, kBasisC), map).f;
+
+  double inf = std::numeric_limits<double>::infinity();
+  cd lo(inf, inf), hi(-inf, -inf);
+  auto grow = [&](cd p) {
+    lo = {std::min(lo.real(), p.real()), std::min(lo.imag(), p.imag())};
+    hi = {std::max(hi.real(), p.real()), std::max(hi.imag(), p.imag())};
+  };
+  for (Eigen::Index i = 0; i < f.size(); ++i) grow(f(i));
+  for (const cd& t : extras.targets) grow(t);
+  const double pad = 24, title_h = extras.title.empty() ? 0 : 22;
+  const double sx = hi.real() - lo.real(), sy = hi.imag() - lo.imag();
+  const double scale = (width_px - 2 * pad) / std::max({sx, sy * 0.75, 1e-300});
+  const int height_px = static_cast<int>(std::ceil(sy * scale + 2 * pad + title_h));
+  const Frame fr{lo, scale, width_px, height_px, pad};
+  std::unique_ptr<cairo_surface_t, decltype(&cairo_surface_destroy)> surf(
+      cairo_image_surface_create(CAIRO_FORMAT_ARGB32, width_px, height_px), cairo_surface_destroy);
+  std::unique_ptr<cairo_t, decltype(&cairo_destroy)> ctx(cairo_create(surf.get()), cairo_destroy);
+  cairo_t* cr = ctx.get();
+  cairo_set_source_rgb(cr, 1, 1, 1);
+  cairo_paint(cr);
+  cairo_set_fill_rule(cr, CAIRO_FILL_RULE_EVEN_ODD);
+  size_t off = 0;
+  for (int l = 0; l < shape.loop_count(); ++l) {
+    const size_t n = static_cast<size_t>(dense.loop_begin[static_cast<size_t>(l) + 1] - dense.loop_begin[static_cast<size_t>(l)]);
+    Loop img(n);
+    for (size_t i = 0; i < n; ++i) img[i] = f(static_cast<Eigen::Index>(off + i));
+    off += n;
+    path(cr, fr, img);
+  }
+  if (extras.uncertified)
+    cairo_set_source_rgb(cr, 0.98, 0.72, 0.72);
+  else
+    cairo_set_source_rgb(cr, 0.85, 0.9, 0.97);
+  cairo_fill_preserve(cr);
+  cairo_set_source_rgb(cr, 0.12, 0.25, 0.5);
+  cairo_set_line_width(cr, 1.6);
+  cairo_stroke(cr);
+  cairo_set_source_rgba(cr, 0.2, 0.35, 0.6, 0.55);
+  cairo_set_line_width(cr, 0.8);
+  for (const auto& l : lines) {
+    for (size_t i = 0; i < l.size(); ++i) {
+      const cd q = fr.px(f(static_cast<Eigen::Index>(off + i)));
+      if (i == 0)
+        cairo_move_to(cr, q.real(), q.imag());
+      else
+        cairo_line_to(cr, q.real(), q.imag());
+    }
+    off += l.size();
+    cairo_stroke(cr);
+  }
+  cairo_set_line_width(cr, 2);
+  for (const cd& t : extras.targets) {
+    const cd q = fr.px(t);
+    cairo_set_source_rgb(cr, 0.9, 0.5, 0.0);
+    cairo_arc(cr, q.real(), q.imag(), 6, 0, 2 * M_PI);
+    cairo_stroke(cr);
+  }
+  for (const cd& h : extras.handles_image) {
+    const cd q = fr.px(h);
+    cairo_set_source_rgb(cr, 0.8, 0.1, 0.1);
+    cairo_arc(cr, q.real(), q.imag(), 3.5, 0, 2 * M_PI);
+    cairo_fill(cr);
+  }
+  if (!extras.title.empty() || extras.uncertified) {
+    cairo_set_source_rgb(cr, extras.uncertified ? 0.8 : 0.1, 0.1, 0.1);
+    cairo_select_font_face(cr, "sans-serif", CAIRO_FONT_SLANT_NORMAL, CAIRO_FONT_WEIGHT_NORMAL);
+    cairo_set_font_size(cr, 14);
+    cairo_move_to(cr, pad, 18);
+    const std::string t = extras.title + (extras.uncertified ? "  [NOT CERTIFIED]" : "");
+    cairo_show_text(cr, t.c_str());
   }
   cairo_surface_flush(surf.get());
   if (cairo_surface_write_to_png(surf.get(), png.string().c_str()) != CAIRO_STATUS_SUCCESS)

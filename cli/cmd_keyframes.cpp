@@ -1,0 +1,74 @@
+// hsi keyframes SCENE: solves the keyframes posed by handle targets (CW17), certifies
+// those given as coefficients, and writes the coefficients back into the scene.
+#include <cstdio>
+
+#include "commands.h"
+#include "hsi/keyframes.h"
+#include "plot.h"
+
+namespace hsi::cli {
+
+void register_keyframes(CLI::App& app) {
+  struct Opts {
+    std::string scene, out, png_dir;
+    bool force = false;
+    double lambda = 1e5;
+    int stages = 8;
+  };
+  auto o = std::make_shared<Opts>();
+  CLI::App* cmd = app.add_subcommand(
+      "keyframes",
+      "Solve a scene's keyframes from handle targets (certified, locally injective) and write their coefficients back");
+  cmd->add_option("scene", o->scene, "Scene file (.json)")->required()->check(CLI::ExistingFile);
+  cmd->add_option("-o,--output", o->out, "Write the solved scene here (default: overwrite SCENE)");
+  cmd->add_option("--png", o->png_dir, "Draw each keyframe to DIR/keyframe_K.png");
+  cmd->add_flag("--force", o->force, "Re-solve keyframes that already have coefficients (if they have targets)");
+  cmd->add_option("--lambda", o->lambda, "Positional weight (relative to size^2)")->capture_default_str();
+  cmd->add_option("--stages", o->stages, "Drag the handles to their targets in this many steps")->capture_default_str();
+  cmd->callback([o] {
+    Scene scene = load_scene(o->scene);
+    if (scene.keyframes.empty()) throw InputError(o->scene + ": the scene has no keyframes");
+    // Coefficients are stored over a cage: keep the one they were solved with.
+    if (!scene.cage) scene.cage = build_cage(scene.shape, scene.cage_options);
+    const auto setup = make_shape_setup(scene);
+    KeyframeOptions ko;
+    ko.lambda = o->lambda;
+    ko.stages = o->stages;
+    if (!o->png_dir.empty()) std::filesystem::create_directories(o->png_dir);
+    HarmonicMap previous = identity_map(setup->cage);
+    bool all_ok = true;
+    for (size_t k = 0; k < scene.keyframes.size(); ++k) {
+      Keyframe& key = scene.keyframes[k];
+      const std::string label = "keyframe " + std::to_string(k) + " (t = " + std::to_string(key.time) + ")";
+      if (key.coefficients && !(o->force && !key.targets.empty())) {
+        key.coefficients = import_keyframe(*setup, *key.coefficients, label);
+        std::printf("%-28s given as coefficients: certified\n", label.c_str());
+      } else {
+        if (key.targets.empty()) throw InputError(label + ": has neither targets nor coefficients");
+        const KeyframeResult r = author_keyframe(*setup, scene.handles, key.targets, previous, ko);
+        std::printf("%-28s %3d Newton iterations, %8.1f ms, energy %.4f, %s\n", label.c_str(), r.iterations, r.ms,
+                    r.energy, r.message.c_str());
+        all_ok = all_ok && r.certified && r.reached;
+        if (!r.certified) throw std::runtime_error(label + ": " + r.message);
+        key.coefficients = r.map;
+      }
+      previous = *key.coefficients;
+      if (!o->png_dir.empty()) {
+        MapPlot extras;
+        extras.handles_image = map_points(setup->cage, previous, scene.handles);
+        extras.targets = key.targets;
+        extras.title = scene.name + " " + label;
+        plot_map(std::filesystem::path(o->png_dir) / ("keyframe_" + std::to_string(k) + ".png"), scene.shape, setup->cage,
+                 previous, extras);
+      }
+    }
+    const std::filesystem::path out = o->out.empty() ? std::filesystem::path(o->scene) : std::filesystem::path(o->out);
+    if (out.parent_path() != std::filesystem::path(o->scene).parent_path() && !scene.texture.empty() &&
+        scene.texture.is_relative())
+      scene.texture = std::filesystem::relative(scene.texture_path(), out.parent_path().empty() ? "." : out.parent_path());
+    save_scene(scene, out);
+    std::printf("wrote %s%s\n", out.string().c_str(), all_ok ? "" : " (some targets were not reached: see above)");
+  });
+}
+
+}  // namespace hsi::cli

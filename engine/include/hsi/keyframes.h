@@ -1,0 +1,57 @@
+// Keyframes (math.md §7, CW17 point-to-point deformation): a harmonic map made by
+// dragging handles, minimising the symmetric Dirichlet distortion on ∂Ω plus a
+// strong positional penalty with the certified Newton solver, so every keyframe is
+// locally injective by construction. Keyframes can also be imported as
+// coefficients; they are certified on import.
+#pragma once
+
+#include <functional>
+#include <span>
+
+#include "hsi/newton.h"
+#include "hsi/shape_setup.h"
+
+namespace hsi {
+
+struct KeyframeOptions {
+  double lambda = 1e5;      // positional weight, relative to the shape's size squared
+  int stages = 8;           // targets are approached in this many steps, as if dragged
+  int stage_iterations = 30;
+  NewtonOptions newton = [] {
+    NewtonOptions o;
+    o.max_iterations = 300;
+    o.tolerance = 1e-10;
+    return o;
+  }();
+  double reach_tolerance = 1e-3;  // a target counts as reached within this fraction of the size
+};
+
+struct KeyframeResult {
+  HarmonicMap map;
+  bool certified = false;
+  bool reached = false;
+  double max_target_error = 0;  // in shape units
+  int worst_handle = -1;
+  int iterations = 0;
+  double ms = 0;
+  double energy = 0;            // mean symmetric Dirichlet energy on ∂Ω (2 = isometric)
+  CertificateResult certificate;
+  std::string message;
+};
+
+// Poses the shape so that handles land on targets, from a certified start map
+// (e.g. the identity or the previous keyframe). Never returns a folding map:
+// if the targets cannot be reached without folding, the result is the closest
+// certified map and the message says so.
+KeyframeResult author_keyframe(const ShapeSetup& setup, std::span<const cd> handles, std::span<const cd> targets,
+                               const HarmonicMap& start, const KeyframeOptions& options = {},
+                               const std::function<void(int stage, int stages)>& progress = {});
+
+// Certifies a map given as coefficients; throws InputError naming the problem if it
+// has the wrong size, breaks ψ_log = conj φ_log, or is not certified locally injective.
+HarmonicMap import_keyframe(const ShapeSetup& setup, const HarmonicMap& map, const std::string& what = "keyframe");
+
+// Positions of points under a map.
+std::vector<cd> map_points(const Cage& cage, const HarmonicMap& map, std::span<const cd> points);
+
+}  // namespace hsi

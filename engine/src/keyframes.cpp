@@ -1,0 +1,108 @@
+// Keyframe authoring by handles (CW17) and import of coefficient keyframes.
+#include "hsi/keyframes.h"
+
+#include <chrono>
+#include <sstream>
+
+namespace hsi {
+
+std::vector<cd> map_points(const Cage& cage, const HarmonicMap& map, std::span<const cd> points) {
+  const VectorXcd f = evaluate_map(evaluate_basis(cage, points, kBasisC), map).f;
+  return std::vector<cd>(f.data(), f.data() + f.size());
+}
+
+KeyframeResult author_keyframe(const ShapeSetup& setup, std::span<const cd> handles, std::span<const cd> targets,
+                               const HarmonicMap& start, const KeyframeOptions& o,
+                               const std::function<void(int, int)>& progress) {
+  const auto t0 = std::chrono::steady_clock::now();
+  if (handles.size() != targets.size())
+    throw InputError("keyframe: " + std::to_string(targets.size()) + " targets for " + std::to_string(handles.size()) + " handles");
+  for (size_t k = 0; k < targets.size(); ++k)
+    if (!std::isfinite(targets[k].real()) || !std::isfinite(targets[k].imag()))
+      throw InputError("keyframe: target " + std::to_string(k) + " is not finite");
+  // A handle must lie on the shape: inside a hole the basis is not the map (and is
+  // singular at the hole point).
+  for (size_t k = 0; k < handles.size(); ++k) {
+    const cd h = handles[k];
+    if (point_in_shape(setup.shape, h) || boundary_distance(setup.shape, h) <= 1e-9 * setup.size) continue;
+    std::string where = "outside the outer loop";
+    for (int l = 1; l < setup.shape.loop_count(); ++l)
+      if (point_in_loop(setup.shape.loop(l), h)) where = "inside " + loop_name(l);
+    throw InputError("keyframe: handle " + std::to_string(k) + " at (" + std::to_string(h.real()) + ", " +
+                     std::to_string(h.imag()) + ") lies " + where + "; handles must be on the shape");
+  }
+  const MapSpace& space = setup.map_space;
+  Eigen::VectorXd x = space.reduce(import_keyframe(setup, start, "the start map")).x;
+
+  // f(handles) = A x: the positional term λ' Σ |f(p_k) − q_k|², λ' = λ / size².
+  const BasisRows rows = evaluate_basis(setup.cage, handles, kBasisC);
+  const Eigen::MatrixXd A = reduced_evaluation_matrix(space, rows);
+  const double lam = o.lambda / (setup.size * setup.size);
+  const std::vector<cd> from = map_points(setup.cage, start, handles);
+
+  auto core = make_cpu_newton_core(setup.D_G, setup.H);  // identity target metric: symmetric Dirichlet
+  KeyframeResult r;
+  const int stages = std::max(1, o.stages);
+  NewtonResult last;
+  for (int st = 1; st <= stages; ++st) {
+    if (progress) progress(st, stages);
+    const double w = static_cast<double>(st) / stages;
+    Eigen::VectorXd q(2 * static_cast<Eigen::Index>(handles.size()));
+    for (size_t k = 0; k < handles.size(); ++k) {
+      const cd t = from[k] + w * (targets[k] - from[k]);
+      q(2 * static_cast<Eigen::Index>(k)) = t.real();
+      q(2 * static_cast<Eigen::Index>(k) + 1) = t.imag();
+    }
+    QuadraticTerm quad{2 * lam * A.transpose() * A, -2 * lam * A.transpose() * q, lam * q.squaredNorm()};
+    NewtonOptions no = o.newton;
+    if (st < stages) {
+      no.max_iterations = o.stage_iterations;
+      no.tolerance = 1e-6;
+    }
+    last = newton_solve(*core, space, &setup.certifier, &quad, x, no);
+    r.iterations += last.iterations;
+    x = last.x;
+  }
+  r.map = space.expand(x);
+  r.certificate = last.certificate;
+  r.certified = last.certified;
+  r.energy = core->energy();
+  const std::vector<cd> got = map_points(setup.cage, r.map, handles);
+  for (size_t k = 0; k < handles.size(); ++k) {
+    const double e = std::abs(got[k] - targets[k]);
+    if (e > r.max_target_error) {
+      r.max_target_error = e;
+      r.worst_handle = static_cast<int>(k);
+    }
+  }
+  r.reached = r.max_target_error <= o.reach_tolerance * setup.size;
+  std::ostringstream m;
+  m.precision(3);
+  if (!r.certified)
+    m << "not certified: " << r.certificate.reason;
+  else if (!r.reached)
+    m << "targets not reached without folding: handle " << r.worst_handle << " stops " << r.max_target_error
+      << " from its target; this is the closest certified map (" << last.message << ")";
+  else
+    m << "reached all targets (max error " << r.max_target_error << "), certified";
+  r.message = m.str();
+  r.ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+  return r;
+}
+
+HarmonicMap import_keyframe(const ShapeSetup& setup, const HarmonicMap& map, const std::string& what) {
+  const int full = setup.map_space.full_size();
+  if (map.phi.size() != full || map.psi.size() != full)
+    throw InputError(what + ": has " + std::to_string(map.phi.size()) + " coefficients; the cage needs " + std::to_string(full));
+  if (!map.phi.allFinite() || !map.psi.allFinite()) throw InputError(what + ": coefficients are not finite");
+  try {
+    (void)setup.map_space.reduce(map);  // checks ψ_log = conj φ_log
+  } catch (const InputError& e) {
+    throw InputError(what + ": " + e.what());
+  }
+  const CertificateResult c = setup.certifier.certify(map);
+  if (!c.certified) throw InputError(what + " is not locally injective: " + c.reason);
+  return map;
+}
+
+}  // namespace hsi

@@ -1,0 +1,86 @@
+// Keyframe authoring by handles (math.md §7) and import of coefficient keyframes.
+#include <catch2/catch.hpp>
+
+#include "hsi/keyframes.h"
+#include "test_shapes.h"
+
+using namespace hsi;
+using Catch::Matchers::Contains;
+
+namespace {
+std::unique_ptr<ShapeSetup> setup_for(const Shape& s, int samples = 2000) {
+  return std::make_unique<ShapeSetup>(s, build_cage(s), samples, 0.2);
+}
+}  // namespace
+
+TEST_CASE("a rigid pose is reached exactly and reproduces the rigid map", "[keyframes]") {
+  const auto setup = setup_for(test::annulus());
+  const std::vector<cd> handles = {{0.7, 0}, {-0.35, 0.6}, {-0.35, -0.6}};
+  const cd r = std::polar(1.0, 0.5), t(0.3, -0.2);
+  std::vector<cd> targets;
+  for (const cd& h : handles) targets.push_back(r * h + t);
+  const KeyframeResult k = author_keyframe(*setup, handles, targets, identity_map(setup->cage));
+  INFO(k.message);
+  CHECK(k.certified);
+  CHECK(k.reached);
+  CHECK(k.energy == Approx(2.0).epsilon(1e-6));
+  const auto pts = test::interior_points(setup->shape, 200);
+  const std::vector<cd> f = map_points(setup->cage, k.map, pts);
+  for (size_t i = 0; i < pts.size(); ++i) CHECK(std::abs(f[i] - (r * pts[i] + t)) < 1e-4);
+}
+
+TEST_CASE("a large bend of a bar with holes is reached and certified", "[keyframes]") {
+  const auto setup = setup_for(test::bar_with_holes());
+  const std::vector<cd> handles = {{0.2, 0.5}, {1.4, 0.5}, {2.6, 0.5}, {3.8, 0.5}};
+  // Bend the centre line y = 0.5 onto a quarter circle (90°).
+  const double R = 3.6 / (std::numbers::pi / 2);
+  std::vector<cd> targets;
+  for (const cd& h : handles) {
+    const double a = (h.real() - 2.0) / R;
+    targets.push_back(cd(2.0 + R * std::sin(a), 0.5 + R * (1 - std::cos(a))));
+  }
+  int last_stage = 0;
+  const KeyframeResult k = author_keyframe(*setup, handles, targets, identity_map(setup->cage), {},
+                                           [&](int stage, int) { last_stage = stage; });
+  INFO(k.message << ", " << k.iterations << " iterations");
+  CHECK(k.certified);
+  CHECK(k.reached);
+  CHECK(k.max_target_error < 1e-3);
+  CHECK(last_stage == KeyframeOptions{}.stages);
+  CHECK(k.certificate.certified);
+  CHECK(k.energy > 2.0);
+}
+
+TEST_CASE("targets no map can reach end at the closest certified map, with a message", "[keyframes]") {
+  // Two handles 1e-3 apart sent 3 units apart: the singular values inside are bounded
+  // by those on the boundary (Theorem 2), so this needs a stretch of 3000 on ∂Ω, far
+  // more distortion than the positional term can pay; the solver must stop at a
+  // certified map and say the targets were not reached.
+  const auto setup = setup_for(test::bar_with_holes());
+  const std::vector<cd> handles = {{1.4, 0.5}, {1.401, 0.5}, {0.2, 0.5}};
+  const std::vector<cd> targets = {{0.5, 0.5}, {3.5, 0.5}, {0.2, 0.5}};
+  KeyframeOptions o;
+  o.newton.max_iterations = 60;
+  const KeyframeResult k = author_keyframe(*setup, handles, targets, identity_map(setup->cage), o);
+  CHECK(k.certified);
+  CHECK_FALSE(k.reached);
+  CHECK_THAT(k.message, Contains("not reached") && Contains("closest certified map"));
+  CHECK(setup->certifier.certify(k.map).certified);
+}
+
+TEST_CASE("imported keyframes are certified; folding or malformed ones are refused", "[keyframes]") {
+  const auto setup = setup_for(test::annulus(), 1000);
+  CHECK_NOTHROW(import_keyframe(*setup, affine_map(setup->cage, cd(1.2, 0.3), 0.2, 1.0)));
+  CHECK_THROWS_WITH(import_keyframe(*setup, affine_map(setup->cage, 1.0, 1.3, 0.0), "keyframe 1"),
+                    Contains("keyframe 1 is not locally injective"));
+  HarmonicMap bad = identity_map(setup->cage);
+  bad.phi.conservativeResize(3);
+  CHECK_THROWS_WITH(import_keyframe(*setup, bad), Contains("the cage needs"));
+  HarmonicMap nan_map = identity_map(setup->cage);
+  nan_map.psi(2) = cd(NAN, 0);
+  CHECK_THROWS_WITH(import_keyframe(*setup, nan_map), Contains("not finite"));
+  CHECK_THROWS_AS(author_keyframe(*setup, std::vector<cd>{{0.7, 0}}, std::vector<cd>{}, identity_map(setup->cage)), InputError);
+  // A handle in a hole (where the basis is singular at the hole point) is refused.
+  CHECK_THROWS_WITH(author_keyframe(*setup, std::vector<cd>{{0.0, 0.0}}, std::vector<cd>{{1, 1}}, identity_map(setup->cage)),
+                    Contains("handle 0") && Contains("inside hole 1"));
+}
