@@ -35,33 +35,26 @@ void register_keyframes(CLI::App& app) {
     ko.lambda = o->lambda;
     ko.stages = o->stages;
     if (!o->png_dir.empty()) std::filesystem::create_directories(o->png_dir);
-    HarmonicMap previous = identity_map(setup->cage);
     bool all_ok = true;
-    for (size_t k = 0; k < scene.keyframes.size(); ++k) {
-      Keyframe& key = scene.keyframes[k];
-      const std::string label = "keyframe " + std::to_string(k) + " (t = " + std::to_string(key.time) + ")";
-      if (key.coefficients && !(o->force && !key.targets.empty())) {
-        key.coefficients = import_keyframe(*setup, *key.coefficients, label);
+    solve_scene_keyframes(scene, *setup, ko, o->force, [&](const SceneKeyframe& k) {
+      const Keyframe& key = scene.keyframes[static_cast<size_t>(k.index)];
+      const std::string label = "keyframe " + std::to_string(k.index) + " (t = " + std::to_string(key.time) + ")";
+      if (!k.solved) {
         std::printf("%-28s given as coefficients: certified\n", label.c_str());
       } else {
-        if (key.targets.empty()) throw InputError(label + ": has neither targets nor coefficients");
-        const KeyframeResult r = author_keyframe(*setup, scene.handles, key.targets, previous, ko);
-        std::printf("%-28s %3d Newton iterations, %8.1f ms, energy %.4f, %s\n", label.c_str(), r.iterations, r.ms,
-                    r.energy, r.message.c_str());
-        all_ok = all_ok && r.certified && r.reached;
-        if (!r.certified) throw std::runtime_error(label + ": " + r.message);
-        key.coefficients = r.map;
+        std::printf("%-28s %3d Newton iterations, %8.1f ms, energy %.4f, %s\n", label.c_str(), k.result.iterations,
+                    k.result.ms, k.result.energy, k.result.message.c_str());
+        all_ok = all_ok && k.result.reached;
       }
-      previous = *key.coefficients;
       if (!o->png_dir.empty()) {
         MapPlot extras;
-        extras.handles_image = map_points(setup->cage, previous, scene.handles);
+        extras.handles_image = map_points(setup->cage, *key.coefficients, scene.handles);
         extras.targets = key.targets;
         extras.title = scene.name + " " + label;
-        plot_map(std::filesystem::path(o->png_dir) / ("keyframe_" + std::to_string(k) + ".png"), scene.shape, setup->cage,
-                 previous, extras);
+        plot_map(std::filesystem::path(o->png_dir) / ("keyframe_" + std::to_string(k.index) + ".png"), scene.shape,
+                 setup->cage, *key.coefficients, extras);
       }
-    }
+    });
     const std::filesystem::path out = o->out.empty() ? std::filesystem::path(o->scene) : std::filesystem::path(o->out);
     if (out.parent_path() != std::filesystem::path(o->scene).parent_path() && !scene.texture.empty() &&
         scene.texture.is_relative())

@@ -10,5 +10,6 @@ void register_info(CLI::App& app);
 void register_import_png(CLI::App& app);
 void register_import_glyph(CLI::App& app);
 void register_keyframes(CLI::App& app);
+void register_interpolate(CLI::App& app);
 
 }  // namespace hsi::cli

@@ -201,3 +201,117 @@ void plot_map(const std::filesystem::path& png, const Shape& shape, const Cage& 
 }
 
 }  // namespace hsi::cli
+
+namespace hsi::cli {
+
+void plot_series(const std::filesystem::path& png, const std::string& title, const std::string& xlabel,
+                 const std::vector<double>& x, const std::vector<Series>& series, const std::vector<double>& flagged,
+                 int W, int H) {
+  std::unique_ptr<cairo_surface_t, decltype(&cairo_surface_destroy)> surf(
+      cairo_image_surface_create(CAIRO_FORMAT_ARGB32, W, H), cairo_surface_destroy);
+  std::unique_ptr<cairo_t, decltype(&cairo_destroy)> ctx(cairo_create(surf.get()), cairo_destroy);
+  cairo_t* cr = ctx.get();
+  cairo_set_source_rgb(cr, 1, 1, 1);
+  cairo_paint(cr);
+  const double L = 70, R = 20, T = 36, B = 48;
+  double x0 = x.empty() ? 0 : x.front(), x1 = x.empty() ? 1 : x.back();
+  if (x1 <= x0) x1 = x0 + 1;
+  double y0 = std::numeric_limits<double>::infinity(), y1 = -y0;
+  for (const Series& s : series)
+    for (double v : s.y)
+      if (std::isfinite(v)) {
+        y0 = std::min(y0, v);
+        y1 = std::max(y1, v);
+      }
+  if (!std::isfinite(y0)) y0 = 0, y1 = 1;
+  if (y1 - y0 < 1e-12 * std::max(1.0, std::abs(y1))) {
+    y0 -= 0.5 * std::max(1e-6, std::abs(y0) * 1e-3);
+    y1 += 0.5 * std::max(1e-6, std::abs(y1) * 1e-3);
+  }
+  const double pad = 0.05 * (y1 - y0);
+  y0 -= pad;
+  y1 += pad;
+  auto px = [&](double xv) { return L + (xv - x0) / (x1 - x0) * (W - L - R); };
+  auto py = [&](double yv) { return H - B - (yv - y0) / (y1 - y0) * (H - T - B); };
+  cairo_select_font_face(cr, "sans-serif", CAIRO_FONT_SLANT_NORMAL, CAIRO_FONT_WEIGHT_NORMAL);
+  cairo_set_font_size(cr, 11);
+  cairo_set_line_width(cr, 1);
+  char buf[64];
+  for (int i = 0; i <= 5; ++i) {  // grid and ticks
+    const double yv = y0 + (y1 - y0) * i / 5, xv = x0 + (x1 - x0) * i / 5;
+    cairo_set_source_rgb(cr, 0.9, 0.9, 0.9);
+    cairo_move_to(cr, L, py(yv));
+    cairo_line_to(cr, W - R, py(yv));
+    cairo_move_to(cr, px(xv), T);
+    cairo_line_to(cr, px(xv), H - B);
+    cairo_stroke(cr);
+    cairo_set_source_rgb(cr, 0.2, 0.2, 0.2);
+    std::snprintf(buf, sizeof buf, "%.4g", yv);
+    cairo_move_to(cr, 6, py(yv) + 4);
+    cairo_show_text(cr, buf);
+    std::snprintf(buf, sizeof buf, "%.3g", xv);
+    cairo_move_to(cr, px(xv) - 10, H - B + 16);
+    cairo_show_text(cr, buf);
+  }
+  cairo_set_source_rgb(cr, 0.2, 0.2, 0.2);
+  cairo_rectangle(cr, L, T, W - L - R, H - T - B);
+  cairo_stroke(cr);
+  cairo_move_to(cr, W / 2.0 - 20, H - 10);
+  cairo_show_text(cr, xlabel.c_str());
+  cairo_set_font_size(cr, 14);
+  cairo_move_to(cr, L, 22);
+  cairo_show_text(cr, title.c_str());
+  cairo_set_font_size(cr, 11);
+  double legend_x = W - R - 10;
+  for (size_t k = series.size(); k-- > 0;) {
+    const Series& s = series[k];
+    cairo_text_extents_t ext;
+    cairo_text_extents(cr, s.name.c_str(), &ext);
+    legend_x -= ext.x_advance + 34;
+    cairo_set_source_rgb(cr, s.r, s.g, s.b);
+    const double d[] = {5.0, 3.0};
+    cairo_set_dash(cr, d, s.dashed ? 2 : 0, 0);
+    cairo_set_line_width(cr, 2);
+    cairo_move_to(cr, legend_x, 22 - 4);
+    cairo_line_to(cr, legend_x + 22, 22 - 4);
+    cairo_stroke(cr);
+    cairo_set_dash(cr, nullptr, 0, 0);
+    cairo_move_to(cr, legend_x + 26, 22);
+    cairo_set_source_rgb(cr, 0.2, 0.2, 0.2);
+    cairo_show_text(cr, s.name.c_str());
+  }
+  cairo_rectangle(cr, L, T, W - L - R, H - T - B);
+  cairo_clip(cr);
+  for (const Series& s : series) {
+    cairo_set_source_rgb(cr, s.r, s.g, s.b);
+    const double d[] = {5.0, 3.0};
+    cairo_set_dash(cr, d, s.dashed ? 2 : 0, 0);
+    cairo_set_line_width(cr, 1.6);
+    bool pen = false;
+    for (size_t i = 0; i < x.size() && i < s.y.size(); ++i) {
+      if (!std::isfinite(s.y[i])) {
+        pen = false;
+        continue;
+      }
+      if (!pen)
+        cairo_move_to(cr, px(x[i]), py(s.y[i]));
+      else
+        cairo_line_to(cr, px(x[i]), py(s.y[i]));
+      pen = true;
+    }
+    cairo_stroke(cr);
+    cairo_set_dash(cr, nullptr, 0, 0);
+  }
+  cairo_set_source_rgb(cr, 0.85, 0.05, 0.05);
+  cairo_set_line_width(cr, 2);
+  for (double f : flagged) {
+    cairo_move_to(cr, px(f), T);
+    cairo_line_to(cr, px(f), H - B);
+    cairo_stroke(cr);
+  }
+  cairo_surface_flush(surf.get());
+  if (cairo_surface_write_to_png(surf.get(), png.string().c_str()) != CAIRO_STATUS_SUCCESS)
+    throw std::runtime_error("cannot write " + png.string());
+}
+
+}  // namespace hsi::cli

@@ -29,3 +29,20 @@ void plot_map(const std::filesystem::path& png, const Shape& shape, const Cage& 
               const MapPlot& extras = {}, int width_px = 800);
 
 }  // namespace hsi::cli
+
+namespace hsi::cli {
+
+struct Series {
+  std::string name;
+  std::vector<double> y;
+  double r = 0.1, g = 0.3, b = 0.7;
+  bool dashed = false;
+};
+
+// A line plot of series over x, with axes, ticks, legend and red markers at
+// `flagged` x positions (e.g. frames that could not be certified).
+void plot_series(const std::filesystem::path& png, const std::string& title, const std::string& xlabel,
+                 const std::vector<double>& x, const std::vector<Series>& series, const std::vector<double>& flagged = {},
+                 int width_px = 900, int height_px = 420);
+
+}  // namespace hsi::cli

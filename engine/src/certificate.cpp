@@ -209,6 +209,8 @@ CertificateResult Certifier::certify(const HarmonicMap& map, const CertificateOp
     r.observed_sigma1_max = std::max(r.observed_sigma1_max, aa + bb);
     r.observed_sigma2_min = std::min(r.observed_sigma2_min, aa - bb);
     r.observed_k_max = std::max(r.observed_k_max, bb / aa);
+    const double s1 = aa + bb, s2 = aa - bb;
+    r.observed_isometric_max = std::max(r.observed_isometric_max, 0.5 * (s1 * s1 + 1 / (s1 * s1) + s2 * s2 + 1 / (s2 * s2)));
   }
   if (!r.certified) {
     std::ostringstream s;

@@ -67,7 +67,8 @@ Eigen::Matrix4d project_K1(const Eigen::Vector3d& alpha) {
   return l1 * (Eigen::Matrix4d::Identity() + N / R) / 2;
 }
 
-SampleDerivatives isometric_derivatives(const Metric& g, cd a, cd b, HessianProjection projection, bool exact) {
+SampleDerivatives isometric_derivatives(const Metric& g, cd a, cd b, HessianProjection projection, bool exact,
+                                        bool with_hessian) {
   SampleDerivatives d;
   d.e = isometric_energy(g, a, b);
   if (!std::isfinite(d.e)) return d;
@@ -84,6 +85,10 @@ SampleDerivatives isometric_derivatives(const Metric& g, cd a, cd b, HessianProj
   dq << 0, 0, 1, 0, -2, 0, 1, 0, 0;
   const double ih = 1 / det_h;
   const Eigen::Vector3d alpha = t * P - T * ih * ih * q;  // α_i = ∂E/∂h_i
+  if (!with_hessian) {
+    d.grad = 2 * (alpha(0) * F(0) + alpha(1) * F(1) + alpha(2) * F(2)) * v;
+    return d;
+  }
   const Eigen::Matrix3d beta = -(t * q.transpose() + q * t.transpose()) * ih * ih +
                                T * (2 * ih * ih * ih * q * q.transpose() - ih * ih * dq);  // β_ij = ∂²E/∂h_i∂h_j
   // ∇_v h_i = 2 F_i v, so ∇_v E = 2 K1 v (Appendix B).

@@ -106,3 +106,32 @@ HarmonicMap import_keyframe(const ShapeSetup& setup, const HarmonicMap& map, con
 }
 
 }  // namespace hsi
+
+namespace hsi {
+
+std::vector<SceneKeyframe> solve_scene_keyframes(Scene& scene, const ShapeSetup& setup, const KeyframeOptions& options,
+                                                 bool force, const std::function<void(const SceneKeyframe&)>& on_keyframe) {
+  std::vector<SceneKeyframe> out;
+  HarmonicMap previous = identity_map(setup.cage);
+  for (size_t k = 0; k < scene.keyframes.size(); ++k) {
+    Keyframe& key = scene.keyframes[k];
+    const std::string label = "keyframe " + std::to_string(k);
+    SceneKeyframe rep;
+    rep.index = static_cast<int>(k);
+    if (key.coefficients && !(force && !key.targets.empty())) {
+      key.coefficients = import_keyframe(setup, *key.coefficients, label);
+    } else {
+      if (key.targets.empty()) throw InputError(label + ": has neither targets nor coefficients");
+      rep.solved = true;
+      rep.result = author_keyframe(setup, scene.handles, key.targets, previous, options);
+      if (!rep.result.certified) throw InputError(label + ": " + rep.result.message);
+      key.coefficients = rep.result.map;
+    }
+    previous = *key.coefficients;
+    if (on_keyframe) on_keyframe(rep);
+    out.push_back(std::move(rep));
+  }
+  return out;
+}
+
+}  // namespace hsi

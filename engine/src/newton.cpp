@@ -55,7 +55,8 @@ class CpuNewtonCore final : public NewtonCore {
     VectorXcd ga(G), gb(G);
 #pragma omp parallel for schedule(static)
     for (Eigen::Index s = 0; s < G; ++s) {
-      const SampleDerivatives d = isometric_derivatives(g_[static_cast<size_t>(s)], a_(s), b_(s), HessianProjection::Delete);
+      const SampleDerivatives d = isometric_derivatives(g_[static_cast<size_t>(s)], a_(s), b_(s), HessianProjection::Delete,
+                                                        false, /*with_hessian=*/false);
       ga(s) = cd(d.grad(0), d.grad(1));
       gb(s) = cd(d.grad(2), d.grad(3));
     }
@@ -89,7 +90,12 @@ class CpuNewtonCore final : public NewtonCore {
           Wt.row(k).segment(q * n, n) = w[q] * DH_.row(k).conjugate();
       }
     }
-    const MatrixXcd R = (DH_.adjoint() * Wt) / static_cast<double>(h);
+    // The GEMM, split by column blocks over the threads (Eigen does not parallelise
+    // a product this thin on its own).
+    MatrixXcd R(n, 6 * n);
+#pragma omp parallel for schedule(static)
+    for (int q = 0; q < 6; ++q) R.middleCols(q * n, n).noalias() = DH_.adjoint() * Wt.middleCols(q * n, n);
+    R /= static_cast<double>(h);
     Eigen::MatrixXd Hv(4 * n, 4 * n);
     real_block(R.middleCols(0, n), R.middleCols(n, n), Hv.block(0, 0, 2 * n, 2 * n));
     real_block(R.middleCols(2 * n, n), R.middleCols(3 * n, n), Hv.block(0, 2 * n, 2 * n, 2 * n));

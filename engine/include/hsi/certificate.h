@@ -35,6 +35,7 @@ struct CertificateResult {
   double conformal_max = 0;   // upper bound of σ1/σ2 = (1 + k)/(1 − k)
   // Observed at the breakpoints (samples and polygon vertices), for reports:
   double observed_sigma1_max = 0, observed_sigma2_min = 0, observed_k_max = 0;
+  double observed_isometric_max = 0;  // max of ½(σ1² + σ1⁻² + σ2² + σ2⁻²)
   long segments = 0, subdivisions = 0;
 };
 

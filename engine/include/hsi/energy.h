@@ -40,7 +40,8 @@ double isometric_energy(const Metric& g, cd a, cd b);
 
 // Energy, gradient and Hessian at one sample. With `exact` the Hessian is the true
 // one (2 K1 + 4 K2, for finite-difference tests), otherwise projected as chosen.
-SampleDerivatives isometric_derivatives(const Metric& g, cd a, cd b, HessianProjection projection, bool exact = false);
+SampleDerivatives isometric_derivatives(const Metric& g, cd a, cd b, HessianProjection projection, bool exact = false,
+                                        bool with_hessian = true);
 
 // The analytic PSD projection of K1 = Σ α_i F_i (paper Eq. 21; math.md §4 on the third case).
 Eigen::Matrix4d project_K1(const Eigen::Vector3d& alpha);

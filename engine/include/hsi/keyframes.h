@@ -55,3 +55,22 @@ HarmonicMap import_keyframe(const ShapeSetup& setup, const HarmonicMap& map, con
 std::vector<cd> map_points(const Cage& cage, const HarmonicMap& map, std::span<const cd> points);
 
 }  // namespace hsi
+
+namespace hsi {
+
+struct SceneKeyframe {
+  int index = 0;
+  bool solved = false;     // authored from targets now (else certified coefficients)
+  KeyframeResult result;   // when solved
+};
+
+// Makes every keyframe of a scene a certified map, in time order: keyframes with
+// coefficients are certified (re-solved from targets when `force`), the others are
+// authored from their targets starting at the previous keyframe (the first from the
+// identity). Coefficients are written into scene.keyframes. Throws InputError for a
+// keyframe that cannot be made certified. The scene's cage must be setup's cage.
+std::vector<SceneKeyframe> solve_scene_keyframes(Scene& scene, const ShapeSetup& setup, const KeyframeOptions& options = {},
+                                                 bool force = false,
+                                                 const std::function<void(const SceneKeyframe&)>& on_keyframe = {});
+
+}  // namespace hsi

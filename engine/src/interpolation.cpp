@@ -1,0 +1,152 @@
+// Metric blending, projection by certified Newton, pose interpolation (paper §4–5).
+#include "hsi/interpolation.h"
+
+#include <chrono>
+#include <cmath>
+#include <numbers>
+#include <sstream>
+
+namespace hsi {
+
+Interpolator::Interpolator(const ShapeSetup& setup, std::vector<double> times, std::vector<HarmonicMap> keyframes,
+                           const InterpolationOptions& options, std::unique_ptr<NewtonCore> core)
+    : setup_(setup), times_(std::move(times)), keys_(std::move(keyframes)), options_(options), core_(std::move(core)) {
+  if (keys_.size() < 2) throw InputError("interpolation needs at least two keyframes (got " + std::to_string(keys_.size()) + ")");
+  if (keys_.size() != times_.size()) throw InputError("interpolation: keyframe times and maps differ in number");
+  for (size_t k = 1; k < times_.size(); ++k)
+    if (!(times_[k] > times_[k - 1])) throw InputError("interpolation: keyframe times must increase");
+  if (!core_) core_ = make_cpu_newton_core(setup_.D_G, setup_.H);
+  C_G_ = evaluate_basis(setup_.cage, setup_.G.points, kBasisC).C;
+  const BasisRows D = evaluate_basis(setup_.cage, setup_.G.points, kBasisD);
+  for (size_t k = 0; k < keys_.size(); ++k) {
+    const CertificateResult c = setup_.certifier.certify(keys_[k]);
+    if (!c.certified) throw InputError("keyframe " + std::to_string(k) + " is not locally injective: " + c.reason);
+    key_distortion_.push_back(measure(c));
+    key_x_.push_back(setup_.metric_space.reduce(keys_[k]).x);
+    const MapValues v = evaluate_map(D, keys_[k]);
+    std::vector<Metric> m(static_cast<size_t>(v.f_z.size()));
+    for (Eigen::Index i = 0; i < v.f_z.size(); ++i) m[static_cast<size_t>(i)] = pullback_metric(v.f_z(i), v.fzbar_conj(i));  // Eq. 5
+    key_metrics_.push_back(std::move(m));
+    Pose p = pose_of(keys_[k]);
+    if (k > 0) {  // unwrap: the nearest turn to the previous keyframe's angle
+      const double prev = key_poses_.back().angle;
+      p.angle = prev + std::remainder(p.angle - prev, 2 * std::numbers::pi);
+    }
+    key_poses_.push_back(p);
+  }
+}
+
+Interpolator::~Interpolator() = default;
+
+int Interpolator::segment(double t) const {
+  int k = 0;
+  while (k + 2 < static_cast<int>(times_.size()) && t > times_[static_cast<size_t>(k) + 1]) ++k;
+  return k;
+}
+
+std::vector<Metric> Interpolator::blended_metric(double t) const {
+  const int k = segment(t);
+  const double u = std::clamp((t - times_[static_cast<size_t>(k)]) / (times_[static_cast<size_t>(k) + 1] - times_[static_cast<size_t>(k)]), 0.0, 1.0);
+  const auto& A = key_metrics_[static_cast<size_t>(k)];
+  const auto& B = key_metrics_[static_cast<size_t>(k) + 1];
+  std::vector<Metric> m(A.size());
+  for (size_t i = 0; i < A.size(); ++i) m[i] = (1 - u) * A[i] + u * B[i];  // M_g = (1 − t) M⁰ + t M¹
+  return m;
+}
+
+Pose Interpolator::pose_of(const HarmonicMap& map) const {
+  const VectorXcd f = C_G_ * map.phi + (C_G_ * map.psi).conjugate();
+  const cd cf = f.mean();
+  cd cw = 0;
+  for (const cd& w : setup_.G.points) cw += w;
+  cw /= static_cast<double>(setup_.G.size());
+  cd s = 0;
+  for (size_t i = 0; i < setup_.G.size(); ++i) s += (f(static_cast<Eigen::Index>(i)) - cf) * std::conj(setup_.G.points[i] - cw);
+  return {cf, std::arg(s)};
+}
+
+Pose Interpolator::interpolated_pose(double t) const {
+  const int k = segment(t);
+  const double u = std::clamp((t - times_[static_cast<size_t>(k)]) / (times_[static_cast<size_t>(k) + 1] - times_[static_cast<size_t>(k)]), 0.0, 1.0);
+  const Pose& a = key_poses_[static_cast<size_t>(k)];
+  const Pose& b = key_poses_[static_cast<size_t>(k) + 1];
+  return {(1 - u) * a.centroid + u * b.centroid, (1 - u) * a.angle + u * b.angle};
+}
+
+Distortion Interpolator::measure(const CertificateResult& c) const {
+  Distortion d;
+  d.sigma1_max = c.observed_sigma1_max;
+  d.sigma2_min = c.observed_sigma2_min;
+  d.conformal_max = (1 + c.observed_k_max) / (1 - c.observed_k_max);
+  d.isometric_max = c.observed_isometric_max;
+  return d;
+}
+
+FrameResult Interpolator::frame(double t, const Eigen::VectorXd& warm_start) {
+  const auto t0 = std::chrono::steady_clock::now();
+  FrameResult r;
+  r.t = t;
+  const int k = segment(t);
+  const Distortion& da = key_distortion_[static_cast<size_t>(k)];
+  const Distortion& db = key_distortion_[static_cast<size_t>(k) + 1];
+  r.bound = {std::max(da.sigma1_max, db.sigma1_max), std::min(da.sigma2_min, db.sigma2_min),
+             std::max(da.conformal_max, db.conformal_max), std::max(da.isometric_max, db.isometric_max)};
+  // At a keyframe time the blended metric is the keyframe's own: its map is the
+  // minimiser (energy 2), so return it exactly.
+  for (size_t j = 0; j < times_.size(); ++j)
+    if (t == times_[j]) {
+      r.keyframe = r.certified = r.converged = true;
+      r.map = keys_[j];
+      r.x = key_x_[j];
+      r.energy = 2.0;
+      r.certificate = setup_.certifier.certify(r.map);
+      r.distortion = key_distortion_[j];
+      r.message = "keyframe " + std::to_string(j);
+      r.ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+      return r;
+    }
+  core_->set_targets(blended_metric(t));
+  NewtonOptions no;
+  no.tolerance = options_.tolerance;
+  no.max_iterations = options_.max_iterations;
+  no.projection = options_.projection;
+  const Eigen::VectorXd& x0 = warm_start.size() ? warm_start : key_x_[static_cast<size_t>(k)];
+  const NewtonResult n = newton_solve(*core_, setup_.metric_space, &setup_.certifier, nullptr, x0, no);
+  r.x = n.x;
+  r.iterations = n.iterations;
+  r.energy = n.energy;
+  r.converged = n.converged;
+  r.certified = n.certified;
+  r.certificate = n.certificate;
+  r.timing = n.timing;
+  r.message = n.message;
+  // Pose: move the solution's centroid and Procrustes angle onto the interpolated pose.
+  const HarmonicMap canon = setup_.metric_space.expand(n.x);
+  const Pose have = pose_of(canon), want = interpolated_pose(t);
+  const cd rot = std::polar(1.0, want.angle - have.angle);
+  r.map = transform_image(setup_.cage, canon, rot, want.centroid - rot * have.centroid);
+  r.distortion = measure(n.certificate);
+  const Distortion& d = r.distortion;
+  const Distortion& b = r.bound;
+  r.bound_excess = std::max({0.0, d.sigma1_max / b.sigma1_max - 1, b.sigma2_min / d.sigma2_min - 1,
+                             d.conformal_max / b.conformal_max - 1, d.isometric_max / b.isometric_max - 1});
+  r.ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+  return r;
+}
+
+std::vector<FrameResult> Interpolator::sequence(int frames, const std::function<void(const FrameResult&, int, int)>& progress) {
+  if (frames < 2) throw InputError("a sequence needs at least 2 frames (got " + std::to_string(frames) + ")");
+  std::vector<FrameResult> out;
+  out.reserve(static_cast<size_t>(frames));
+  Eigen::VectorXd warm;
+  for (int i = 0; i < frames; ++i) {
+    const double t = i == frames - 1 ? t_end() : t_begin() + (t_end() - t_begin()) * i / (frames - 1);
+    // Crossing into a new keyframe segment keeps the warm start: frames are continuous.
+    out.push_back(frame(t, warm));
+    if (out.back().certified) warm = out.back().x;
+    if (progress) progress(out.back(), i, frames);
+  }
+  return out;
+}
+
+}  // namespace hsi

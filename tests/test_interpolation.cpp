@@ -1,0 +1,173 @@
+// Harmonic shape interpolation (paper §4–5): metric blending, keyframe
+// reproduction, pose, certified warm-started sequences, the frames file.
+#include <catch2/catch.hpp>
+
+#include "hsi/frames_io.h"
+#include "hsi/interpolation.h"
+#include "hsi/keyframes.h"
+#include "test_shapes.h"
+
+using namespace hsi;
+using Catch::Matchers::Contains;
+
+namespace {
+
+// An annulus whose hole is twisted by 30° against its rim, posed by handles, and then
+// the whole thing turned by 100° and moved: large rotation plus a real deformation.
+struct TwistScene {
+  std::unique_ptr<ShapeSetup> setup;
+  std::vector<double> times{0.0, 1.0, 2.0};
+  std::vector<HarmonicMap> maps;
+  TwistScene() {
+    const Shape s = test::annulus(1.0, 0.45, 128);
+    setup = std::make_unique<ShapeSetup>(s, build_cage(s), 2000, 0.2);
+    std::vector<cd> handles, twist, turned;
+    for (int k = 0; k < 6; ++k) {
+      const cd u = std::polar(1.0, k * std::numbers::pi / 3);
+      handles.push_back(0.93 * u);  // on the rim
+      handles.push_back(0.52 * u);  // near the hole
+    }
+    const cd rot = std::polar(1.0, std::numbers::pi / 6);
+    for (size_t i = 0; i < handles.size(); ++i) twist.push_back(i % 2 ? rot * handles[i] : handles[i]);
+    const cd turn = std::polar(1.0, 100 * std::numbers::pi / 180);
+    for (const cd& p : twist) turned.push_back(turn * p + cd(1.5, -0.5));
+    maps.push_back(identity_map(setup->cage));
+    const KeyframeResult k1 = author_keyframe(*setup, handles, twist, maps.back());
+    REQUIRE(k1.certified);
+    REQUIRE(k1.reached);
+    maps.push_back(k1.map);
+    const KeyframeResult k2 = author_keyframe(*setup, handles, turned, maps.back());
+    REQUIRE(k2.certified);
+    REQUIRE(k2.reached);
+    maps.push_back(k2.map);
+  }
+};
+
+TwistScene& twist_scene() {
+  static TwistScene scene;
+  return scene;
+}
+
+double max_dist(const VectorXcd& a, const VectorXcd& b) { return (a - b).cwiseAbs().maxCoeff(); }
+
+}  // namespace
+
+TEST_CASE("blended metric is linear between the neighbouring keyframes", "[interpolation]") {
+  TwistScene& S = twist_scene();
+  Interpolator I(*S.setup, S.times, S.maps);
+  const auto m0 = I.blended_metric(0.0), m1 = I.blended_metric(1.0), m2 = I.blended_metric(2.0);
+  const auto mq = I.blended_metric(0.25), m15 = I.blended_metric(1.5);
+  for (size_t i = 0; i < m0.size(); i += 97) {
+    CHECK((mq[i] - (0.75 * m0[i] + 0.25 * m1[i])).norm() < 1e-12);
+    CHECK((m15[i] - (0.5 * m1[i] + 0.5 * m2[i])).norm() < 1e-12);
+  }
+  // Keyframe 1's metric is its own pull-back metric (Eq. 5).
+  const MapValues v = evaluate_map(evaluate_basis(S.setup->cage, S.setup->G.points, kBasisD), S.maps[1]);
+  CHECK((m1[5] - pullback_metric(v.f_z(5), v.fzbar_conj(5))).norm() < 1e-12);
+}
+
+TEST_CASE("pose of a rigid motion of the identity is that motion", "[interpolation]") {
+  TwistScene& S = twist_scene();
+  Interpolator I(*S.setup, S.times, S.maps);
+  const Pose p0 = I.pose_of(identity_map(S.setup->cage));
+  const Pose p = I.pose_of(transform_image(S.setup->cage, identity_map(S.setup->cage), std::polar(1.0, 0.8), cd(2, 1)));
+  CHECK(p.angle - p0.angle == Approx(0.8).margin(1e-12));
+  CHECK(std::abs(p.centroid - (std::polar(1.0, 0.8) * p0.centroid + cd(2, 1))) < 1e-12);
+}
+
+TEST_CASE("keyframes are reproduced at their times", "[interpolation]") {
+  TwistScene& S = twist_scene();
+  Interpolator I(*S.setup, S.times, S.maps);
+  const auto pts = test::interior_points(S.setup->shape, 500);
+  const BasisRows rows = evaluate_basis(S.setup->cage, pts, kBasisC);
+  for (size_t k = 0; k < S.times.size(); ++k) {
+    const FrameResult f = I.frame(S.times[k]);
+    CHECK(f.keyframe);
+    CHECK(f.certified);
+    CHECK(max_dist(evaluate_map(rows, f.map).f, evaluate_map(rows, S.maps[k]).f) < 1e-8);
+  }
+  // The solver itself lands on keyframe 1 when its metric is the target (t just
+  // below 1, started away from it), up to the pose it is given.
+  const FrameResult near = I.frame(1.0 - 1e-9, I.frame(0.5).x);
+  CHECK(near.certified);
+  CHECK(near.energy == Approx(2.0).margin(1e-6));
+  CHECK(max_dist(evaluate_map(rows, near.map).f, evaluate_map(rows, S.maps[1]).f) < 2e-3);
+}
+
+TEST_CASE("a warm-started sequence is certified, converges in few iterations and follows the pose", "[interpolation]") {
+  TwistScene& S = twist_scene();
+  Interpolator I(*S.setup, S.times, S.maps);
+  int calls = 0;
+  const auto frames = I.sequence(41, [&](const FrameResult&, int i, int n) {
+    CHECK(i == calls++);
+    CHECK(n == 41);
+  });
+  REQUIRE(frames.size() == 41);
+  double iters = 0;
+  int solved = 0;
+  for (const FrameResult& f : frames) {
+    INFO("t = " << f.t << ": " << f.message);
+    CHECK(f.certified);
+    CHECK(f.converged);
+    if (!f.keyframe) {
+      iters += f.iterations;
+      ++solved;
+    }
+  }
+  CHECK(frames.front().keyframe);
+  CHECK(frames[20].keyframe);  // t = 1
+  CHECK(frames.back().keyframe);
+  INFO("mean iterations " << iters / solved);
+  CHECK(iters / solved <= 6);
+  // No drift or spin: each frame's pose is the interpolated one, and the poses move
+  // continuously through the 100° turn.
+  for (size_t i = 1; i < frames.size(); ++i) {
+    const Pose p = I.pose_of(frames[i].map), want = I.interpolated_pose(frames[i].t);
+    CHECK(std::abs(p.centroid - want.centroid) < 1e-9);
+    CHECK(std::remainder(p.angle - want.angle, 2 * std::numbers::pi) == Approx(0).margin(1e-9));
+    CHECK(std::abs(p.angle - I.pose_of(frames[i - 1].map).angle) < 0.2);
+  }
+}
+
+TEST_CASE("a frame that cannot be certified is reported as such, never as good", "[interpolation]") {
+  TwistScene& S = twist_scene();
+  Interpolator I(*S.setup, S.times, S.maps);
+  // A folded warm start: the solver refuses to move from it and says so.
+  const Eigen::VectorXd folded = S.setup->metric_space.reduce(affine_map(S.setup->cage, 1.0, 1.4, 0.0)).x;
+  const FrameResult f = I.frame(0.5, folded);
+  CHECK_FALSE(f.certified);
+  CHECK_FALSE(f.converged);
+  CHECK_THAT(f.message, Contains("folds") || Contains("not certified"));
+}
+
+TEST_CASE("interpolation refuses bad keyframes", "[interpolation]") {
+  TwistScene& S = twist_scene();
+  CHECK_THROWS_WITH(Interpolator(*S.setup, {0.0}, {S.maps[0]}), Contains("at least two keyframes"));
+  CHECK_THROWS_WITH(Interpolator(*S.setup, {1.0, 0.0}, {S.maps[0], S.maps[1]}), Contains("must increase"));
+  CHECK_THROWS_WITH(Interpolator(*S.setup, {0.0, 1.0}, {S.maps[0], affine_map(S.setup->cage, 1.0, 1.3, 0.0)}),
+                    Contains("keyframe 1 is not locally injective"));
+}
+
+TEST_CASE("frames file round-trips and refuses damaged files", "[interpolation][frames_io]") {
+  TwistScene& S = twist_scene();
+  FrameFile f;
+  f.cage = S.setup->cage;
+  f.frames.push_back({0.0, true, true, true, 0, 2.0, S.maps[0]});
+  f.frames.push_back({0.5, false, false, true, 3, 2.1, S.maps[1]});
+  const std::string bytes = encode_frames(f);
+  const FrameFile g = decode_frames(bytes);
+  REQUIRE(g.frames.size() == 2);
+  CHECK(g.cage.loops == f.cage.loops);
+  CHECK(g.frames[1].map.phi == f.frames[1].map.phi);
+  CHECK_FALSE(g.frames[1].certified);
+  CHECK(g.frames[0].keyframe);
+  CHECK(g.frames[1].iterations == 3);
+  CHECK_THROWS_WITH(decode_frames("XXXX" + bytes.substr(4)), Contains("not an hsi frames file"));
+  std::string v2 = bytes;
+  v2[4] = 2;
+  CHECK_THROWS_WITH(decode_frames(v2), Contains("unsupported frames version 2"));
+  // Truncated at every length: always a clear error, never a crash.
+  for (size_t cut = 0; cut < bytes.size(); cut += 7) CHECK_THROWS_AS(decode_frames(bytes.substr(0, cut)), InputError);
+  CHECK_THROWS_WITH(decode_frames(bytes.substr(0, bytes.size() - 5)), Contains("truncated"));
+  CHECK_THROWS_WITH(decode_frames(bytes + "junk"), Contains("trailing bytes"));
+}
