@@ -11,7 +11,7 @@ namespace hsi::cli {
 void register_keyframes(CLI::App& app) {
   struct Opts {
     std::string scene, out, png_dir;
-    bool force = false;
+    bool force = false, verbose = false;
     double lambda = 1e5;
     int stages = 8;
   };
@@ -23,6 +23,7 @@ void register_keyframes(CLI::App& app) {
   cmd->add_option("-o,--output", o->out, "Write the solved scene here (default: overwrite SCENE)");
   cmd->add_option("--png", o->png_dir, "Draw each keyframe to DIR/keyframe_K.png");
   cmd->add_flag("--force", o->force, "Re-solve keyframes that already have coefficients (if they have targets)");
+  cmd->add_flag("-v,--verbose", o->verbose, "Print every Newton iteration (energy, gradient norm, step, backtracks, time)");
   cmd->add_option("--lambda", o->lambda, "Positional weight (relative to size^2)")->capture_default_str();
   cmd->add_option("--stages", o->stages, "Drag the handles to their targets in this many steps")->capture_default_str();
   cmd->callback([o] {
@@ -45,6 +46,13 @@ void register_keyframes(CLI::App& app) {
         std::printf("%-28s %3d Newton iterations, %8.1f ms, energy %.4f, %s\n", label.c_str(), k.result.iterations,
                     k.result.ms, k.result.energy, k.result.message.c_str());
         all_ok = all_ok && k.result.reached;
+        if (o->verbose)
+          for (size_t i = 0; i < k.result.log.size(); ++i) {
+            const NewtonIteration& it = k.result.log[i];
+            std::printf("    it %3zu  energy %.8f  |grad| %.3e  step %.3g (safe %.3g)  backtracks %d (%d by the certificate)  %.1f ms\n",
+                        i + 1, it.energy, it.gradient_norm, it.step, it.max_safe_step, it.backtracks,
+                        it.certificate_rejections, it.ms);
+          }
       }
       if (!o->png_dir.empty()) {
         MapPlot extras;

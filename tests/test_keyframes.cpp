@@ -84,3 +84,25 @@ TEST_CASE("imported keyframes are certified; folding or malformed ones are refus
   CHECK_THROWS_WITH(author_keyframe(*setup, std::vector<cd>{{0.0, 0.0}}, std::vector<cd>{{1, 1}}, identity_map(setup->cage)),
                     Contains("handle 0") && Contains("inside hole 1"));
 }
+
+TEST_CASE("every bundled scene has at least two keyframes, all certified", "[keyframes][assets]") {
+  const auto scenes = test::asset_scenes();
+  REQUIRE(!scenes.empty());
+  for (const auto& path : scenes) {
+    INFO(path.filename().string());
+    Scene scene = load_scene(path);
+    CHECK(scene.keyframes.size() >= 2);
+    REQUIRE(scene.cage.has_value());  // coefficients are stored over the scene's own cage
+    const auto setup = make_shape_setup(scene);
+    for (size_t k = 0; k < scene.keyframes.size(); ++k) {
+      INFO("keyframe " << k);
+      REQUIRE(scene.keyframes[k].coefficients.has_value());
+      CHECK_NOTHROW(import_keyframe(*setup, *scene.keyframes[k].coefficients));
+      // The stored pose still puts the handles on their targets.
+      if (!scene.keyframes[k].targets.empty()) {
+        const std::vector<cd> got = map_points(setup->cage, *scene.keyframes[k].coefficients, scene.handles);
+        for (size_t h = 0; h < got.size(); ++h) CHECK(std::abs(got[h] - scene.keyframes[k].targets[h]) < 1e-3 * setup->size);
+      }
+    }
+  }
+}

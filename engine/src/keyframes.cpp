@@ -61,6 +61,7 @@ KeyframeResult author_keyframe(const ShapeSetup& setup, std::span<const cd> hand
     }
     last = newton_solve(*core, space, &setup.certifier, &quad, x, no);
     r.iterations += last.iterations;
+    r.log.insert(r.log.end(), last.log.begin(), last.log.end());
     x = last.x;
   }
   r.map = space.expand(x);

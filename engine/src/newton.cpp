@@ -234,7 +234,7 @@ NewtonResult newton_solve(NewtonCore& core, const MapSpace& space, const Certifi
     }
     log.gradient_norm = g.norm();
     const double slope = g.dot(d);
-    if (!(slope < 0)) {
+    if (!(slope < -1e-14 * std::max(1.0, std::abs(E)))) {
       res.converged = true;
       res.message = "no descent direction left (gradient at round-off level)";
       break;

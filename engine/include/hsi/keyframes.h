@@ -36,6 +36,7 @@ struct KeyframeResult {
   double ms = 0;
   double energy = 0;            // mean symmetric Dirichlet energy on ∂Ω (2 = isometric)
   CertificateResult certificate;
+  std::vector<NewtonIteration> log;  // every Newton iteration over all stages
   std::string message;
 };
 
