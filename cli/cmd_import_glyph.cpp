@@ -67,17 +67,6 @@ char32_t parse_character(const std::string& s) {
   return c;
 }
 
-// Splits every edge longer than max_edge into equal parts, so that a deformed
-// outline bends along long straight strokes too.
-Loop subdivide(const Loop& loop, double max_edge) {
-  Loop out;
-  for (size_t i = 0; i < loop.size(); ++i) {
-    const cd p = loop[i], q = loop[(i + 1) % loop.size()];
-    const int parts = std::max(1, static_cast<int>(std::ceil(std::abs(q - p) / max_edge - 1e-9)));
-    for (int k = 0; k < parts; ++k) out.push_back(p + (q - p) * (static_cast<double>(k) / parts));
-  }
-  return out;
-}
 
 std::string default_name(char32_t c) {
   if ((c >= U'0' && c <= U'9') || (c >= U'A' && c <= U'Z') || (c >= U'a' && c <= U'z'))
@@ -95,8 +84,8 @@ void run(const ImportGlyphOptions& o) {
   gopt.flatness = o.flatness;
   Shape shape = import_glyph(c, gopt);
   if (o.max_edge > 0) {
-    shape.outer = subdivide(shape.outer, o.max_edge * o.height);
-    for (Loop& h : shape.holes) h = subdivide(h, o.max_edge * o.height);
+    shape.outer = subdivide_edges(shape.outer, o.max_edge * o.height);
+    for (Loop& h : shape.holes) h = subdivide_edges(h, o.max_edge * o.height);
     validate(shape);
   }
 

@@ -23,17 +23,6 @@ struct ImportPngOptions {
   std::string name;
 };
 
-// Splits every edge longer than max_edge into equal parts, so that a deformed
-// outline bends along long straight runs too (the points stay on the edges).
-Loop subdivide(const Loop& loop, double max_edge) {
-  Loop out;
-  for (size_t i = 0; i < loop.size(); ++i) {
-    const cd p = loop[i], q = loop[(i + 1) % loop.size()];
-    const int parts = std::max(1, static_cast<int>(std::ceil(std::abs(q - p) / max_edge - 1e-9)));
-    for (int k = 0; k < parts; ++k) out.push_back(p + (q - p) * (static_cast<double>(k) / parts));
-  }
-  return out;
-}
 
 void run(const ImportPngOptions& o) {
   std::error_code ec;
@@ -44,8 +33,8 @@ void run(const ImportPngOptions& o) {
   PngShape png = import_png_alpha(o.sprite, o.import);
   if (o.max_edge > 0) {
     const double len = o.max_edge * o.import.pixel_size;
-    png.shape.outer = subdivide(png.shape.outer, len);
-    for (Loop& h : png.shape.holes) h = subdivide(h, len);
+    png.shape.outer = subdivide_edges(png.shape.outer, len);
+    for (Loop& h : png.shape.holes) h = subdivide_edges(h, len);
     validate(png.shape);
   }
 

@@ -17,6 +17,9 @@ blob) itself, every texture, and then imports the glyph scenes with these comman
 Everything is deterministic: the same inputs give byte-identical files. Needs only
 /usr/bin/python3 with python3-numpy (Debian 12) and the standard library; PNGs are
 written with zlib + struct. Other assets in the folder (sprite_* scenes) are left alone.
+
+The scenes come out without handles and keyframes: pose them afterwards with
+scripts/make_keyframes.py (the README's "Keyframes" section lists the poses).
 """
 
 import argparse
@@ -608,6 +611,43 @@ The output is deterministic (the same script and font give byte-identical files)
 |---|---|---|---|---|---|---|---|
 """
 
+SPRITE_NOTE = """
+Scenes named `sprite_*` are not made by this script. `sprite_pretzel` is an original
+procedural sprite: `scripts/make_sprite.py` draws `sprite_pretzel.png` (256×256 RGBA,
+anti-aliased alpha) and `hsi import-png` traces its alpha into the scene (see the
+header of `scripts/make_sprite.py`):
+
+```sh
+/usr/bin/python3 scripts/make_sprite.py
+build/bin/hsi import-png assets/sprite_pretzel.png -o assets/sprite_pretzel.json \\
+    --tolerance 0.5 --max-edge 6 --pixel-size 0.00390625
+```
+"""
+
+KEYFRAMES_HEAD = """
+## Keyframes
+
+Every scene has handles and keyframes (t = 0, 1, …), posed by
+`scripts/make_keyframes.py` and solved by `hsi keyframes` (certified locally
+injective; the automatic cage is stored as the scene's user cage and each keyframe's
+coefficients `phi`/`psi` are written into the scene). This script writes the scenes
+without keyframes, so run it after this one (and after importing the sprite):
+
+```sh
+/usr/bin/python3 scripts/make_keyframes.py --hsi build/bin/hsi --png /tmp/keyframes
+```
+
+Keyframe 0 is the rest pose (targets = handles); the targets of the others are the
+handles moved by one analytic deformation each (a conformal bend onto a curve, a
+hinge about a joint, squash and stretch, the harmonic twist of a hole), drawn
+to `/tmp/keyframes/NAME/keyframe_K.png`. A harmonic map cannot twist a hole far
+against the rim around it without wrecking the shape: the only rotationally
+symmetric harmonic twist, w ↦ w + i·k·w/|w|², turns the annulus' hole by at most
+about 30° before it folds. So the holes turn 20°, and the large motions are bends,
+hinges, squash and stretch.
+
+"""
+
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
@@ -674,7 +714,23 @@ def main():
         text += (f"| `{name}.json` | {1 + len(holes)} (outer + {len(holes)} hole{'' if len(holes) == 1 else 's'}) "
                  f"| {len(outer)} | {hv} | {hi[0] - lo[0]:.2f} × {hi[1] - lo[1]:.2f} | {g} "
                  f"| `{name}.png` ({size // 1024} KB): {TEXTURES[name][1]} | {desc} |\n")
-    text += "\nScenes named `sprite_*`, where present, are not made by this script.\n"
+    sprite = os.path.join(ASSETS, "sprite_pretzel.json")
+    if os.path.exists(sprite):
+        # Not made here (scripts/make_sprite.py + hsi import-png): described, not written.
+        _, outer, holes = load_loops(sprite)
+        gap = check_shape("sprite_pretzel", outer, holes, enforce_clearance=False)
+        lo, hi = outer.min(axis=0), outer.max(axis=0)
+        size = os.path.getsize(os.path.join(ASSETS, "sprite_pretzel.png"))
+        text += (f"| `sprite_pretzel.json` | {1 + len(holes)} (outer + {len(holes)} holes) | {len(outer)} "
+                 f"| {', '.join(str(len(h)) for h in holes)} | {hi[0] - lo[0]:.2f} × {hi[1] - lo[1]:.2f} "
+                 f"| {gap:.3f} | `sprite_pretzel.png` ({size // 1024} KB): 256×256 RGBA sprite, baked-crust "
+                 f"gradient + bevel + diagonal stripes + salt grains | A stylised pretzel (one rope crossing "
+                 f"itself, three holes), traced from the sprite's alpha by `hsi import-png`. |\n")
+    text += SPRITE_NOTE
+    text += KEYFRAMES_HEAD
+    sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+    import make_keyframes  # the poses are defined there; this only describes them
+    text += "\n".join(make_keyframes.describe()) + "\n"
     with open(os.path.join(ASSETS, "README.md"), "w") as f:
         f.write(text)
     print("wrote assets/README.md")

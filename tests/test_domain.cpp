@@ -114,3 +114,12 @@ TEST_CASE("largest inscribed circle", "[domain]") {
   CHECK(l.radius == Approx(std::sqrt(2.0) / (1 + std::sqrt(2.0))).margin(0.005));
   CHECK(point_in_loop({{0, 0}, {3, 0}, {3, 3}, {2, 3}, {2, 1}, {0, 1}}, l.center));
 }
+
+TEST_CASE("subdivide_edges splits long edges and keeps the outline", "[domain]") {
+  const Loop sq = test::rect(0, 0, 2, 1);
+  const Loop s = subdivide_edges(sq, 0.25);
+  CHECK(s.size() == 24);  // 8 + 4 + 8 + 4 parts
+  CHECK(signed_area(s) == Approx(2));
+  for (size_t i = 0; i < s.size(); ++i) CHECK(std::abs(s[(i + 1) % s.size()] - s[i]) <= 0.25 + 1e-12);
+  CHECK_THROWS_AS(subdivide_edges(sq, 0), InputError);
+}

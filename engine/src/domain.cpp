@@ -99,6 +99,17 @@ BoundingBox bounding_box(const Loop& loop) {
 
 BoundingBox bounding_box(const Shape& shape) { return bounding_box(shape.outer); }
 
+Loop subdivide_edges(const Loop& loop, double max_edge) {
+  if (!(max_edge > 0)) throw InputError("subdivide_edges: max_edge must be positive");
+  Loop out;
+  for (size_t i = 0; i < loop.size(); ++i) {
+    const cd p = loop[i], q = loop[(i + 1) % loop.size()];
+    const int parts = std::max(1, static_cast<int>(std::ceil(std::abs(q - p) / max_edge - 1e-9)));
+    for (int k = 0; k < parts; ++k) out.push_back(p + (q - p) * (static_cast<double>(k) / parts));
+  }
+  return out;
+}
+
 Shape normalize(Shape shape) {
   if (signed_area(shape.outer) < 0) std::reverse(shape.outer.begin(), shape.outer.end());
   for (Loop& h : shape.holes)

@@ -53,6 +53,10 @@ struct BoundingBox {
 BoundingBox bounding_box(const Loop& loop);
 BoundingBox bounding_box(const Shape& shape);
 
+// Splits every edge longer than max_edge into equal parts (points stay on the
+// edges), so that a deformed outline bends along long straight runs too.
+Loop subdivide_edges(const Loop& loop, double max_edge);
+
 // Orients the outer loop counter-clockwise and the holes clockwise.
 Shape normalize(Shape shape);
 
