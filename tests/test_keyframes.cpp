@@ -59,8 +59,10 @@ TEST_CASE("targets no map can reach end at the closest certified map, with a mes
   const auto setup = setup_for(test::bar_with_holes());
   const std::vector<cd> handles = {{1.4, 0.5}, {1.401, 0.5}, {0.2, 0.5}};
   const std::vector<cd> targets = {{0.5, 0.5}, {3.5, 0.5}, {0.2, 0.5}};
-  KeyframeOptions o;
-  o.newton.max_iterations = 60;
+  KeyframeOptions o;  // a short solve: the verdict is what matters here
+  o.stages = 2;
+  o.stage_iterations = 5;
+  o.newton.max_iterations = 10;
   const KeyframeResult k = author_keyframe(*setup, handles, targets, identity_map(setup->cage), o);
   CHECK(k.certified);
   CHECK_FALSE(k.reached);

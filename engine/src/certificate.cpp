@@ -135,6 +135,44 @@ CertificateResult Certifier::certify(const HarmonicMap& map, const CertificateOp
   std::vector<SegmentOutcome> out(static_cast<size_t>(S));
   std::atomic<bool> stop{false};
 
+  // f_z, conj f_zbar and their derivatives at one point, straight from the cage
+  // (math.md §2), without forming basis rows: the subdivision's inner loop.
+  const cd inv2pii = 1.0 / (2.0 * std::numbers::pi * cd(0, 1));
+  auto values_at = [&](cd w) {
+    Values v{0, 0, 0, 0};
+    int col = 0;
+    for (const Loop& loop : I.cage.loops) {
+      const size_t k = loop.size();
+      cd Bm = loop[k - 1] - w, B0 = loop[0] - w;
+      cd Lm = std::log(B0 / Bm);  // log(B_j / B_{j−1}) for j = 0
+      for (size_t j = 0; j < k; ++j) {
+        const size_t jp = (j + 1) % k;
+        const cd Bp = loop[jp] - w;
+        const cd L0 = std::log(Bp / B0);
+        const cd A0 = loop[j] - loop[(j + k - 1) % k], A1 = loop[jp] - loop[j];
+        const cd D = inv2pii * (Lm / A0 - L0 / A1);
+        const cd E = inv2pii * (Bp - Bm) / (Bm * B0 * Bp);
+        const Eigen::Index c = col + static_cast<Eigen::Index>(j);
+        v.a += D * map.phi(c);
+        v.b += D * map.psi(c);
+        v.a1 += E * map.phi(c);
+        v.b1 += E * map.psi(c);
+        Bm = B0;
+        B0 = Bp;
+        Lm = L0;
+      }
+      col += static_cast<int>(k);
+    }
+    for (int h = 0; h < I.N; ++h) {
+      const cd d = w - I.cage.hole_points[static_cast<size_t>(h)];
+      v.a += map.phi(I.m + h) / d;
+      v.b += map.psi(I.m + h) / d;
+      v.a1 -= map.phi(I.m + h) / (d * d);
+      v.b1 -= map.psi(I.m + h) / (d * d);
+    }
+    return v;
+  };
+
   // Proves (b) and the arg condition on [p, q] from values at its ends, subdividing
   // (new basis rows at midpoints; the parent's Lipschitz constants stay valid).
   auto prove = [&](auto&& self, cd p, cd q, const Values& vp, const Values& vq, double lipA, double lipB, int depth,
@@ -148,6 +186,8 @@ CertificateResult Certifier::certify(const HarmonicMap& map, const CertificateOp
     // The image of σ under f_z stays in the disc |w − f_z(p)| ≤ fzz_max·len, which must exclude 0
     // for the principal arg increment to be the true one.
     const bool arg_ok = fzz_max * len < std::abs(vp.a);
+    // A point where |f_zbar| ≥ |f_z| is a real fold: no subdivision can help.
+    const bool folds_here = std::abs(vp.b) >= std::abs(vp.a) || std::abs(vq.b) >= std::abs(vq.a);
     if (a_lo > b_hi && arg_ok) {
       o.pieces++;
       o.arg += std::arg(vq.a / vp.a);
@@ -157,7 +197,8 @@ CertificateResult Certifier::certify(const HarmonicMap& map, const CertificateOp
       o.k = std::max(o.k, b_hi / a_lo);
       return;
     }
-    if (depth >= opt.max_depth || stop.load(std::memory_order_relaxed)) {
+    if (folds_here || depth >= opt.max_depth || o.pieces >= opt.max_pieces_per_segment ||
+        stop.load(std::memory_order_relaxed)) {
       o.ok = false;
       o.pieces++;
       o.margin = std::min(o.margin, a_lo - b_hi);
@@ -165,9 +206,7 @@ CertificateResult Certifier::certify(const HarmonicMap& map, const CertificateOp
       return;
     }
     const cd mid = (p + q) / 2.0;
-    const cd w[1] = {mid};
-    const BasisRows rows = evaluate_basis(I.cage, w, kBasisD | kBasisE);
-    const Values vm{(rows.D * map.phi)(0), (rows.D * map.psi)(0), (rows.E * map.phi)(0), (rows.E * map.psi)(0)};
+    const Values vm = values_at(mid);
     self(self, p, mid, vp, vm, lipA, lipB, depth + 1, o);
     if (!o.ok) return;
     self(self, mid, q, vm, vq, lipA, lipB, depth + 1, o);

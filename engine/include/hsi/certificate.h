@@ -17,6 +17,7 @@ namespace hsi {
 
 struct CertificateOptions {
   int max_depth = 14;              // subdivision levels per segment before giving up
+  long max_pieces_per_segment = 4096;  // work budget per segment; exhausting it means "not certified"
   bool stop_at_first_failure = false;  // for line searches: the verdict is all that matters
 };
 
