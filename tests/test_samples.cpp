@@ -38,3 +38,17 @@ TEST_CASE("samples are deterministic and H is a spread-out subset", "[samples]")
   CHECK_THROWS_AS(hessian_subset(a, 0.0), InputError);
   CHECK_THROWS_AS(sample_boundary(s, 0), InputError);
 }
+
+TEST_CASE("H keeps a minimum number of samples on small loops", "[samples]") {
+  const Shape s = test::annulus(1.0, 0.05, 64);  // a tiny hole: about 5% of the boundary
+  const BoundarySamples g = sample_boundary(s, 1000);
+  const auto plain = hessian_subset(g, 0.05);
+  const auto guarded = hessian_subset(g, 0.05, {0, 30});
+  auto on_hole = [&](const std::vector<int>& h) {
+    return std::count_if(h.begin(), h.end(), [&](int i) { return g.loop[static_cast<size_t>(i)] == 1; });
+  };
+  CHECK(on_hole(plain) < 30);
+  CHECK(on_hole(guarded) == 30);
+  CHECK(hessian_subset(g, 0.05, {0, 100000}).size() == plain.size() - static_cast<size_t>(on_hole(plain)) +
+                                                           static_cast<size_t>(g.loop_begin[2] - g.loop_begin[1]));
+}

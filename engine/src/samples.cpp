@@ -53,13 +53,18 @@ BoundarySamples sample_boundary(const Shape& shape, int count) {
   return s;
 }
 
-std::vector<int> hessian_subset(const BoundarySamples& g, double ratio) {
+std::vector<int> hessian_subset(const BoundarySamples& g, double ratio, const std::vector<int>& min_per_loop) {
   if (!(ratio > 0 && ratio <= 1))
     throw InputError("the Hessian sample ratio must lie in (0, 1] (got " + std::to_string(ratio) + ")");
-  const size_t n = g.size();
-  const size_t m = std::max<size_t>(1, static_cast<size_t>(std::llround(ratio * static_cast<double>(n))));
-  std::vector<int> idx(m);
-  for (size_t k = 0; k < m; ++k) idx[k] = static_cast<int>((k * n) / m);
+  std::vector<int> idx;
+  const size_t loops = g.loop_begin.size() - 1;
+  for (size_t l = 0; l < loops; ++l) {
+    const size_t begin = static_cast<size_t>(g.loop_begin[l]), n = static_cast<size_t>(g.loop_begin[l + 1]) - begin;
+    size_t m = std::max<size_t>(1, static_cast<size_t>(std::llround(ratio * static_cast<double>(n))));
+    if (l < min_per_loop.size()) m = std::max(m, static_cast<size_t>(std::max(0, min_per_loop[l])));
+    m = std::min(m, n);
+    for (size_t k = 0; k < m; ++k) idx.push_back(static_cast<int>(begin + (k * n) / m));
+  }
   return idx;
 }
 

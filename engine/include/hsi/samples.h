@@ -20,8 +20,10 @@ struct BoundarySamples {
 // at its vertex 0 shifted by half a spacing.
 BoundarySamples sample_boundary(const Shape& shape, int count);
 
-// Indices of a uniform subset H ⊂ G with |H| = round(ratio |G|) (at least 1):
-// every k-th sample by a fixed stride, so H is spread over all loops. ratio in (0, 1].
-std::vector<int> hessian_subset(const BoundarySamples& g, double ratio);
+// Indices of a uniform subset H ⊂ G: on each loop, every k-th sample by a fixed
+// stride, round(ratio |G_loop|) of them (at least 1) — but at least
+// min_per_loop[l] on loop l when given (capped by that loop's samples), so that a
+// small hole keeps enough Hessian samples for its cage's coefficients. ratio in (0, 1].
+std::vector<int> hessian_subset(const BoundarySamples& g, double ratio, const std::vector<int>& min_per_loop = {});
 
 }  // namespace hsi
