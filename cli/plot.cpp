@@ -213,7 +213,7 @@ void plot_series(const std::filesystem::path& png, const std::string& title, con
   cairo_t* cr = ctx.get();
   cairo_set_source_rgb(cr, 1, 1, 1);
   cairo_paint(cr);
-  const double L = 70, R = 20, T = 36, B = 48;
+  const double L = 70, R = 20, T = 54, B = 48;  // title on the first line, legend on the second
   double x0 = x.empty() ? 0 : x.front(), x1 = x.empty() ? 1 : x.back();
   if (x1 <= x0) x1 = x0 + 1;
   double y0 = std::numeric_limits<double>::infinity(), y1 = -y0;
@@ -272,11 +272,11 @@ void plot_series(const std::filesystem::path& png, const std::string& title, con
     const double d[] = {5.0, 3.0};
     cairo_set_dash(cr, d, s.dashed ? 2 : 0, 0);
     cairo_set_line_width(cr, 2);
-    cairo_move_to(cr, legend_x, 22 - 4);
-    cairo_line_to(cr, legend_x + 22, 22 - 4);
+    cairo_move_to(cr, legend_x, 40 - 4);
+    cairo_line_to(cr, legend_x + 22, 40 - 4);
     cairo_stroke(cr);
     cairo_set_dash(cr, nullptr, 0, 0);
-    cairo_move_to(cr, legend_x + 26, 22);
+    cairo_move_to(cr, legend_x + 26, 40);
     cairo_set_source_rgb(cr, 0.2, 0.2, 0.2);
     cairo_show_text(cr, s.name.c_str());
   }
