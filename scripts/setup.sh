@@ -6,6 +6,7 @@ pkgs=(
   libeigen3-dev catch2 nlohmann-json3-dev libcli11-dev libstb-dev libpng-dev
   libfreetype-dev fonts-dejavu-core libcgal-dev libpolyclipping-dev libcairo2-dev
   python3 python3-numpy
+  libvulkan-dev libvulkan-volk-dev glslang-tools spirv-tools mesa-vulkan-drivers vulkan-validationlayers
 )
 missing=()
 for p in "${pkgs[@]}"; do

@@ -3,5 +3,7 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/build.sh -DHSI_WARNINGS_AS_ERRORS=ON
+# lavapipe is installed by setup.sh: Vulkan tests must run, not skip.
+export HSI_REQUIRE_VULKAN=1
 cd build
 ctest --output-on-failure -j"$(nproc)" --timeout 900

@@ -1,0 +1,142 @@
+// Benchmark of the Vulkan dense evaluation (compute/dense_eval.h) against the CPU
+// reference (hsi::evaluate_map at the same points) in the same run: grids of 256²,
+// 1024², 2048² over a scene's shape, ms per frame and the ratio. Prints the device
+// and a Markdown table. Not a test: timings only.
+#include <CLI/CLI.hpp>
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <omp.h>
+
+#include "hsi/compute/dense_eval.h"
+#include "hsi/scene_io.h"
+
+using namespace hsi;
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double ms_since(Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); }
+
+// The 1-minute load average: timings on a shared machine are only as good as this.
+std::string load_average() {
+  std::FILE* f = std::fopen("/proc/loadavg", "r");
+  if (!f) return "n/a";
+  char buf[64] = {};
+  const bool ok = std::fgets(buf, sizeof buf, f) != nullptr;
+  std::fclose(f);
+  std::string s = ok ? buf : "n/a";
+  return s.substr(0, s.find(' '));
+}
+
+// The CPU reference at every point, in chunks (a full basis matrix of 4M points
+// would not fit in memory). Returns f_z so the caller can compare.
+void cpu_evaluate(const Cage& cage, const HarmonicMap& map, const std::vector<cd>& pts, std::vector<cd>& f,
+                  std::vector<cd>& f_z) {
+  constexpr size_t kChunk = 16384;
+  f.resize(pts.size());
+  f_z.resize(pts.size());
+  for (size_t s = 0; s < pts.size(); s += kChunk) {
+    const size_t n = std::min(kChunk, pts.size() - s);
+    const BasisRows rows = evaluate_basis(cage, std::span<const cd>(pts.data() + s, n), kBasisC | kBasisD);
+    const MapValues v = evaluate_map(rows, map);
+    for (size_t i = 0; i < n; ++i) {
+      f[s + i] = v.f(static_cast<Eigen::Index>(i));
+      f_z[s + i] = v.f_z(static_cast<Eigen::Index>(i));
+    }
+  }
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"hsi Vulkan dense evaluation benchmark: GPU grid vs CPU evaluate_map, Markdown table"};
+  std::vector<std::string> scenes;
+  std::vector<int> sizes = {256, 1024, 2048};
+  int frames = 3, cpu_frames = 1;
+  bool use_float = false, validation = false;
+  std::string device;
+  app.add_option("scenes", scenes, "Scene files (.json)")->required();
+  app.add_option("--sizes", sizes, "Grid sides (n × n points over the shape's bounding box)")->capture_default_str();
+  app.add_option("--frames", frames, "GPU frames per size (after one warm-up)")->capture_default_str();
+  app.add_option("--cpu-frames", cpu_frames, "CPU frames per size")->capture_default_str();
+  app.add_option("--device", device, "Vulkan device name substring (default: best device)");
+  app.add_flag("--float", use_float, "Use the float shader (default: double where supported)");
+  app.add_flag("--validation", validation, "Enable the validation layer (slower)");
+  CLI11_PARSE(app, argc, argv);
+
+  vk::ContextOptions co;
+  co.validation = validation;
+  co.device_name = device;
+  std::unique_ptr<vk::Context> ctx;
+  try {
+    ctx = std::make_unique<vk::Context>(co);
+  } catch (const vk::VulkanError& e) {
+    std::fprintf(stderr, "bench_vulkan: %s\n", e.what());
+    return 2;
+  }
+  vk::DenseEvalOptions eo;
+  eo.precision = use_float ? vk::Precision::kFloat : vk::Precision::kAuto;
+  vk::DenseEvaluator eval(*ctx, eo);
+  const char* lp = std::getenv("LP_NUM_THREADS");
+  std::printf("Vulkan device: %s (%s, Vulkan %u.%u), shader precision: %s\n", ctx->info().name.c_str(),
+              ctx->info().type_name().c_str(), VK_API_VERSION_MAJOR(ctx->info().api_version),
+              VK_API_VERSION_MINOR(ctx->info().api_version), eval.double_precision() ? "double" : "float");
+  std::printf("CPU reference: hsi::evaluate_basis(C, D) + evaluate_map, %d OpenMP threads; LP_NUM_THREADS=%s; "
+              "load average %s\n\n",
+              omp_get_max_threads(), lp ? lp : "(unset)", load_average().c_str());
+  std::printf("GPU ms/frame: median evaluate_grid wall time (upload, dispatch, readback, conversion; inside mask\n"
+              "on); dispatch ms: submit to fence. CPU ms/frame: mean. Max error: max |f_gpu - f_cpu| / max |f_cpu|\n"
+              "over the grid points inside the shape.\n\n");
+  std::printf("| scene | grid | points | m + N | GPU ms/frame | dispatch ms | CPU ms/frame | CPU / GPU | max error |\n"
+              "|---|---|---|---|---|---|---|---|---|\n");
+
+  for (const std::string& path : scenes) {
+    const Scene scene = load_scene(path);
+    const Cage cage = scene_cage(scene);
+    HarmonicMap map = affine_map(cage, {1.1, 0.2}, {0.1, 0.0}, {0.0, 0.0});
+    for (const Keyframe& k : scene.keyframes)
+      if (k.coefficients) map = *k.coefficients;
+    const std::string name = scene.name.empty() ? path : scene.name;
+    for (int n : sizes) {
+      const vk::Grid grid = vk::Grid::covering(bounding_box(scene.shape), n, n);
+      vk::DenseField field = eval.evaluate_grid(cage, map, grid, &scene.shape);  // warm-up
+      std::vector<double> wall, dispatch_ms;
+      for (int i = 0; i < std::max(frames, 1); ++i) {
+        const auto t0 = Clock::now();
+        field = eval.evaluate_grid(cage, map, grid, &scene.shape);
+        wall.push_back(ms_since(t0));
+        dispatch_ms.push_back(eval.last_stats().gpu_ms);
+      }
+      std::sort(wall.begin(), wall.end());
+      std::sort(dispatch_ms.begin(), dispatch_ms.end());
+      const double gpu = wall[wall.size() / 2], dispatch = dispatch_ms[dispatch_ms.size() / 2];
+
+      const std::vector<cd> pts = grid.points();
+      std::vector<cd> f, f_z;
+      double cpu = 0;
+      for (int i = 0; i < cpu_frames; ++i) {
+        const auto t0 = Clock::now();
+        cpu_evaluate(cage, map, pts, f, f_z);
+        cpu += ms_since(t0);
+      }
+      cpu /= std::max(cpu_frames, 1);
+      double err = 0, mag = 0;
+      for (size_t k = 0; k < pts.size(); ++k) {
+        if (!field.inside[k]) continue;  // outside the shape values near the cage are huge and meaningless
+        err = std::max(err, std::abs(field.f[k] - f[k]));
+        mag = std::max(mag, std::abs(f[k]));
+      }
+      std::printf("| %s | %d² | %zu | %d | %.1f | %.1f | %.1f | %.2f | %.1e |\n", name.c_str(), n, pts.size(),
+                  basis_size(cage), gpu, dispatch, cpu, cpu / gpu, err / std::max(mag, 1e-300));
+      std::fflush(stdout);
+    }
+  }
+  std::printf("\nload average at the end: %s\n", load_average().c_str());
+  if (validation && ctx->validation_log()->count()) {
+    std::fprintf(stderr, "%s\n", ctx->validation_log()->summary().c_str());
+    return 1;
+  }
+  return 0;
+}

@@ -1,0 +1,103 @@
+// Complex arithmetic for hsi's compute shaders, in the precision chosen by
+// HSI_REAL_DOUBLE (1: double, needs shaderFloat64; 0: float). A complex number is a
+// Real2 (x = real part, y = imaginary part).
+//
+// GLSL has no double-precision log or atan (GLSL.std.450 Log/Atan2 are 32-bit
+// only), so the double build carries its own: ln by frexp + the atanh series, atan
+// by two half-angle reductions + the Taylor series, both to about 1e-16 relative.
+#ifndef HSI_COMPLEX_GLSL
+#define HSI_COMPLEX_GLSL
+
+#if HSI_REAL_DOUBLE
+#define Real double
+#define Real2 dvec2
+#define Real4 dvec4
+const double kPi = 3.14159265358979323846264338328lf;
+const double kHalfPi = 1.57079632679489661923132169164lf;
+const double kInv2Pi = 0.159154943091895335768883763373lf;
+const double kLn2 = 0.693147180559945309417232121458lf;
+const double kSqrtHalf = 0.707106781186547524400844362105lf;
+double hsi_nan() { return packDouble2x32(uvec2(0u, 0x7ff80000u)); }
+
+// Natural log of x > 0: x = m 2^e with m in [sqrt(1/2), sqrt(2)), then
+// ln m = 2 atanh(s), s = (m - 1)/(m + 1), |s| <= 0.1716, series to s^23.
+double hsi_ln(double x) {
+  int e;
+  double m = frexp(x, e);
+  if (m < kSqrtHalf) {
+    m *= 2.0lf;
+    e -= 1;
+  }
+  const double s = (m - 1.0lf) / (m + 1.0lf);
+  const double s2 = s * s;
+  double p = 1.0lf / 23.0lf;
+  p = p * s2 + 1.0lf / 21.0lf;
+  p = p * s2 + 1.0lf / 19.0lf;
+  p = p * s2 + 1.0lf / 17.0lf;
+  p = p * s2 + 1.0lf / 15.0lf;
+  p = p * s2 + 1.0lf / 13.0lf;
+  p = p * s2 + 1.0lf / 11.0lf;
+  p = p * s2 + 1.0lf / 9.0lf;
+  p = p * s2 + 1.0lf / 7.0lf;
+  p = p * s2 + 1.0lf / 5.0lf;
+  p = p * s2 + 1.0lf / 3.0lf;
+  return double(e) * kLn2 + 2.0lf * s * (1.0lf + s2 * p);
+}
+
+// atan(t) for |t| <= 1: atan t = 2 atan(t / (1 + sqrt(1 + t^2))) twice brings
+// |t| below tan(pi/16) ~ 0.199, then the alternating series to t^25.
+double hsi_atan_unit(double t) {
+  t = t / (1.0lf + sqrt(1.0lf + t * t));
+  t = t / (1.0lf + sqrt(1.0lf + t * t));
+  const double t2 = t * t;
+  double p = -1.0lf / 25.0lf;
+  p = p * t2 + 1.0lf / 23.0lf;
+  p = p * t2 - 1.0lf / 21.0lf;
+  p = p * t2 + 1.0lf / 19.0lf;
+  p = p * t2 - 1.0lf / 17.0lf;
+  p = p * t2 + 1.0lf / 15.0lf;
+  p = p * t2 - 1.0lf / 13.0lf;
+  p = p * t2 + 1.0lf / 11.0lf;
+  p = p * t2 - 1.0lf / 9.0lf;
+  p = p * t2 + 1.0lf / 7.0lf;
+  p = p * t2 - 1.0lf / 5.0lf;
+  p = p * t2 + 1.0lf / 3.0lf;
+  return 4.0lf * t * (1.0lf - t2 * p);
+}
+
+// Principal argument in (-pi, pi], as std::arg (0 at the origin).
+double hsi_atan2(double y, double x) {
+  const double ax = abs(x), ay = abs(y);
+  const double hi = max(ax, ay), lo = min(ax, ay);
+  double a = hi > 0.0lf ? hsi_atan_unit(lo / hi) : 0.0lf;
+  a = ay > ax ? kHalfPi - a : a;
+  a = x < 0.0lf ? kPi - a : a;
+  return y < 0.0lf ? -a : a;
+}
+#else
+#define Real float
+#define Real2 vec2
+#define Real4 vec4
+const float kPi = 3.14159265358979323846;
+const float kHalfPi = 1.57079632679489661923;
+const float kInv2Pi = 0.159154943091895335769;
+float hsi_nan() { return uintBitsToFloat(0x7fc00000u); }
+float hsi_ln(float x) { return log(x); }
+float hsi_atan2(float y, float x) { return (x == 0.0 && y == 0.0) ? 0.0 : atan(y, x); }
+#endif
+
+Real2 cmul(Real2 a, Real2 b) { return Real2(a.x * b.x - a.y * b.y, a.x * b.y + a.y * b.x); }
+Real2 cconj(Real2 a) { return Real2(a.x, -a.y); }
+Real cabs2(Real2 a) { return a.x * a.x + a.y * a.y; }
+Real cabs(Real2 a) { return sqrt(cabs2(a)); }
+Real2 cdiv(Real2 a, Real2 b) {
+  const Real d = cabs2(b);
+  return Real2((a.x * b.x + a.y * b.y) / d, (a.y * b.x - a.x * b.y) / d);
+}
+Real2 cinv(Real2 b) { return Real2(b.x, -b.y) / cabs2(b); }
+// Principal log: ln|z| + i arg z.
+Real2 clog(Real2 z) { return Real2(Real(0.5) * hsi_ln(cabs2(z)), hsi_atan2(z.y, z.x)); }
+// z / (2 pi i) = -i z / (2 pi).
+Real2 div_2pi_i(Real2 z) { return Real2(z.y, -z.x) * kInv2Pi; }
+
+#endif  // HSI_COMPLEX_GLSL
