@@ -1,0 +1,323 @@
+// Benchmark of the CUDA Newton core against the CPU one, in the same run: per bundled
+// scene and |G|, the time per call of each core method, the floor set by the library
+// calls alone (the Hessian's ZGEMM, a Cholesky factor-and-solve of its size), and a
+// warm-started interpolation sequence with each backend. Prints Markdown tables with
+// CUDA/CPU ratios. Not a test: timings only.
+#include <CLI/CLI.hpp>
+#include <Eigen/Cholesky>
+#include <chrono>
+#include <cstdio>
+#include <cusolverDn.h>
+#include <omp.h>
+#include <random>
+#include <sstream>
+
+#include "hsi/cuda/device.h"
+#include "hsi/cuda/newton_core.h"
+#include "hsi/interpolation.h"
+#include "hsi/keyframes.h"
+
+using namespace hsi;
+namespace hc = hsi::cuda;
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double ms_since(Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); }
+
+void check_solver(cusolverStatus_t s, const char* call) {
+  if (s != CUSOLVER_STATUS_SUCCESS) throw hc::Error(std::string(call) + " failed: cusolver status " + std::to_string(static_cast<int>(s)));
+}
+#define HSI_CUSOLVER_CHECK(call) check_solver((call), #call)
+
+class SolverHandle {
+ public:
+  explicit SolverHandle(cudaStream_t stream) {
+    HSI_CUSOLVER_CHECK(cusolverDnCreate(&h_));
+    if (cusolverDnSetStream(h_, stream) != CUSOLVER_STATUS_SUCCESS) {
+      cusolverDnDestroy(h_);
+      throw hc::Error("cusolverDnSetStream failed");
+    }
+  }
+  ~SolverHandle() { cusolverDnDestroy(h_); }
+  SolverHandle(const SolverHandle&) = delete;
+  SolverHandle& operator=(const SolverHandle&) = delete;
+  operator cusolverDnHandle_t() const { return h_; }
+
+ private:
+  cusolverDnHandle_t h_ = nullptr;
+};
+
+struct Loaded {
+  std::string name;
+  Scene scene;
+  std::unique_ptr<ShapeSetup> setup;
+  std::vector<double> times;
+  std::vector<HarmonicMap> maps;
+};
+
+Loaded load(const std::string& path, int samples, double ratio) {
+  Loaded L;
+  L.scene = load_scene(path);
+  L.name = L.scene.name.empty() ? path : L.scene.name;
+  if (!L.scene.cage) L.scene.cage = build_cage(L.scene.shape, L.scene.cage_options);
+  L.setup = make_shape_setup(L.scene, samples, ratio);
+  solve_scene_keyframes(L.scene, *L.setup);
+  for (const Keyframe& k : L.scene.keyframes) {
+    L.times.push_back(k.time);
+    L.maps.push_back(*k.coefficients);
+  }
+  return L;
+}
+
+// Mean ms per call of f over `reps` calls, after two warm-up calls. Every timed core
+// call ends in a host synchronisation (its result is on the host), so wall-clock time
+// is the cost the Newton loop sees.
+template <class F>
+double time_calls(int reps, F&& f) {
+  f();
+  f();
+  const auto t0 = Clock::now();
+  for (int i = 0; i < reps; ++i) f();
+  return ms_since(t0) / reps;
+}
+
+volatile double g_sink = 0;
+
+struct CallTimes {
+  double energy_gradient = 0, hessian = 0, line_search = 0;
+};
+
+// One core at a fixed, realistic state: keyframe 0's coefficients against the metric
+// blended halfway to keyframe 1, the direction towards keyframe 1.
+CallTimes time_core(NewtonCore& core, const Loaded& L, const std::vector<Metric>& targets, int reps) {
+  const MapSpace& space = L.setup->metric_space;
+  const Eigen::VectorXd x0 = space.reduce(L.maps[0]).x, x1 = space.reduce(L.maps[1]).x;
+  const Eigen::VectorXd v = space.T() * x0, dv = space.T() * (x1 - x0);
+  core.set_targets(targets);
+  CallTimes t;
+  double sink = 0;
+  t.energy_gradient = time_calls(reps, [&] {
+    core.set_coefficients(v);
+    sink += core.energy();
+    sink += core.gradient()(0);
+  });
+  t.hessian = time_calls(reps, [&] { sink += core.hessian(HessianProjection::PartProj)(0, 0); });
+  t.line_search = time_calls(reps, [&] {
+    core.set_direction(dv);
+    const double s = core.max_safe_step();
+    sink += core.energy_at(0.5 * std::min(1.0, s));
+  });
+  g_sink = sink;  // keep the results observable
+  return t;
+}
+
+struct Floors {
+  double zgemm_ms = 0, zgemm_tflops = 0, potrf_potrs_ms = 0, eigen_llt_ms = 0;
+};
+
+// The library calls alone, timed with CUDA events on a stream of their own: the
+// Hessian's ZGEMM (n × 6n × |H|) and a Cholesky factor + solve of a (4n) × (4n) SPD matrix.
+Floors time_floors(int n, int h, const Eigen::MatrixXd& spd, int reps) {
+  Floors f;
+  hc::Stream stream;
+  hc::BlasHandle blas(stream);
+  hc::Event start(true), stop(true);
+  auto event_ms = [&](auto&& body) {
+    body();  // warm-up
+    HSI_CUDA_CHECK(cudaEventRecord(start, stream));
+    for (int i = 0; i < reps; ++i) body();
+    HSI_CUDA_CHECK(cudaEventRecord(stop, stream));
+    HSI_CUDA_CHECK(cudaEventSynchronize(stop));
+    float ms = 0;
+    HSI_CUDA_CHECK(cudaEventElapsedTime(&ms, start, stop));
+    return static_cast<double>(ms) / reps;
+  };
+  {
+    const size_t sn = static_cast<size_t>(n), sh = static_cast<size_t>(h);
+    hc::DeviceArray<cuDoubleComplex> A(sh * sn), B(sh * 6 * sn), C(sn * 6 * sn);
+    HSI_CUDA_CHECK(cudaMemsetAsync(A.get(), 0, A.bytes(), stream));
+    HSI_CUDA_CHECK(cudaMemsetAsync(B.get(), 0, B.bytes(), stream));
+    const cuDoubleComplex one{1, 0}, zero{0, 0};
+    f.zgemm_ms = event_ms([&] {
+      HSI_CUDA_CHECK(cublasZgemm(blas, CUBLAS_OP_C, CUBLAS_OP_N, n, 6 * n, h, &one, A.get(), h, B.get(), h, &zero, C.get(), n));
+    });
+    f.zgemm_tflops = 8.0 * n * 6.0 * n * h / (f.zgemm_ms * 1e-3) / 1e12;
+  }
+  {
+    const int N = static_cast<int>(spd.rows());
+    const size_t NN = static_cast<size_t>(N) * static_cast<size_t>(N);
+    SolverHandle solver(stream);
+    hc::DeviceArray<double> A0(NN), A(NN), b(static_cast<size_t>(N));
+    hc::DeviceArray<int> info(1);
+    HSI_CUDA_CHECK(cudaMemcpyAsync(A0.get(), spd.data(), A0.bytes(), cudaMemcpyHostToDevice, stream));
+    HSI_CUDA_CHECK(cudaMemcpyAsync(A.get(), spd.data(), A.bytes(), cudaMemcpyHostToDevice, stream));
+    int lwork = 0;
+    HSI_CUSOLVER_CHECK(cusolverDnDpotrf_bufferSize(solver, CUBLAS_FILL_MODE_LOWER, N, A.get(), N, &lwork));
+    hc::DeviceArray<double> work(static_cast<size_t>(std::max(lwork, 1)));
+    const Eigen::VectorXd rhs = Eigen::VectorXd::Ones(N);
+    // Restoring A and b is part of each timed round (a device copy of (4n)², small
+    // against the factorisation); what a solver on the device would pay too.
+    f.potrf_potrs_ms = event_ms([&] {
+      HSI_CUDA_CHECK(cudaMemcpyAsync(A.get(), A0.get(), A.bytes(), cudaMemcpyDeviceToDevice, stream));
+      HSI_CUDA_CHECK(cudaMemcpyAsync(b.get(), rhs.data(), b.bytes(), cudaMemcpyHostToDevice, stream));
+      HSI_CUSOLVER_CHECK(cusolverDnDpotrf(solver, CUBLAS_FILL_MODE_LOWER, N, A.get(), N, work.get(), lwork, info.get()));
+      HSI_CUSOLVER_CHECK(cusolverDnDpotrs(solver, CUBLAS_FILL_MODE_LOWER, N, 1, A.get(), N, b.get(), N, info.get()));
+    });
+    int host_info = -1;
+    HSI_CUDA_CHECK(cudaMemcpyAsync(&host_info, info.get(), sizeof(int), cudaMemcpyDeviceToHost, stream));
+    HSI_CUDA_CHECK(cudaStreamSynchronize(stream));
+    if (host_info != 0) std::fprintf(stderr, "warning: cusolverDnDpotrf/potrs reported info = %d\n", host_info);
+    f.eigen_llt_ms = time_calls(std::max(1, reps / 4), [&] {
+      Eigen::LLT<Eigen::MatrixXd> llt(spd);
+      const Eigen::VectorXd x = llt.solve(rhs);
+      if (!x.allFinite()) std::fprintf(stderr, "warning: Eigen LLT failed\n");
+    });
+  }
+  return f;
+}
+
+struct SequenceStats {
+  bool ran = false;
+  double mean_ms = 0, max_ms = 0, iterations = 0;
+  int uncertified = 0;
+  NewtonResult::Timing per_iteration;
+};
+
+SequenceStats run_sequence(const Loaded& L, std::unique_ptr<NewtonCore> core, int frames) {
+  Interpolator interp(*L.setup, L.times, L.maps, {}, std::move(core));
+  const auto seq = interp.sequence(frames);
+  SequenceStats s;
+  s.ran = true;
+  int solved = 0;
+  double its = 0;
+  NewtonResult::Timing t;
+  for (const FrameResult& f : seq) {
+    s.uncertified += !f.certified;
+    if (f.keyframe) continue;
+    ++solved;
+    s.mean_ms += f.ms;
+    s.max_ms = std::max(s.max_ms, f.ms);
+    its += f.iterations;
+    t.energy_gradient += f.timing.energy_gradient;
+    t.hessian += f.timing.hessian;
+    t.solve += f.timing.solve;
+    t.line_search += f.timing.line_search;
+    t.certificate += f.timing.certificate;
+  }
+  solved = std::max(solved, 1);
+  s.mean_ms /= solved;
+  s.iterations = its / solved;
+  const double per = std::max(its, 1.0);
+  s.per_iteration = {t.energy_gradient / per, t.hessian / per, t.solve / per, t.line_search / per, t.certificate / per};
+  return s;
+}
+
+std::string ratio(double cuda, double cpu) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.3f", cuda / cpu);
+  return buf;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"hsi CUDA Newton core benchmark: CPU vs CUDA in one run, Markdown tables"};
+  std::vector<std::string> scenes;
+  std::vector<int> sample_counts{10000, 100000};
+  double ratio_r = 0.2;
+  int frames = 500, reps = 20, cpu_sequence_max = 10000;
+  bool skip_sequence = false;
+  app.add_option("scenes", scenes, "Scene files with two or more keyframes")->required();
+  app.add_option("--samples", sample_counts, "|G| values")->capture_default_str();
+  app.add_option("--ratio", ratio_r, "Hessian sample ratio r = |H|/|G|")->capture_default_str();
+  app.add_option("--frames", frames, "Frames of the warm-started sequences")->capture_default_str();
+  app.add_option("--reps", reps, "Timed calls per core method")->capture_default_str();
+  app.add_option("--cpu-sequence-max-samples", cpu_sequence_max, "Run the CPU sequence only up to this |G| (at 100,000: minutes per scene)")->capture_default_str();
+  app.add_flag("--skip-sequence", skip_sequence, "Skip the warm-started sequences");
+  CLI11_PARSE(app, argc, argv);
+
+  std::string why;
+  if (!hc::device_available(&why)) {
+    std::fprintf(stderr, "no CUDA device: %s\n", why.c_str());
+    return 1;
+  }
+  std::printf("Device: %s; CPU threads: %d; r = %.0f%%; PartProj\n\n", why.c_str(), omp_get_max_threads(), 100 * ratio_r);
+
+  std::ostringstream calls, floors, seqs;
+  calls << "## Core calls (ms per call, mean of " << reps << "; CUDA/CPU < 1: CUDA faster)\n\n"
+        << "| scene | |G| | n | |H| | E+∇ CPU | E+∇ CUDA | ratio | Hessian CPU | Hessian CUDA | ratio | "
+           "safe step+E(s) CPU | safe step+E(s) CUDA | ratio |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
+  floors << "## Library floors on the GPU (CUDA events) against the CUDA Hessian call and the CPU Cholesky\n\n"
+         << "| scene | |G| | n | ZGEMM n×6n×|H| ms | ZGEMM TFLOP/s | CUDA Hessian call ms | GEMM share | potrf+potrs (4n) ms | "
+            "Eigen LLT (4n) CPU ms | ratio |\n|---|---|---|---|---|---|---|---|---|---|\n";
+  seqs << "## Warm-started sequences (" << frames << " frames; per-iteration parts in ms)\n\n"
+       << "| scene | |G| | backend | mean ms/frame | max ms/frame | mean iters/frame | uncertified | E+∇ | Hessian | solve | "
+          "line search | certificate | mean ms CUDA/CPU |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
+
+  for (const std::string& path : scenes) {
+    for (int samples : sample_counts) {
+      std::fprintf(stderr, "%s, |G| = %d: setting up\n", path.c_str(), samples);
+      const Loaded L = load(path, samples, ratio_r);
+      const int n = L.setup->metric_space.n();
+      const int h = static_cast<int>(L.setup->H.size());
+      const int G = static_cast<int>(L.setup->G.size());
+      std::vector<Metric> targets;
+      {
+        Interpolator blend(*L.setup, L.times, L.maps);
+        targets = blend.blended_metric(0.5 * (L.times[0] + L.times[1]));
+      }
+      auto cpu = make_cpu_newton_core(L.setup->D_G, L.setup->H);
+      auto gpu = hc::make_newton_core(L.setup->D_G, L.setup->H);
+      std::fprintf(stderr, "  core calls\n");
+      const CallTimes tc = time_core(*cpu, L, targets, std::max(1, reps / 4));
+      const CallTimes tg = time_core(*gpu, L, targets, reps);
+      char row[512];
+      std::snprintf(row, sizeof row, "| %s | %d | %d | %d | %.3f | %.3f | %s | %.3f | %.3f | %s | %.3f | %.3f | %s |\n", L.name.c_str(), G, n,
+                    h, tc.energy_gradient, tg.energy_gradient, ratio(tg.energy_gradient, tc.energy_gradient).c_str(), tc.hessian,
+                    tg.hessian, ratio(tg.hessian, tc.hessian).c_str(), tc.line_search, tg.line_search,
+                    ratio(tg.line_search, tc.line_search).c_str());
+      calls << row;
+      std::fprintf(stderr, "  %s", row);
+
+      std::fprintf(stderr, "  library floors\n");
+      Eigen::MatrixXd spd = gpu->hessian(HessianProjection::PartProj);
+      spd.diagonal().array() += 1e-3 * spd.diagonal().cwiseAbs().mean() + 1e-12;
+      const Floors f = time_floors(n, h, spd, reps);
+      std::snprintf(row, sizeof row, "| %s | %d | %d | %.3f | %.1f | %.3f | %.0f%% | %.3f | %.3f | %s |\n", L.name.c_str(), G, n, f.zgemm_ms,
+                    f.zgemm_tflops, tg.hessian, 100 * f.zgemm_ms / tg.hessian, f.potrf_potrs_ms, f.eigen_llt_ms,
+                    ratio(f.potrf_potrs_ms, f.eigen_llt_ms).c_str());
+      floors << row;
+      std::fprintf(stderr, "  %s", row);
+      std::fflush(stderr);
+
+      if (skip_sequence) continue;
+      cpu.reset();  // the sequences make their own cores
+      gpu.reset();
+      std::fprintf(stderr, "  sequence (CUDA)\n");
+      const SequenceStats sg = run_sequence(L, hc::make_newton_core(L.setup->D_G, L.setup->H), frames);
+      SequenceStats sc;
+      if (samples <= cpu_sequence_max) {
+        std::fprintf(stderr, "  sequence (CPU)\n");
+        sc = run_sequence(L, make_cpu_newton_core(L.setup->D_G, L.setup->H), frames);
+      }
+      for (const SequenceStats* s : {static_cast<const SequenceStats*>(&sc), &sg}) {
+        const bool is_cuda = s == &sg;
+        if (!s->ran) {
+          std::snprintf(row, sizeof row, "| %s | %d | cpu | skipped (--cpu-sequence-max-samples) | | | | | | | | | |\n", L.name.c_str(), G);
+        } else {
+          const auto& t = s->per_iteration;
+          std::snprintf(row, sizeof row, "| %s | %d | %s | %.1f | %.1f | %.2f | %d | %.2f | %.2f | %.2f | %.2f | %.2f | %s |\n",
+                        L.name.c_str(), G, is_cuda ? "cuda" : "cpu", s->mean_ms, s->max_ms, s->iterations, s->uncertified,
+                        t.energy_gradient, t.hessian, t.solve, t.line_search, t.certificate,
+                        is_cuda && sc.ran ? ratio(sg.mean_ms, sc.mean_ms).c_str() : "");
+        }
+        seqs << row;
+        std::fprintf(stderr, "  %s", row);
+      }
+    }
+  }
+  std::printf("\n---\n\n%s\n%s\n", calls.str().c_str(), floors.str().c_str());
+  if (!skip_sequence) std::printf("%s\n", seqs.str().c_str());
+  return 0;
+}

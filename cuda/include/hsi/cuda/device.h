@@ -1,0 +1,133 @@
+// Checked CUDA calls and RAII owners of device resources (memory, pinned memory,
+// streams, events, cuBLAS handles): the building blocks of the CUDA backend, also used
+// by its benchmark. Host code only; needs the CUDA toolkit's headers.
+#pragma once
+
+#include <cublas_v2.h>
+#include <cuda_runtime.h>
+
+#include <cstddef>
+#include <string>
+#include <utility>
+
+#include "hsi/cuda/newton_core.h"
+
+namespace hsi::cuda {
+
+[[noreturn]] inline void fail_call(const char* call, const std::string& what, const char* file, int line) {
+  throw Error(std::string(call) + " failed: " + what + " (" + file + ":" + std::to_string(line) + ")");
+}
+inline void check_call(cudaError_t e, const char* call, const char* file, int line) {
+  if (e != cudaSuccess) fail_call(call, std::string(cudaGetErrorName(e)) + ": " + cudaGetErrorString(e), file, line);
+}
+inline void check_call(cublasStatus_t s, const char* call, const char* file, int line) {
+  if (s != CUBLAS_STATUS_SUCCESS) fail_call(call, std::string(cublasGetStatusName(s)) + ": " + cublasGetStatusString(s), file, line);
+}
+
+}  // namespace hsi::cuda
+
+// Throws hsi::cuda::Error naming the call, the error and the place.
+#define HSI_CUDA_CHECK(call) ::hsi::cuda::check_call((call), #call, __FILE__, __LINE__)
+
+namespace hsi::cuda {
+
+// Device memory for `count` values of T (uninitialised).
+template <class T>
+class DeviceArray {
+ public:
+  DeviceArray() = default;
+  explicit DeviceArray(size_t count) : count_(count) {
+    if (count) HSI_CUDA_CHECK(cudaMalloc(reinterpret_cast<void**>(&p_), count * sizeof(T)));
+  }
+  ~DeviceArray() {
+    if (p_) cudaFree(p_);
+  }
+  DeviceArray(DeviceArray&& o) noexcept : p_(std::exchange(o.p_, nullptr)), count_(std::exchange(o.count_, 0)) {}
+  DeviceArray& operator=(DeviceArray&& o) noexcept {
+    std::swap(p_, o.p_);
+    std::swap(count_, o.count_);
+    return *this;
+  }
+  DeviceArray(const DeviceArray&) = delete;
+  DeviceArray& operator=(const DeviceArray&) = delete;
+  T* get() const { return p_; }
+  size_t size() const { return count_; }
+  size_t bytes() const { return count_ * sizeof(T); }
+
+ private:
+  T* p_ = nullptr;
+  size_t count_ = 0;
+};
+
+// Page-locked host memory (fast, truly asynchronous copies).
+template <class T>
+class PinnedArray {
+ public:
+  PinnedArray() = default;
+  explicit PinnedArray(size_t count) : count_(count) {
+    if (count) HSI_CUDA_CHECK(cudaMallocHost(reinterpret_cast<void**>(&p_), count * sizeof(T)));
+  }
+  ~PinnedArray() {
+    if (p_) cudaFreeHost(p_);
+  }
+  PinnedArray(const PinnedArray&) = delete;
+  PinnedArray& operator=(const PinnedArray&) = delete;
+  T* get() const { return p_; }
+  T& operator[](size_t i) const { return p_[i]; }
+  size_t size() const { return count_; }
+
+ private:
+  T* p_ = nullptr;
+  size_t count_ = 0;
+};
+
+// A non-blocking stream (no implicit ordering with the legacy default stream).
+class Stream {
+ public:
+  Stream() { HSI_CUDA_CHECK(cudaStreamCreateWithFlags(&s_, cudaStreamNonBlocking)); }
+  ~Stream() { cudaStreamDestroy(s_); }
+  Stream(const Stream&) = delete;
+  Stream& operator=(const Stream&) = delete;
+  operator cudaStream_t() const { return s_; }
+
+ private:
+  cudaStream_t s_ = nullptr;
+};
+
+class Event {
+ public:
+  explicit Event(bool timing = false) {
+    HSI_CUDA_CHECK(cudaEventCreateWithFlags(&e_, timing ? cudaEventDefault : cudaEventDisableTiming));
+  }
+  ~Event() { cudaEventDestroy(e_); }
+  Event(const Event&) = delete;
+  Event& operator=(const Event&) = delete;
+  operator cudaEvent_t() const { return e_; }
+
+ private:
+  cudaEvent_t e_ = nullptr;
+};
+
+// A cuBLAS handle bound to a stream, scalars passed from the host.
+class BlasHandle {
+ public:
+  explicit BlasHandle(cudaStream_t stream) {
+    HSI_CUDA_CHECK(cublasCreate(&h_));
+    try {
+      HSI_CUDA_CHECK(cublasSetStream(h_, stream));
+      HSI_CUDA_CHECK(cublasSetPointerMode(h_, CUBLAS_POINTER_MODE_HOST));
+    } catch (...) {
+      cublasDestroy(h_);
+      throw;
+    }
+  }
+  ~BlasHandle() { cublasDestroy(h_); }
+  BlasHandle(const BlasHandle&) = delete;
+  BlasHandle& operator=(const BlasHandle&) = delete;
+  operator cublasHandle_t() const { return h_; }
+
+ private:
+  cublasHandle_t h_ = nullptr;
+};
+
+}  // namespace hsi::cuda

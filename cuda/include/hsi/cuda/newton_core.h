@@ -1,0 +1,31 @@
+// The CUDA twin of the CPU Newton core (hsi/newton.h): the same NewtonCore interface,
+// in double precision, with every per-sample array resident on the GPU. Only scalars,
+// the gradient (4n) and the Hessian (4n × 4n) come back to the host.
+#pragma once
+
+#include <memory>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "hsi/newton.h"
+
+namespace hsi::cuda {
+
+// A failed CUDA, cuBLAS or cuSOLVER call; the message names the call and where.
+class Error : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+// Whether a CUDA device can run this library's kernels. Never throws: on a machine
+// without a GPU or driver it returns false and, if `why` is given, says why.
+bool device_available(std::string* why = nullptr);
+
+// D: the active basis rows D(w) at the samples G (|G| × n); H: indices into G (the
+// Hessian subset). Uploads D once; throws Error if the device cannot be used and
+// InputError on inconsistent input. The core lives on the CUDA device current when it
+// is made and, like the CPU core, is not thread-safe.
+std::unique_ptr<NewtonCore> make_newton_core(const MatrixXcd& D, std::vector<int> H);
+
+}  // namespace hsi::cuda

@@ -1,0 +1,266 @@
+// The CUDA Newton core's kernels (see newton_kernels.h): per-sample energy, gradient,
+// projected Hessian weights and safe step from sample_math.cuh, block reductions with
+// fixed per-block partials (no atomics, deterministic), and the Hessian's layout maps.
+#include "newton_kernels.h"
+
+#include <algorithm>
+
+namespace hsi::cuda::kernels {
+namespace {
+
+static_assert(kBlock % 32 == 0 && kBlock <= 1024 && kMaxPartials % 32 == 0);
+
+using sample::Projection;
+
+__device__ __forceinline__ void load_metric(const double* __restrict__ g, int i, double out[3]) {
+  out[0] = g[3 * static_cast<size_t>(i)];
+  out[1] = g[3 * static_cast<size_t>(i) + 1];
+  out[2] = g[3 * static_cast<size_t>(i) + 2];
+}
+
+// Block-wide sum of `sum` and OR of `bad`, valid in thread 0. Every thread of the block
+// must call it (blockDim.x a multiple of 32, at most 1024).
+__device__ void block_sum_bad(double& sum, int& bad) {
+  __shared__ double s_sum[32];
+  __shared__ int s_bad[32];
+  for (int o = 16; o > 0; o >>= 1) {
+    sum += __shfl_down_sync(0xffffffffu, sum, o);
+    bad |= __shfl_down_sync(0xffffffffu, bad, o);
+  }
+  const int lane = static_cast<int>(threadIdx.x) & 31, warp = static_cast<int>(threadIdx.x) >> 5;
+  if (lane == 0) {
+    s_sum[warp] = sum;
+    s_bad[warp] = bad;
+  }
+  __syncthreads();
+  if (warp == 0) {
+    const int warps = static_cast<int>(blockDim.x) >> 5;
+    sum = lane < warps ? s_sum[lane] : 0.0;
+    bad = lane < warps ? s_bad[lane] : 0;
+    for (int o = 16; o > 0; o >>= 1) {
+      sum += __shfl_down_sync(0xffffffffu, sum, o);
+      bad |= __shfl_down_sync(0xffffffffu, bad, o);
+    }
+  }
+}
+
+// Block-wide minimum, valid in thread 0 (same contract as block_sum_bad).
+__device__ void block_min(double& v) {
+  __shared__ double s_min[32];
+  for (int o = 16; o > 0; o >>= 1) v = fmin(v, __shfl_down_sync(0xffffffffu, v, o));
+  const int lane = static_cast<int>(threadIdx.x) & 31, warp = static_cast<int>(threadIdx.x) >> 5;
+  if (lane == 0) s_min[warp] = v;
+  __syncthreads();
+  if (warp == 0) {
+    const int warps = static_cast<int>(blockDim.x) >> 5;
+    v = lane < warps ? s_min[lane] : sample::infinity();
+    for (int o = 16; o > 0; o >>= 1) v = fmin(v, __shfl_down_sync(0xffffffffu, v, o));
+  }
+}
+
+// Pass 1 of E(s) = mean_G e(g, a + s da, b + s db): per-block sums of the finite sample
+// energies and whether any sample was infinite (folded or degenerate).
+__global__ void __launch_bounds__(kBlock) energy_partials(int G, const double* __restrict__ g, const double2* __restrict__ ab,
+                                                          const double2* __restrict__ dab, double s,
+                                                          double* __restrict__ part_sum, int* __restrict__ part_bad) {
+  double sum = 0;
+  int bad = 0;
+  for (int i = static_cast<int>(blockIdx.x * blockDim.x + threadIdx.x); i < G; i += static_cast<int>(gridDim.x * blockDim.x)) {
+    double2 a = ab[i], b = ab[G + i];
+    if (s != 0) {
+      const double2 da = dab[i], db = dab[G + i];
+      a = make_double2(a.x + s * da.x, a.y + s * da.y);
+      b = make_double2(b.x + s * db.x, b.y + s * db.y);
+    }
+    double gi[3];
+    load_metric(g, i, gi);
+    const double e = sample::isometric_energy(gi, a.x, a.y, b.x, b.y);
+    if (!sample::is_finite(e)) bad = 1;
+    else sum += e;
+  }
+  block_sum_bad(sum, bad);
+  if (threadIdx.x == 0) {
+    part_sum[blockIdx.x] = sum;
+    part_bad[blockIdx.x] = bad;
+  }
+}
+
+// Pass 2 (one block): the mean, or +inf if any sample was.
+__global__ void __launch_bounds__(kBlock) finish_mean(int parts, const double* __restrict__ part_sum, const int* __restrict__ part_bad,
+                                                      double count, double* __restrict__ out) {
+  double sum = 0;
+  int bad = 0;
+  for (int i = static_cast<int>(threadIdx.x); i < parts; i += static_cast<int>(blockDim.x)) {
+    sum += part_sum[i];
+    bad |= part_bad[i];
+  }
+  block_sum_bad(sum, bad);
+  if (threadIdx.x == 0) *out = bad ? sample::infinity() : sum / count;
+}
+
+// ∂e/∂(Re a, Im a, Re b, Im b) per sample of G, packed as complex ∂E/∂a, ∂E/∂b (zero
+// where the sample is infinite, as on the CPU).
+__global__ void __launch_bounds__(kBlock) gradient_kernel(int G, const double* __restrict__ g, const double2* __restrict__ ab,
+                                                           double2* __restrict__ gab) {
+  for (int i = static_cast<int>(blockIdx.x * blockDim.x + threadIdx.x); i < G; i += static_cast<int>(gridDim.x * blockDim.x)) {
+    const double2 a = ab[i], b = ab[G + i];
+    double gi[3];
+    load_metric(g, i, gi);
+    const sample::Derivatives d =
+        sample::isometric_derivatives(gi, a.x, a.y, b.x, b.y, Projection::Delete, false, /*with_hessian=*/false);
+    gab[i] = make_double2(d.grad[0], d.grad[1]);
+    gab[G + i] = make_double2(d.grad[2], d.grad[3]);
+  }
+}
+
+// The six complex weights of each H-sample's projected 4×4 Hessian, stored 6 × |H|
+// (weight-major, so the next kernel's loads are coalesced).
+__global__ void __launch_bounds__(kBlock) h_sample_weights(int h, int G, const int* __restrict__ H, const double* __restrict__ g,
+                                                          const double2* __restrict__ ab, Projection projection, bool exact,
+                                                          double2* __restrict__ W) {
+  for (int k = static_cast<int>(blockIdx.x * blockDim.x + threadIdx.x); k < h; k += static_cast<int>(gridDim.x * blockDim.x)) {
+    const int s = H[k];
+    const double2 a = ab[s], b = ab[G + s];
+    double gi[3];
+    load_metric(g, s, gi);
+    const sample::Derivatives d = sample::isometric_derivatives(gi, a.x, a.y, b.x, b.y, projection, exact, true);
+    double w[6][2];
+    sample::hessian_weights(d.hess, w);
+#pragma unroll
+    for (int q = 0; q < 6; ++q) W[static_cast<size_t>(q) * h + k] = make_double2(w[q][0], w[q][1]);
+  }
+}
+
+// Wt (|H| × 6n, column-major): column block q is w_q ∘ D_H for even q, w_q ∘ conj(D_H)
+// for odd q. Threads run along the rows (k) so that every access is coalesced.
+__global__ void weighted_rows_kernel(int h, int n, const double2* __restrict__ DH, const double2* __restrict__ W, double2* __restrict__ Wt) {
+  const int k = static_cast<int>(blockIdx.x * blockDim.x + threadIdx.x);
+  if (k >= h) return;
+  double2 w[6];
+#pragma unroll
+  for (int q = 0; q < 6; ++q) w[q] = W[static_cast<size_t>(q) * h + k];
+  for (int j = static_cast<int>(blockIdx.y * blockDim.y + threadIdx.y); j < n; j += static_cast<int>(gridDim.y * blockDim.y)) {
+    const double2 d = DH[static_cast<size_t>(j) * h + k];
+#pragma unroll
+    for (int q = 0; q < 6; ++q) {
+      const double dr = d.x, di = q % 2 == 0 ? d.y : -d.y;  // D or conj(D)
+      Wt[(static_cast<size_t>(q) * n + j) * h + k] = make_double2(w[q].x * dr - w[q].y * di, w[q].x * di + w[q].y * dr);
+    }
+  }
+}
+
+// Entry (r, c) of the real 4n × 4n Hessian before symmetrisation, from R = Dᴴ Wt (n × 6n,
+// not yet divided by |H|): newton.cpp's real_block for the blocks (0,0), (0,1), (1,1)
+// from the column pairs (0,1), (2,3), (4,5) of R, and block (1,0) = block (0,1)ᵀ.
+__device__ __forceinline__ double raw_hessian(int n, const double2* __restrict__ R, double count, int r, int c) {
+  const int m = 2 * n;
+  if (r >= m && c < m) {
+    const int t = r;
+    r = c;
+    c = t;
+  }
+  const int p = r < m ? (c < m ? 0 : 1) : 2;
+  const int rr = r < m ? r : r - m, cc = c < m ? c : c - m;
+  const bool hi_r = rr >= n, hi_c = cc >= n;
+  const int i = hi_r ? rr - n : rr, j = hi_c ? cc - n : cc;
+  const double2 P = R[static_cast<size_t>(2 * p * n + j) * n + i], Q = R[static_cast<size_t>((2 * p + 1) * n + j) * n + i];
+  const double Pr = P.x / count, Pi = P.y / count, Qr = Q.x / count, Qi = Q.y / count;
+  if (!hi_r) return hi_c ? -Pi + Qi : Pr + Qr;
+  return hi_c ? Pr - Qr : Pi + Qi;
+}
+
+// Hv = (M + Mᵀ)/2, column-major 4n × 4n, with M the raw Hessian above.
+__global__ void real_hessian_kernel(int n, const double2* __restrict__ R, double count, double* __restrict__ Hv) {
+  const int N = 4 * n;
+  for (int c = static_cast<int>(blockIdx.y * blockDim.y + threadIdx.y); c < N; c += static_cast<int>(gridDim.y * blockDim.y))
+    for (int r = static_cast<int>(blockIdx.x * blockDim.x + threadIdx.x); r < N; r += static_cast<int>(gridDim.x * blockDim.x))
+      Hv[static_cast<size_t>(c) * N + r] = (raw_hessian(n, R, count, r, c) + raw_hessian(n, R, count, c, r)) / 2;
+}
+
+// Pass 1 of the safe step: per-block minimum over samples of the first s > 0 with
+// |a + s da| = |b + s db|.
+__global__ void __launch_bounds__(kBlock) safe_step_partials(int G, const double2* __restrict__ ab, const double2* __restrict__ dab,
+                                                             double* __restrict__ part_min) {
+  double t = sample::infinity();
+  for (int i = static_cast<int>(blockIdx.x * blockDim.x + threadIdx.x); i < G; i += static_cast<int>(gridDim.x * blockDim.x)) {
+    const double2 a = ab[i], b = ab[G + i], da = dab[i], db = dab[G + i];
+    t = fmin(t, sample::first_fold_step(a.x, a.y, b.x, b.y, da.x, da.y, db.x, db.y));
+  }
+  block_min(t);
+  if (threadIdx.x == 0) part_min[blockIdx.x] = t;
+}
+
+__global__ void __launch_bounds__(kBlock) finish_min(int parts, const double* __restrict__ part_min, double* __restrict__ out) {
+  double t = sample::infinity();
+  for (int i = static_cast<int>(threadIdx.x); i < parts; i += static_cast<int>(blockDim.x)) t = fmin(t, part_min[i]);
+  block_min(t);
+  if (threadIdx.x == 0) *out = t;
+}
+
+// D_H = the rows H of D_G, column-major |H| × n.
+__global__ void gather_rows_kernel(int G, int h, int n, const double2* __restrict__ D, const int* __restrict__ H, double2* __restrict__ DH) {
+  const int k = static_cast<int>(blockIdx.x * blockDim.x + threadIdx.x);
+  if (k >= h) return;
+  const int s = H[k];
+  for (int j = static_cast<int>(blockIdx.y * blockDim.y + threadIdx.y); j < n; j += static_cast<int>(gridDim.y * blockDim.y))
+    DH[static_cast<size_t>(j) * h + k] = D[static_cast<size_t>(j) * G + s];
+}
+
+unsigned blocks_for(long long count, long long per_block, long long cap) {
+  return static_cast<unsigned>(std::clamp((count + per_block - 1) / per_block, 1LL, cap));
+}
+
+}  // namespace
+
+unsigned reduction_blocks(int count) { return blocks_for(count, kBlock, kMaxPartials); }
+
+cudaError_t loadable() {
+  cudaFuncAttributes attr{};
+  return cudaFuncGetAttributes(&attr, energy_partials);
+}
+
+cudaError_t gather_rows(int G, int h, int n, const double2* D, const int* H, double2* DH, cudaStream_t stream) {
+  const dim3 block(32, 8), grid(blocks_for(h, 32, 1LL << 30), blocks_for(n, 8, 65535));
+  gather_rows_kernel<<<grid, block, 0, stream>>>(G, h, n, D, H, DH);
+  return cudaGetLastError();
+}
+
+cudaError_t mean_energy(int G, const double* g, const double2* ab, const double2* dab, double s, double* part_sum,
+                        int* part_bad, double* out, cudaStream_t stream) {
+  const unsigned parts = reduction_blocks(G);
+  energy_partials<<<parts, kBlock, 0, stream>>>(G, g, ab, dab, s, part_sum, part_bad);
+  if (const cudaError_t e = cudaGetLastError(); e != cudaSuccess) return e;
+  finish_mean<<<1, kBlock, 0, stream>>>(static_cast<int>(parts), part_sum, part_bad, static_cast<double>(G), out);
+  return cudaGetLastError();
+}
+
+cudaError_t gradient_samples(int G, const double* g, const double2* ab, double2* gab, cudaStream_t stream) {
+  gradient_kernel<<<blocks_for(G, kBlock, 1LL << 30), kBlock, 0, stream>>>(G, g, ab, gab);
+  return cudaGetLastError();
+}
+
+cudaError_t weighted_rows(int G, int h, int n, const int* H, const double* g, const double2* ab, sample::Projection projection,
+                          bool exact, const double2* DH, double2* W, double2* Wt, cudaStream_t stream) {
+  h_sample_weights<<<blocks_for(h, kBlock, 1LL << 30), kBlock, 0, stream>>>(h, G, H, g, ab, projection, exact, W);
+  if (const cudaError_t e = cudaGetLastError(); e != cudaSuccess) return e;
+  const dim3 block(32, 8), grid(blocks_for(h, 32, 1LL << 30), blocks_for(n, 8, 65535));
+  weighted_rows_kernel<<<grid, block, 0, stream>>>(h, n, DH, W, Wt);
+  return cudaGetLastError();
+}
+
+cudaError_t real_hessian(int n, const double2* R, double count, double* Hv, cudaStream_t stream) {
+  const long long N = 4LL * n;
+  const dim3 block(32, 8), grid(blocks_for(N, 32, 65535), blocks_for(N, 8, 65535));
+  real_hessian_kernel<<<grid, block, 0, stream>>>(n, R, count, Hv);
+  return cudaGetLastError();
+}
+
+cudaError_t max_safe_step(int G, const double2* ab, const double2* dab, double* part_min, double* out, cudaStream_t stream) {
+  const unsigned parts = reduction_blocks(G);
+  safe_step_partials<<<parts, kBlock, 0, stream>>>(G, ab, dab, part_min);
+  if (const cudaError_t e = cudaGetLastError(); e != cudaSuccess) return e;
+  finish_min<<<1, kBlock, 0, stream>>>(static_cast<int>(parts), part_min, out);
+  return cudaGetLastError();
+}
+
+}  // namespace hsi::cuda::kernels

@@ -1,0 +1,49 @@
+// The CUDA Newton core's kernels behind plain launch functions (no Eigen on either
+// side of this line): each enqueues its work on `stream` and returns the launch
+// status. Complex values are double2 (layout of std::complex<double>); vectors over G
+// are G × 2 column-major pairs ([a | b], [da | db], [∂E/∂a | ∂E/∂b]); target metrics
+// are (g1, g2, g3) per sample.
+#pragma once
+
+#include <cuda_runtime.h>
+
+#include "hsi/cuda/sample_math.cuh"
+
+namespace hsi::cuda::kernels {
+
+constexpr int kBlock = 256;         // threads per block of the sample kernels
+constexpr int kMaxPartials = 1024;  // most blocks (= partial results) of a reduction
+
+// The number of partials a reduction over `count` samples writes (≤ kMaxPartials);
+// scratch arrays for partials need this many entries.
+unsigned reduction_blocks(int count);
+
+// Whether this build's kernels can run on the current device (cudaSuccess if so).
+cudaError_t loadable();
+
+// D_H = the rows H of D (G × n), column-major |H| × n.
+cudaError_t gather_rows(int G, int h, int n, const double2* D, const int* H, double2* DH, cudaStream_t stream);
+
+// *out = mean over G of the sample energies at a + s·da, b + s·db (dab unread when
+// s = 0), +inf if any sample is folded or degenerate. Two passes through part_sum and
+// part_bad (reduction_blocks(G) entries each): deterministic.
+cudaError_t mean_energy(int G, const double* g, const double2* ab, const double2* dab, double s, double* part_sum,
+                        int* part_bad, double* out, cudaStream_t stream);
+
+// gab = per-sample (∂e/∂Re a + i ∂e/∂Im a, ∂e/∂Re b + i ∂e/∂Im b); zero where e = +inf.
+cudaError_t gradient_samples(int G, const double* g, const double2* ab, double2* gab, cudaStream_t stream);
+
+// Per H-sample projected 4×4 Hessian → six complex weights W (6 × h) → the weighted
+// rows Wt (h × 6n, column-major): column block q is w_q ∘ D_H (q even) or w_q ∘ conj(D_H).
+cudaError_t weighted_rows(int G, int h, int n, const int* H, const double* g, const double2* ab, sample::Projection projection,
+                          bool exact, const double2* DH, double2* W, double2* Wt, cudaStream_t stream);
+
+// Hv (4n × 4n, column-major, symmetric) from R = D_Hᴴ Wt (n × 6n) divided by count:
+// newton.cpp's real_block layout, then (M + Mᵀ)/2.
+cudaError_t real_hessian(int n, const double2* R, double count, double* Hv, cudaStream_t stream);
+
+// *out = min over G of the first s > 0 with |a + s da| = |b + s db| (+inf if none).
+// part_min: reduction_blocks(G) entries.
+cudaError_t max_safe_step(int G, const double2* ab, const double2* dab, double* part_min, double* out, cudaStream_t stream);
+
+}  // namespace hsi::cuda::kernels
