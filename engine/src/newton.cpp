@@ -175,11 +175,23 @@ NewtonResult newton_solve(NewtonCore& core, const MapSpace& space, const Certifi
   };
   CertificateOptions fast;
   fast.stop_at_first_failure = true;
+  // A certificate that passes has looked at every segment, so the line search's
+  // verdict on the accepted step is also the final report: keep it.
+  CertificateResult last_pass;
+  Eigen::VectorXd last_pass_x;
   auto certified = [&](const Eigen::VectorXd& x, CertificateResult* full) {
     if (!opt.certify || !certifier) return true;
+    if (full && last_pass_x.size() == x.size() && last_pass_x == x) {
+      *full = last_pass;
+      return true;
+    }
     const auto t0 = Clock::now();
     CertificateResult c = certifier->certify(space.expand(x), full ? CertificateOptions{} : fast);
     res.timing.certificate += ms_since(t0);
+    if (c.certified) {
+      last_pass = c;
+      last_pass_x = x;
+    }
     if (full) *full = c;
     return c.certified;
   };
