@@ -12,6 +12,7 @@
 #include <random>
 #include <sstream>
 
+#include "bench_scenes.h"
 #include "hsi/cuda/device.h"
 #include "hsi/cuda/newton_core.h"
 #include "hsi/interpolation.h"
@@ -48,27 +49,8 @@ class SolverHandle {
   cusolverDnHandle_t h_ = nullptr;
 };
 
-struct Loaded {
-  std::string name;
-  Scene scene;
-  std::unique_ptr<ShapeSetup> setup;
-  std::vector<double> times;
-  std::vector<HarmonicMap> maps;
-};
-
-Loaded load(const std::string& path, int samples, double ratio) {
-  Loaded L;
-  L.scene = load_scene(path);
-  L.name = L.scene.name.empty() ? path : L.scene.name;
-  if (!L.scene.cage) L.scene.cage = build_cage(L.scene.shape, L.scene.cage_options);
-  L.setup = make_shape_setup(L.scene, samples, ratio);
-  solve_scene_keyframes(L.scene, *L.setup);
-  for (const Keyframe& k : L.scene.keyframes) {
-    L.times.push_back(k.time);
-    L.maps.push_back(*k.coefficients);
-  }
-  return L;
-}
+using bench::Loaded;
+using bench::load;
 
 // Mean ms per call of f over `reps` calls, after two warm-up calls. Every timed core
 // call ends in a host synchronisation (its result is on the host), so wall-clock time

@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <omp.h>
 
+#include "bench_scenes.h"
 #include "hsi/interpolation.h"
 #include "hsi/keyframes.h"
 
@@ -14,27 +15,8 @@ using namespace hsi;
 
 namespace {
 
-struct Loaded {
-  std::string name;
-  Scene scene;
-  std::unique_ptr<ShapeSetup> setup;
-  std::vector<double> times;
-  std::vector<HarmonicMap> maps;
-};
-
-Loaded load(const std::string& path, int samples, double ratio) {
-  Loaded L;
-  L.scene = load_scene(path);
-  L.name = L.scene.name.empty() ? path : L.scene.name;
-  if (!L.scene.cage) L.scene.cage = build_cage(L.scene.shape, L.scene.cage_options);
-  L.setup = make_shape_setup(L.scene, samples, ratio);
-  solve_scene_keyframes(L.scene, *L.setup);
-  for (const Keyframe& k : L.scene.keyframes) {
-    L.times.push_back(k.time);
-    L.maps.push_back(*k.coefficients);
-  }
-  return L;
-}
+using bench::Loaded;
+using bench::load;
 
 }  // namespace
 
