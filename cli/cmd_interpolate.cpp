@@ -12,6 +12,9 @@
 #include "hsi/interpolation.h"
 #include "hsi/keyframes.h"
 #include "plot.h"
+#ifdef HSI_WITH_CUDA
+#include "hsi/cuda/newton_core.h"
+#endif
 
 namespace hsi::cli {
 
@@ -36,6 +39,7 @@ void register_interpolate(CLI::App& app) {
     int frames = 500, samples = 0, png_count = 16, max_iterations = 100;
     double ratio = 0, tolerance = 1e-7;
     std::string projection = "partproj";
+    std::string backend = "auto";
   };
   auto o = std::make_shared<Opts>();
   CLI::App* cmd = app.add_subcommand(
@@ -52,6 +56,9 @@ void register_interpolate(CLI::App& app) {
   cmd->add_option("--tolerance", o->tolerance, "Stop a frame when its energy decreases by less than this")->capture_default_str();
   cmd->add_option("--max-iterations", o->max_iterations, "Newton iterations per frame at most")->capture_default_str();
   cmd->add_option("--projection", o->projection, "Hessian PSD projection: partproj, fullproj or delete")->capture_default_str();
+  cmd->add_option("--backend", o->backend, "Newton core: cpu, cuda, or auto (CUDA when a device is present)")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"cpu", "cuda", "auto"}));
   cmd->add_option("--png-frames", o->png_count, "Draw this many evenly spaced frames (0: none)")->capture_default_str();
   cmd->callback([o] {
     using Clock = std::chrono::steady_clock;
@@ -77,7 +84,17 @@ void register_interpolate(CLI::App& app) {
     io.tolerance = o->tolerance;
     io.max_iterations = o->max_iterations;
     io.projection = parse_projection(o->projection);
-    Interpolator interp(*setup, times, maps, io);
+    // The Newton core: the CUDA twin where asked for (or, with auto, where a device
+    // is present), the CPU reference otherwise.
+    std::unique_ptr<NewtonCore> core;
+    std::string why = "this hsi was built without CUDA";
+#ifdef HSI_WITH_CUDA
+    if (o->backend != "cpu" && hsi::cuda::device_available(&why)) core = hsi::cuda::make_newton_core(setup->D_G, setup->H);
+#endif
+    if (!core && o->backend == "cuda") throw std::runtime_error("--backend cuda: no CUDA device (" + why + ")");
+    if (!core) core = make_cpu_newton_core(setup->D_G, setup->H);
+    std::printf("Newton core: %s\n", core->name());
+    Interpolator interp(*setup, times, maps, io, std::move(core));
 
     const std::filesystem::path out(o->out);
     std::filesystem::create_directories(out);
