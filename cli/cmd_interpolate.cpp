@@ -18,21 +18,6 @@
 
 namespace hsi::cli {
 
-namespace {
-
-void write_text_atomic(const std::filesystem::path& path, const std::string& text) {
-  std::filesystem::path tmp = path;
-  tmp += ".tmp";
-  {
-    std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
-    out << text;
-    if (!out.flush()) throw std::runtime_error("cannot write " + path.string());
-  }
-  std::filesystem::rename(tmp, path);
-}
-
-}  // namespace
-
 void register_interpolate(CLI::App& app) {
   struct Opts {
     std::string scene, out = "out";
@@ -193,7 +178,7 @@ void register_interpolate(CLI::App& app) {
                       {"frames_within_keyframe_bounds", bounded},
                       {"max_bound_excess", max_excess}};
     rep["frames"] = fr;
-    write_text_atomic(out / "report.json", rep.dump(1) + "\n");
+    write_file_atomic(out / "report.json", rep.dump(1) + "\n");
     char head[512];
     std::snprintf(head, sizeof head,
                   "hsi interpolate %s: %zu frames, %d certified, %d NOT certified\n"
@@ -201,7 +186,7 @@ void register_interpolate(CLI::App& app) {
                   "%d frames within the keyframes' distortion bounds, largest excess %.3g (relative)\n\n",
                   o->scene.c_str(), frames.size(), static_cast<int>(frames.size()) - uncertified, uncertified,
                   solved ? sum_it / solved : 0.0, solved ? sum_ms / solved : 0.0, max_ms, total_s, bounded, max_excess);
-    write_text_atomic(out / "report.txt", std::string(head) + table);
+    write_file_atomic(out / "report.txt", std::string(head) + table);
 
     plot_series(out / "energy.png", scene.name + ": energy per frame (2 = metric reproduced exactly)", "t", ts,
                 {{"energy", energy, 0.1, 0.3, 0.7}}, flagged);

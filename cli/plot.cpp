@@ -17,6 +17,27 @@ struct Frame {
   double pad;
   cd px(cd p) const { return {pad + (p.real() - lo.real()) * scale, h - pad - (p.imag() - lo.imag()) * scale}; }
 };
+// A white RGBA image with its drawing context; write() saves it as PNG.
+class Canvas {
+ public:
+  Canvas(int w, int h)
+      : surf_(cairo_image_surface_create(CAIRO_FORMAT_ARGB32, w, h), cairo_surface_destroy),
+        ctx_(cairo_create(surf_.get()), cairo_destroy) {
+    cairo_set_source_rgb(cr(), 1, 1, 1);
+    cairo_paint(cr());
+  }
+  cairo_t* cr() const { return ctx_.get(); }
+  void write(const std::filesystem::path& png) const {
+    cairo_surface_flush(surf_.get());
+    if (cairo_surface_write_to_png(surf_.get(), png.string().c_str()) != CAIRO_STATUS_SUCCESS)
+      throw std::runtime_error("cannot write " + png.string());
+  }
+
+ private:
+  std::unique_ptr<cairo_surface_t, decltype(&cairo_surface_destroy)> surf_;
+  std::unique_ptr<cairo_t, decltype(&cairo_destroy)> ctx_;
+};
+
 void path(cairo_t* cr, const Frame& f, const Loop& loop) {
   for (size_t i = 0; i < loop.size(); ++i) {
     const cd q = f.px(loop[i]);
@@ -37,12 +58,8 @@ void plot_cage(const std::filesystem::path& png, const Shape& shape, const Cage&
   const double scale = (width_px - 2 * pad) / std::max(sx, 1e-300);
   const int height_px = static_cast<int>(std::ceil(sy * scale + 2 * pad));
   const Frame f{bb.lo, scale, width_px, height_px, pad};
-  std::unique_ptr<cairo_surface_t, decltype(&cairo_surface_destroy)> surf(
-      cairo_image_surface_create(CAIRO_FORMAT_ARGB32, width_px, height_px), cairo_surface_destroy);
-  std::unique_ptr<cairo_t, decltype(&cairo_destroy)> ctx(cairo_create(surf.get()), cairo_destroy);
-  cairo_t* cr = ctx.get();
-  cairo_set_source_rgb(cr, 1, 1, 1);
-  cairo_paint(cr);
+  const Canvas canvas(width_px, height_px);
+  cairo_t* cr = canvas.cr();
   // Shape, filled with holes cut out (even-odd).
   cairo_set_fill_rule(cr, CAIRO_FILL_RULE_EVEN_ODD);
   for (int k = 0; k < shape.loop_count(); ++k) path(cr, f, shape.loop(k));
@@ -86,9 +103,7 @@ void plot_cage(const std::filesystem::path& png, const Shape& shape, const Cage&
       cairo_fill(cr);
     }
   }
-  cairo_surface_flush(surf.get());
-  if (cairo_surface_write_to_png(surf.get(), png.string().c_str()) != CAIRO_STATUS_SUCCESS)
-    throw std::runtime_error("cannot write " + png.string());
+  canvas.write(png);
 }
 
 }  // namespace hsi::cli
@@ -138,12 +153,8 @@ void plot_map(const std::filesystem::path& png, const Shape& shape, const Cage& 
   const double scale = (width_px - 2 * pad) / std::max({sx, sy * 0.75, 1e-300});
   const int height_px = static_cast<int>(std::ceil(sy * scale + 2 * pad + title_h));
   const Frame fr{lo, scale, width_px, height_px, pad};
-  std::unique_ptr<cairo_surface_t, decltype(&cairo_surface_destroy)> surf(
-      cairo_image_surface_create(CAIRO_FORMAT_ARGB32, width_px, height_px), cairo_surface_destroy);
-  std::unique_ptr<cairo_t, decltype(&cairo_destroy)> ctx(cairo_create(surf.get()), cairo_destroy);
-  cairo_t* cr = ctx.get();
-  cairo_set_source_rgb(cr, 1, 1, 1);
-  cairo_paint(cr);
+  const Canvas canvas(width_px, height_px);
+  cairo_t* cr = canvas.cr();
   cairo_set_fill_rule(cr, CAIRO_FILL_RULE_EVEN_ODD);
   size_t off = 0;
   for (int l = 0; l < shape.loop_count(); ++l) {
@@ -195,9 +206,7 @@ void plot_map(const std::filesystem::path& png, const Shape& shape, const Cage& 
     const std::string t = extras.title + (extras.uncertified ? "  [NOT CERTIFIED]" : "");
     cairo_show_text(cr, t.c_str());
   }
-  cairo_surface_flush(surf.get());
-  if (cairo_surface_write_to_png(surf.get(), png.string().c_str()) != CAIRO_STATUS_SUCCESS)
-    throw std::runtime_error("cannot write " + png.string());
+  canvas.write(png);
 }
 
 }  // namespace hsi::cli
@@ -207,12 +216,8 @@ namespace hsi::cli {
 void plot_series(const std::filesystem::path& png, const std::string& title, const std::string& xlabel,
                  const std::vector<double>& x, const std::vector<Series>& series, const std::vector<double>& flagged,
                  int W, int H) {
-  std::unique_ptr<cairo_surface_t, decltype(&cairo_surface_destroy)> surf(
-      cairo_image_surface_create(CAIRO_FORMAT_ARGB32, W, H), cairo_surface_destroy);
-  std::unique_ptr<cairo_t, decltype(&cairo_destroy)> ctx(cairo_create(surf.get()), cairo_destroy);
-  cairo_t* cr = ctx.get();
-  cairo_set_source_rgb(cr, 1, 1, 1);
-  cairo_paint(cr);
+  const Canvas canvas(W, H);
+  cairo_t* cr = canvas.cr();
   const double L = 70, R = 20, T = 54, B = 48;  // title on the first line, legend on the second
   double x0 = x.empty() ? 0 : x.front(), x1 = x.empty() ? 1 : x.back();
   if (x1 <= x0) x1 = x0 + 1;
@@ -309,9 +314,7 @@ void plot_series(const std::filesystem::path& png, const std::string& title, con
     cairo_line_to(cr, px(f), H - B);
     cairo_stroke(cr);
   }
-  cairo_surface_flush(surf.get());
-  if (cairo_surface_write_to_png(surf.get(), png.string().c_str()) != CAIRO_STATUS_SUCCESS)
-    throw std::runtime_error("cannot write " + png.string());
+  canvas.write(png);
 }
 
 }  // namespace hsi::cli

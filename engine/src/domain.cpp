@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <fstream>
 #include <limits>
 #include <queue>
 #include <sstream>
@@ -10,6 +11,22 @@
 #include "cgal_geometry.h"
 
 namespace hsi {
+
+void write_file_atomic(const std::filesystem::path& path, const std::string& bytes) {
+  std::filesystem::path tmp = path;
+  tmp += ".tmp";
+  {
+    std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
+    if (!out) throw InputError(path.string() + ": cannot write");
+    out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+    if (!out.flush()) {
+      out.close();
+      std::filesystem::remove(tmp);
+      throw InputError(path.string() + ": write failed");
+    }
+  }
+  std::filesystem::rename(tmp, path);
+}
 
 std::string loop_name(int loop) { return loop == 0 ? "outer loop" : "hole " + std::to_string(loop); }
 

@@ -134,21 +134,7 @@ FrameFile decode_frames(const std::string& bytes, const std::string& source) {
   return f;
 }
 
-void write_frames(const std::filesystem::path& path, const FrameFile& file) {
-  const std::string bytes = encode_frames(file);
-  std::filesystem::path tmp = path;
-  tmp += ".tmp";
-  {
-    std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
-    if (!out) throw InputError(path.string() + ": cannot write");
-    out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
-    if (!out.flush()) {
-      std::filesystem::remove(tmp);
-      throw InputError(path.string() + ": write failed");
-    }
-  }
-  std::filesystem::rename(tmp, path);
-}
+void write_frames(const std::filesystem::path& path, const FrameFile& file) { write_file_atomic(path, encode_frames(file)); }
 
 FrameFile read_frames(const std::filesystem::path& path) {
   std::ifstream in(path, std::ios::binary);

@@ -256,21 +256,7 @@ std::string scene_to_json(const Scene& s) {
   return j.dump(1) + "\n";
 }
 
-void save_scene(const Scene& scene, const std::filesystem::path& path) {
-  const std::string text = scene_to_json(scene);
-  std::filesystem::path tmp = path;
-  tmp += ".tmp";
-  {
-    std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
-    if (!out) throw InputError(path.string() + ": cannot write the scene file");
-    out << text;
-    if (!out.flush()) {
-      std::filesystem::remove(tmp);
-      throw InputError(path.string() + ": write failed");
-    }
-  }
-  std::filesystem::rename(tmp, path);
-}
+void save_scene(const Scene& scene, const std::filesystem::path& path) { write_file_atomic(path, scene_to_json(scene)); }
 
 Cage scene_cage(const Scene& scene) { return scene.cage ? *scene.cage : build_cage(scene.shape, scene.cage_options); }
 

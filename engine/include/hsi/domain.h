@@ -4,6 +4,7 @@
 #pragma once
 
 #include <complex>
+#include <filesystem>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -30,6 +31,10 @@ class InputError : public std::runtime_error {
  public:
   using std::runtime_error::runtime_error;
 };
+
+// Writes bytes to path through a temporary file and a rename, so a failed write
+// never leaves a partial file that looks complete. Throws InputError naming path.
+void write_file_atomic(const std::filesystem::path& path, const std::string& bytes);
 
 // "outer loop" or "hole 2" (1-based for people), used in every message.
 std::string loop_name(int loop);
