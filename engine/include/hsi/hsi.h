@@ -1,0 +1,264 @@
+/* hsi C API: harmonic shape interpolation of 2D shapes with holes, for game engines
+ * and other hosts that speak C. One header, C99, opaque handles with explicit
+ * create/destroy, status codes plus a message; no C++ exception ever crosses it.
+ *
+ *   hsi_scene         a shape, its cage, texture, handles and keyframes (a scene file)
+ *   hsi_interpolator  the keyframes made certified, ready to make frames
+ *   hsi_sequence      interpolated frames: their report, their maps (evaluate them at
+ *                     your own points, e.g. a mesh's vertices), baking, rendering
+ *
+ * Errors: every function that can fail returns an hsi_status; on failure
+ * hsi_last_error() gives a message that says what was wrong and where (file, JSON
+ * path, keyframe, point index, ...). Out-parameters are left unchanged on failure,
+ * out-handles set to NULL.
+ *
+ * Threads: the library is thread-compatible. Functions marked [any thread] may be
+ * called concurrently with anything. [per handle] means: concurrent calls on
+ * different handles are fine, calls on the same handle must not overlap (const
+ * query functions on the same handle may overlap each other). Handles keep what
+ * they need alive: an interpolator or sequence stays valid after the scene it came
+ * from is destroyed or changed.
+ *
+ * Memory: handles and everything else this API allocates for the caller go through
+ * the allocator hooks (hsi_set_allocator), as do the baked runtime's allocations;
+ * the engine's internal working memory during a call uses the C++ heap.
+ */
+#ifndef HSI_HSI_H
+#define HSI_HSI_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+#if defined(HSI_BUILDING_SHARED) && (defined(__GNUC__) || defined(__clang__))
+#define HSI_API __attribute__((visibility("default")))
+#else
+#define HSI_API
+#endif
+
+#define HSI_VERSION_MAJOR 0
+#define HSI_VERSION_MINOR 1
+#define HSI_VERSION_PATCH 0
+/* major * 10000 + minor * 100 + patch, comparable with hsi_version(). */
+#define HSI_VERSION (HSI_VERSION_MAJOR * 10000 + HSI_VERSION_MINOR * 100 + HSI_VERSION_PATCH)
+#define HSI_VERSION_STRING "0.1.0"
+
+typedef enum hsi_status {
+  HSI_OK = 0,
+  HSI_ERROR_INVALID_ARGUMENT = 1, /* NULL handle or pointer, size or option out of its range */
+  HSI_ERROR_INPUT = 2,            /* a scene, keyframe, file content or point was refused */
+  HSI_ERROR_IO = 3,               /* a file cannot be read or written */
+  HSI_ERROR_NOT_CERTIFIED = 4,    /* a map could not be certified locally injective */
+  HSI_ERROR_OUT_OF_RANGE = 5,     /* a frame index past the end */
+  HSI_ERROR_UNSUPPORTED = 6,      /* e.g. rendering in a build without Vulkan */
+  HSI_ERROR_OUT_OF_MEMORY = 7,
+  HSI_ERROR_BUFFER_TOO_SMALL = 8, /* *length or *size says how many bytes are needed */
+  HSI_ERROR_CANCELLED = 9,        /* a progress callback asked to stop */
+  HSI_ERROR_INTERNAL = 10         /* a bug: please report it with the message */
+} hsi_status;
+
+/* [any thread] The runtime version (HSI_VERSION of the library that is loaded) and
+ * its string. Compare with HSI_VERSION to detect a header/library mismatch. */
+HSI_API uint32_t hsi_version(void);
+HSI_API const char* hsi_version_string(void);
+/* [any thread] "invalid argument", "not certified", ... */
+HSI_API const char* hsi_status_name(hsi_status status);
+/* [any thread] The message of the last failure on this thread ("" if none); valid
+ * until the next hsi_ call on this thread. */
+HSI_API const char* hsi_last_error(void);
+
+typedef struct hsi_allocator {
+  void* (*allocate)(size_t size, size_t alignment, void* user); /* NULL on failure */
+  void (*release)(void* pointer, void* user);
+  void* user;
+} hsi_allocator;
+/* [not thread-safe] Installs allocator hooks (NULL: the C library's). Only while no
+ * handle exists: otherwise HSI_ERROR_INVALID_ARGUMENT. */
+HSI_API hsi_status hsi_set_allocator(const hsi_allocator* allocator);
+
+typedef struct hsi_scene hsi_scene;
+typedef struct hsi_interpolator hsi_interpolator;
+typedef struct hsi_sequence hsi_sequence;
+
+/* ------------------------------------------------------------------ scenes */
+
+/* [any thread] A scene from a file (JSON, format in the project's README and
+ * engine/include/hsi/scene_io.h) or from JSON text in memory; base_dir resolves the
+ * texture (NULL: the working directory). The shape and any user cage are validated. */
+HSI_API hsi_status hsi_scene_load_file(const char* path, hsi_scene** out);
+HSI_API hsi_status hsi_scene_load_memory(const char* json, size_t size, const char* base_dir, hsi_scene** out);
+/* [per handle] NULL is ignored. */
+HSI_API void hsi_scene_destroy(hsi_scene* scene);
+
+typedef struct hsi_scene_info {
+  uint32_t loop_count;        /* 1 + holes */
+  uint32_t hole_count;
+  uint32_t cage_vertex_count; /* m (the cage is built on first need when the file has none) */
+  uint32_t coefficient_count; /* m + holes: phi and psi each */
+  uint32_t handle_count;
+  uint32_t keyframe_count;
+  uint32_t samples;           /* |G| in use */
+  double hessian_ratio;
+  double bbox[4];             /* the shape's bounding box x0, y0, x1, y1 */
+  double size;                /* its diagonal: the unit of every tolerance */
+  int has_texture;
+} hsi_scene_info;
+/* [per handle] */
+HSI_API hsi_status hsi_scene_get_info(hsi_scene* scene, hsi_scene_info* info);
+
+/* [per handle] Overrides the scene's |G| and Hessian ratio r (0: keep the scene's). */
+HSI_API hsi_status hsi_scene_set_sampling(hsi_scene* scene, uint32_t samples, double hessian_ratio);
+
+/* [per handle] Handles: points on the shape (x, y pairs) that keyframes pose. Setting
+ * them removes the keyframes that were posed by targets for other handles. */
+HSI_API hsi_status hsi_scene_set_handles(hsi_scene* scene, const double* xy, uint32_t count);
+/* [per handle] Copies up to capacity handles; *count gets how many there are. */
+HSI_API hsi_status hsi_scene_get_handles(hsi_scene* scene, double* xy, uint32_t capacity, uint32_t* count);
+
+typedef struct hsi_keyframe_report {
+  int certified;           /* always 1 for a keyframe that was added */
+  int reached;             /* every handle within 1e-3 of the size of its target */
+  double max_target_error; /* shape units */
+  int worst_handle;        /* -1 when there are no handles */
+  int iterations;          /* Newton iterations over all stages */
+  double energy;           /* mean symmetric Dirichlet energy on the boundary (2 = isometric) */
+  double ms;
+  char message[256];
+} hsi_keyframe_report;
+
+/* [per handle] Removes every keyframe. */
+HSI_API hsi_status hsi_scene_clear_keyframes(hsi_scene* scene);
+/* [per handle] Authors a keyframe now: the handles dragged to targets (x, y pairs,
+ * one per handle) from the previous keyframe's map (the identity for the first),
+ * certified locally injective by construction. time must exceed the last
+ * keyframe's. If the targets cannot be reached without folding, the closest
+ * certified pose is added and report->reached is 0. report may be NULL. */
+HSI_API hsi_status hsi_scene_add_keyframe(hsi_scene* scene, double time, const double* targets_xy, uint32_t count,
+                                          hsi_keyframe_report* report);
+/* [per handle] Makes every keyframe of the scene certified: keyframes loaded with
+ * coefficients are certified, those with only targets are solved. Called by
+ * hsi_interpolator_create too. HSI_ERROR_NOT_CERTIFIED names a keyframe that fails. */
+HSI_API hsi_status hsi_scene_solve_keyframes(hsi_scene* scene);
+/* [per handle] The scene as JSON (with solved keyframes' coefficients): copies up to
+ * capacity bytes (NUL-terminated when it fits), *length = bytes needed without the
+ * NUL; HSI_ERROR_BUFFER_TOO_SMALL when capacity <= *length. */
+HSI_API hsi_status hsi_scene_to_json(hsi_scene* scene, char* buffer, size_t capacity, size_t* length);
+/* [per handle] Writes the scene file atomically. */
+HSI_API hsi_status hsi_scene_save_file(hsi_scene* scene, const char* path);
+
+/* ------------------------------------------------------------------ interpolation */
+
+typedef enum hsi_projection { HSI_PROJECTION_PARTPROJ = 0, HSI_PROJECTION_FULLPROJ = 1, HSI_PROJECTION_DELETE = 2 } hsi_projection;
+
+typedef struct hsi_interpolation_options {
+  double tolerance;        /* stop a frame when E_k - E_k+1 < tolerance; default 1e-7 */
+  int max_iterations;      /* Newton iterations per frame; default 100 */
+  hsi_projection projection; /* default HSI_PROJECTION_PARTPROJ */
+} hsi_interpolation_options;
+/* [any thread] */
+HSI_API void hsi_interpolation_options_default(hsi_interpolation_options* options);
+
+/* [per handle: the scene] Certifies or solves the scene's keyframes (two or more)
+ * and prepares interpolation. options may be NULL (defaults). */
+HSI_API hsi_status hsi_interpolator_create(hsi_scene* scene, const hsi_interpolation_options* options,
+                                           hsi_interpolator** out);
+HSI_API void hsi_interpolator_destroy(hsi_interpolator* interpolator);
+/* [per handle] The keyframes' time range. */
+HSI_API hsi_status hsi_interpolator_time_range(hsi_interpolator* interpolator, double* t_begin, double* t_end);
+
+/* [per handle] One frame at time t (clamped to the range), warm-started from this
+ * interpolator's previous frame if it made one: a one-frame sequence. A frame that
+ * cannot be certified is returned and reported as such (certified = 0), never as good. */
+HSI_API hsi_status hsi_interpolator_frame(hsi_interpolator* interpolator, double t, hsi_sequence** out);
+
+typedef struct hsi_frame_report {
+  double t;
+  int keyframe, certified, converged;
+  int iterations;
+  double energy;        /* mean isometric energy against the blended metric (2 = exact) */
+  double ms;
+  double sigma1_max, sigma2_min, conformal_max, isometric_max; /* distortion over the shape */
+  double bound_sigma1_max, bound_sigma2_min, bound_conformal_max, bound_isometric_max; /* keyframes' envelope */
+  double bound_excess;  /* relative excess over the envelope (0 = within) */
+} hsi_frame_report;
+
+/* Called after each frame; return non-zero to stop (HSI_ERROR_CANCELLED). */
+typedef int (*hsi_progress_fn)(uint32_t frame, uint32_t frame_count, const hsi_frame_report* report, void* user);
+
+/* [per handle] frame_count (>= 2) frames uniform over the time range, each
+ * warm-started from the previous one, as `hsi interpolate` makes them. */
+HSI_API hsi_status hsi_interpolator_sequence(hsi_interpolator* interpolator, uint32_t frame_count, hsi_progress_fn progress,
+                                             void* user, hsi_sequence** out);
+
+/* ------------------------------------------------------------------ sequences */
+
+HSI_API void hsi_sequence_destroy(hsi_sequence* sequence);
+/* [per handle, const] */
+HSI_API uint32_t hsi_sequence_frame_count(const hsi_sequence* sequence);
+HSI_API hsi_status hsi_sequence_frame_report(const hsi_sequence* sequence, uint32_t frame, hsi_frame_report* report);
+
+typedef struct hsi_sequence_summary {
+  uint32_t frames, certified, uncertified, within_bounds;
+  double mean_iterations, mean_ms, max_ms, total_s, max_bound_excess;
+} hsi_sequence_summary;
+/* [per handle, const] */
+HSI_API hsi_status hsi_sequence_summary_get(const hsi_sequence* sequence, hsi_sequence_summary* summary);
+/* [per handle, const] The report as JSON (the schema of `hsi interpolate`'s
+ * report.json) or CSV (one line per frame); buffer protocol as hsi_scene_to_json. */
+HSI_API hsi_status hsi_sequence_report_json(const hsi_sequence* sequence, char* buffer, size_t capacity, size_t* length);
+HSI_API hsi_status hsi_sequence_report_csv(const hsi_sequence* sequence, char* buffer, size_t capacity, size_t* length);
+
+/* [per handle, const] The frame's map f at count points (x, y pairs; e.g. a game
+ * mesh's rest vertices) into out_xy (x, y pairs; may not alias points_xy). Points
+ * must lie inside the cage (the shape and a margin around it): otherwise
+ * HSI_ERROR_INPUT names the first point that does not. */
+HSI_API hsi_status hsi_sequence_evaluate(const hsi_sequence* sequence, uint32_t frame, const double* points_xy, size_t count,
+                                         double* out_xy);
+/* [per handle, const] The frame's coefficients over the cage, (re, im) pairs:
+ * phi and psi get 2 * coefficient_count doubles each (either may be NULL). */
+HSI_API hsi_status hsi_sequence_coefficients(const hsi_sequence* sequence, uint32_t frame, double* phi, double* psi,
+                                             uint32_t coefficient_count);
+
+/* [per handle, const] Bakes the sequence for playback (the .hsib format and its
+ * dependency-free runtime: hsi/baked_runtime.h). single_precision: coefficients as
+ * f32 (compact) instead of f64. To memory: buffer protocol as hsi_scene_to_json, in
+ * bytes (no NUL). */
+HSI_API hsi_status hsi_sequence_bake_file(const hsi_sequence* sequence, const char* path, int single_precision);
+HSI_API hsi_status hsi_sequence_bake_memory(const hsi_sequence* sequence, int single_precision, void* buffer, size_t capacity,
+                                            size_t* size);
+/* [per handle, const] Writes the frames file (.hsif) as `hsi interpolate` does. */
+HSI_API hsi_status hsi_sequence_save_frames(const hsi_sequence* sequence, const char* path);
+
+/* ------------------------------------------------------------------ rendering */
+
+typedef struct hsi_render_options {
+  uint32_t width, height;   /* pixels; default 512 x 512 */
+  float background[4];      /* straight RGBA in [0, 1]; default opaque white */
+  int draw_boundary;        /* the image of the outline and holes as lines; default 1 */
+  int draw_distortion;      /* conformal distortion colour map over the texture; default 0 */
+  int draw_handles;         /* default 0 */
+  double mesh_vertices;     /* triangulation resolution, about this many vertices; default 4000 */
+  double view[4];           /* world rectangle x0, y0, x1, y1 to show; all 0 (default): fit every
+                               frame of the sequence, so frames share one view */
+  uint32_t msaa_samples;    /* 1, 2, 4 or 8; default 4 */
+} hsi_render_options;
+/* [any thread] */
+HSI_API void hsi_render_options_default(hsi_render_options* options);
+/* [any thread] 1 when this library renders (built with Vulkan and a device, e.g.
+ * lavapipe, is present), else 0; *why (may be NULL) gets the reason when 0. */
+HSI_API int hsi_render_available(const char** why);
+/* [per handle] Renders frame `frame` (textured with the scene's texture) into rgba:
+ * height rows of width RGBA8 pixels (straight alpha), row_stride bytes apart
+ * (0 = 4 * width), top row first. HSI_ERROR_UNSUPPORTED without Vulkan. The first
+ * call sets up the renderer (seconds on a CPU device); later calls reuse it. */
+HSI_API hsi_status hsi_sequence_render(hsi_sequence* sequence, uint32_t frame, const hsi_render_options* options,
+                                       uint8_t* rgba, size_t row_stride);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* HSI_HSI_H */

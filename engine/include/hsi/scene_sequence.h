@@ -1,0 +1,57 @@
+// A scene interpolated end to end (keyframes made certified, then the warm-started
+// sequence) and its report as JSON and CSV: the flow that hsi bake, hsi export and
+// the C API share.
+#pragma once
+
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "hsi/frames_io.h"
+#include "hsi/interpolation.h"
+
+namespace hsi {
+
+struct SceneSequenceOptions {
+  int frames = 500;            // uniform over the keyframes' time range (≥ 2)
+  int samples = 0;             // |G|; 0: the scene's
+  double hessian_ratio = 0;    // r; 0: the scene's
+  InterpolationOptions interpolation;
+};
+
+struct SceneSequence {
+  std::shared_ptr<const ShapeSetup> setup;
+  std::vector<FrameResult> frames;
+  double total_s = 0;  // wall-clock time of the sequence
+
+  int uncertified() const;
+  FrameFile frame_file() const;  // cage + posed maps, as hsi interpolate writes them
+};
+
+// Gives the scene a cage if it has none, then the setup for its sample settings
+// (samples, ratio override the scene's when positive).
+std::shared_ptr<const ShapeSetup> scene_setup(Scene& scene, int samples = 0, double hessian_ratio = 0);
+
+// Needs two or more keyframes (InputError otherwise); keyframes given by targets are
+// solved and their coefficients written into scene.keyframes. `core` = nullptr: the
+// CPU Newton core. Frames that cannot be certified are reported in the result, not thrown.
+SceneSequence interpolate_scene(Scene& scene, const SceneSequenceOptions& options = {},
+                                const std::function<void(const FrameResult&, int, int)>& progress = {},
+                                std::unique_ptr<NewtonCore> core = nullptr,
+                                std::shared_ptr<const ShapeSetup> setup = nullptr);
+
+struct SequenceSummary {
+  int frames = 0, certified = 0, uncertified = 0, within_bounds = 0;
+  double mean_iterations = 0, mean_ms = 0, max_ms = 0, total_s = 0, max_bound_excess = 0;
+};
+SequenceSummary summarize(const std::vector<FrameResult>& frames, double total_s);
+
+// The per-frame report (the fields of hsi interpolate's report.json: time, keyframe,
+// certified, iterations, energy, ms, distortion and its bound, certificate) plus a
+// summary. `scene_path` is only recorded.
+std::string report_json(const Scene& scene, const SceneSequence& sequence, const std::string& scene_path = "");
+// One line per frame, a header line first; RFC 4180, '.' decimals.
+std::string report_csv(const SceneSequence& sequence);
+
+}  // namespace hsi

@@ -1,0 +1,161 @@
+// Writing .hsib baked sequences (layout in hsi/baked_runtime.h).
+#include "hsi/baked.h"
+
+#include <array>
+#include <cstring>
+#include <map>
+
+#include "hsi/baked_runtime.h"
+#include "hsi/map_space.h"
+
+namespace hsi {
+namespace {
+
+// Explicit little-endian bytes, whatever the host.
+struct LEWriter {
+  std::string out;
+  void u32(uint32_t v) {
+    for (int k = 0; k < 4; ++k) out.push_back(static_cast<char>((v >> (8 * k)) & 0xFFu));
+  }
+  void u64(uint64_t v) {
+    for (int k = 0; k < 8; ++k) out.push_back(static_cast<char>((v >> (8 * k)) & 0xFFu));
+  }
+  void f64(double d) {
+    uint64_t u;
+    std::memcpy(&u, &d, 8);
+    u64(u);
+  }
+  void f32(float f) {
+    uint32_t u;
+    std::memcpy(&u, &f, 4);
+    u32(u);
+  }
+  void point(cd p) {
+    f64(p.real());
+    f64(p.imag());
+  }
+};
+
+}  // namespace
+
+std::string encode_baked(const Shape& shape, const FrameFile& frames, const BakeOptions& options) {
+  const Cage& cage = frames.cage;
+  if (cage.loops.empty()) throw InputError("bake: the frames have no cage");
+  const MapSpace space(cage, Gauge::ModuloRigid);
+  const int m = cage.vertex_count(), N = cage.hole_count(), n = space.n();
+
+  // Runtime rows: Re C_j and Im C_j per active cage column, log|w − ρ_h| per hole.
+  std::vector<uint32_t> row_sources;
+  std::vector<std::array<int, 2>> rows_of(static_cast<size_t>(n));  // active column → (row of Re C, row of Im C or −1)
+  for (int a = 0; a < n; ++a) {
+    const int j = space.active()[static_cast<size_t>(a)];
+    if (j < m) {
+      rows_of[static_cast<size_t>(a)] = {static_cast<int>(row_sources.size()), static_cast<int>(row_sources.size()) + 1};
+      row_sources.push_back(static_cast<uint32_t>(j) << 2);
+      row_sources.push_back((static_cast<uint32_t>(j) << 2) | 1u);
+    } else {
+      rows_of[static_cast<size_t>(a)] = {static_cast<int>(row_sources.size()), -1};
+      row_sources.push_back((static_cast<uint32_t>(j - m) << 2) | 2u);
+    }
+  }
+  // E: x ↦ row weights. v = T x holds (Re φ_a, Im φ_a, Re ψ_a, Im ψ_a); the row of
+  // Re C weighs φ + conj ψ, the row of Im C weighs i (φ − conj ψ) (f = Σ C φ + conj Σ C ψ).
+  struct Entry {
+    uint32_t target, source;
+    double value;
+  };
+  std::vector<Entry> expansion;
+  const Eigen::SparseMatrix<double>& T = space.T();
+  for (int k = 0; k < T.outerSize(); ++k) {
+    std::map<uint32_t, double> column;
+    for (Eigen::SparseMatrix<double>::InnerIterator it(T, k); it; ++it) {
+      const int part = static_cast<int>(it.row()) / n, a = static_cast<int>(it.row()) % n;
+      const double v = it.value();
+      const int rc = rows_of[static_cast<size_t>(a)][0], rs = rows_of[static_cast<size_t>(a)][1];
+      auto add = [&](int row, int comp, double value) {
+        if (row >= 0) column[static_cast<uint32_t>(2 * row + comp)] += value;
+      };
+      switch (part) {
+        case 0: add(rc, 0, v); add(rs, 1, v); break;    // Re φ
+        case 1: add(rc, 1, v); add(rs, 0, -v); break;   // Im φ
+        case 2: add(rc, 0, v); add(rs, 1, -v); break;   // Re ψ
+        default: add(rc, 1, -v); add(rs, 0, -v); break; // Im ψ
+      }
+    }
+    for (const auto& [target, value] : column)
+      if (value != 0) expansion.push_back({target, static_cast<uint32_t>(k), value});
+  }
+
+  const uint32_t R = static_cast<uint32_t>(row_sources.size()), D = static_cast<uint32_t>(space.dim());
+  const uint32_t scalar = options.single_precision ? 4 : 8;
+  const uint32_t S = 48 + D * scalar + 4;
+
+  LEWriter st;
+  for (const Loop& l : cage.loops) st.u32(static_cast<uint32_t>(l.size()));
+  for (const Loop& l : cage.loops)
+    for (const cd& z : l) st.point(z);
+  for (const cd& p : cage.hole_points) st.point(p);
+  for (uint32_t r : row_sources) st.u32(r);
+  for (const Entry& e : expansion) {
+    st.u32(e.target);
+    st.u32(e.source);
+    st.f64(e.value);
+  }
+
+  LEWriter fr;
+  for (size_t i = 0; i < frames.frames.size(); ++i) {
+    const StoredFrame& f = frames.frames[i];
+    if (f.map.phi.size() != basis_size(cage) || f.map.psi.size() != basis_size(cage))
+      throw InputError("bake: frame " + std::to_string(i) + " has " + std::to_string(f.map.phi.size()) +
+                       " coefficients; the cage needs " + std::to_string(basis_size(cage)));
+    if (i > 0 && !(f.t >= frames.frames[i - 1].t)) throw InputError("bake: frame times must not decrease (frame " + std::to_string(i) + ")");
+    MapSpace::Canonical c;
+    try {
+      c = space.reduce(f.map);
+    } catch (const InputError& e) {
+      throw InputError("bake: frame " + std::to_string(i) + ": " + e.what());
+    }
+    const size_t start = fr.out.size();
+    fr.f64(f.t);
+    fr.u32((f.certified ? 1u : 0u) | (f.keyframe ? 2u : 0u) | (f.converged ? 4u : 0u));
+    fr.u32(0);
+    fr.point(c.rotation);
+    fr.point(c.translation);
+    for (Eigen::Index d = 0; d < c.x.size(); ++d) {
+      if (options.single_precision)
+        fr.f32(static_cast<float>(c.x(d)));
+      else
+        fr.f64(c.x(d));
+    }
+    fr.u32(hsib_crc32(fr.out.data() + start, fr.out.size() - start));
+  }
+
+  const BoundingBox bb = bounding_box(shape);
+  LEWriter h;
+  h.out = "HSIB";
+  h.u32(HSIB_FORMAT_VERSION);
+  h.u32(HSIB_HEADER_SIZE);
+  h.u32(options.single_precision ? 1u : 0u);
+  h.u32(static_cast<uint32_t>(cage.loops.size()));
+  h.u32(static_cast<uint32_t>(m));
+  h.u32(static_cast<uint32_t>(N));
+  h.u32(R);
+  h.u32(D);
+  h.u32(static_cast<uint32_t>(expansion.size()));
+  h.u32(static_cast<uint32_t>(frames.frames.size()));
+  h.u32(S);
+  h.f64(bb.lo.real());
+  h.f64(bb.lo.imag());
+  h.f64(bb.hi.real());
+  h.f64(bb.hi.imag());
+  h.u64(st.out.size());
+  h.u32(hsib_crc32(st.out.data(), st.out.size()));
+  h.u32(hsib_crc32(h.out.data(), h.out.size()));
+  return h.out + st.out + fr.out;
+}
+
+void write_baked(const std::filesystem::path& path, const Shape& shape, const FrameFile& frames, const BakeOptions& options) {
+  write_file_atomic(path, encode_baked(shape, frames, options));
+}
+
+}  // namespace hsi

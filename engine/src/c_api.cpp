@@ -1,0 +1,624 @@
+// The C API (hsi/hsi.h) over the C++ engine: handles, status codes and messages;
+// every entry point catches everything, so no exception crosses into C.
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+#include <new>
+
+#include "c_api_internal.h"
+#include "hsi/baked.h"
+#include "hsi/baked_runtime.h"
+#include "hsi/keyframes.h"
+
+using namespace hsi;
+using hsi::capi::ApiError;
+
+namespace {
+
+thread_local std::string g_error;
+std::atomic<long> g_live_handles{0};
+
+void* default_allocate(size_t size, size_t alignment, void*) {
+  alignment = std::max(alignment, alignof(std::max_align_t));
+  return std::aligned_alloc(alignment, (size + alignment - 1) / alignment * alignment);
+}
+void default_release(void* p, void*) { std::free(p); }
+hsi_allocator g_alloc{default_allocate, default_release, nullptr};
+
+void* baked_allocate(size_t bytes, void*) { return g_alloc.allocate(bytes, 16, g_alloc.user); }
+void baked_release(void* p, void*) { g_alloc.release(p, g_alloc.user); }
+
+template <class T>
+T* new_handle() {
+  void* p = g_alloc.allocate(sizeof(T), alignof(T), g_alloc.user);
+  if (!p) throw std::bad_alloc();
+  try {
+    T* h = new (p) T();
+    ++g_live_handles;
+    return h;
+  } catch (...) {
+    g_alloc.release(p, g_alloc.user);
+    throw;
+  }
+}
+
+template <class T>
+void delete_handle(T* h) {
+  if (!h) return;
+  h->~T();
+  g_alloc.release(h, g_alloc.user);
+  --g_live_handles;
+}
+
+hsi_status set_error(hsi_status s, const std::string& message) {
+  g_error = message;
+  return s;
+}
+
+[[noreturn]] void fail(hsi_status s, const std::string& message) { throw ApiError{s, message}; }
+
+void require(bool ok, const char* function, const char* what) {
+  if (!ok) fail(HSI_ERROR_INVALID_ARGUMENT, std::string(function) + ": " + what);
+}
+
+template <class F>
+hsi_status guard(F&& body) noexcept {
+  g_error.clear();
+  try {
+    body();
+    return HSI_OK;
+  } catch (const ApiError& e) {
+    return set_error(e.status, e.message);
+  } catch (const InputError& e) {
+    return set_error(HSI_ERROR_INPUT, e.what());
+  } catch (const std::bad_alloc&) {
+    return set_error(HSI_ERROR_OUT_OF_MEMORY, "out of memory");
+  } catch (const std::filesystem::filesystem_error& e) {
+    return set_error(HSI_ERROR_IO, e.what());
+  } catch (const std::exception& e) {
+    return set_error(HSI_ERROR_INTERNAL, std::string("internal error: ") + e.what());
+  } catch (...) {
+    return set_error(HSI_ERROR_INTERNAL, "internal error: unknown exception");
+  }
+}
+
+// Buffer protocol: *length = bytes needed (without a NUL); copy with a NUL when it fits.
+void copy_out(const std::string& text, char* buffer, size_t capacity, size_t* length, bool nul) {
+  if (length) *length = text.size();
+  const size_t need = text.size() + (nul ? 1 : 0);
+  if (!buffer || capacity < need)
+    fail(HSI_ERROR_BUFFER_TOO_SMALL,
+         "the buffer holds " + std::to_string(buffer ? capacity : 0) + " bytes; " + std::to_string(need) + " are needed");
+  std::memcpy(buffer, text.data(), text.size());
+  if (nul) buffer[text.size()] = '\0';
+}
+
+const ShapeSetup& ensure_setup(hsi_scene* s) {
+  if (!s->setup) s->setup = scene_setup(s->scene, s->samples, s->hessian_ratio);
+  return *s->setup;
+}
+
+std::vector<cd> read_points(const double* xy, size_t count) {
+  std::vector<cd> p(count);
+  for (size_t i = 0; i < count; ++i) p[i] = cd(xy[2 * i], xy[2 * i + 1]);
+  return p;
+}
+
+hsi_frame_report to_report(const FrameResult& f) {
+  hsi_frame_report r{};
+  r.t = f.t;
+  r.keyframe = f.keyframe;
+  r.certified = f.certified;
+  r.converged = f.converged;
+  r.iterations = f.iterations;
+  r.energy = f.energy;
+  r.ms = f.ms;
+  r.sigma1_max = f.distortion.sigma1_max;
+  r.sigma2_min = f.distortion.sigma2_min;
+  r.conformal_max = f.distortion.conformal_max;
+  r.isometric_max = f.distortion.isometric_max;
+  r.bound_sigma1_max = f.bound.sigma1_max;
+  r.bound_sigma2_min = f.bound.sigma2_min;
+  r.bound_conformal_max = f.bound.conformal_max;
+  r.bound_isometric_max = f.bound.isometric_max;
+  r.bound_excess = f.bound_excess;
+  return r;
+}
+
+const FrameResult& frame_of(const hsi_sequence* s, uint32_t frame, const char* function) {
+  require(s, function, "sequence is NULL");
+  if (frame >= s->seq.frames.size())
+    fail(HSI_ERROR_OUT_OF_RANGE, std::string(function) + ": frame " + std::to_string(frame) + " is past the end (" +
+                                     std::to_string(s->seq.frames.size()) + " frames)");
+  return s->seq.frames[frame];
+}
+
+// Points must lie in the cage domain, where the basis is defined (not on the cage).
+void check_in_cage(const Cage& cage, double size, const std::vector<cd>& points) {
+  const double eps = 1e-9 * size;
+  for (size_t i = 0; i < points.size(); ++i) {
+    const cd p = points[i];
+    if (!std::isfinite(p.real()) || !std::isfinite(p.imag())) fail(HSI_ERROR_INPUT, "point " + std::to_string(i) + " is not finite");
+    for (size_t l = 0; l < cage.loops.size(); ++l) {
+      const bool inside = point_in_loop(cage.loops[l], p);
+      if ((l == 0) != inside || loop_distance(cage.loops[l], p) <= eps)
+        fail(HSI_ERROR_INPUT, "point " + std::to_string(i) + " at (" + std::to_string(p.real()) + ", " + std::to_string(p.imag()) +
+                                  ") lies " + (l == 0 ? "outside (or on) the cage's outer loop" : "inside (or on) the cage loop of hole " + std::to_string(l)) +
+                                  ": maps are defined inside the cage only (the shape and a margin around it)");
+    }
+  }
+}
+
+}  // namespace
+
+extern "C" {
+
+uint32_t hsi_version(void) { return HSI_VERSION; }
+const char* hsi_version_string(void) { return HSI_VERSION_STRING; }
+
+const char* hsi_status_name(hsi_status s) {
+  switch (s) {
+    case HSI_OK: return "ok";
+    case HSI_ERROR_INVALID_ARGUMENT: return "invalid argument";
+    case HSI_ERROR_INPUT: return "input refused";
+    case HSI_ERROR_IO: return "I/O error";
+    case HSI_ERROR_NOT_CERTIFIED: return "not certified";
+    case HSI_ERROR_OUT_OF_RANGE: return "out of range";
+    case HSI_ERROR_UNSUPPORTED: return "unsupported";
+    case HSI_ERROR_OUT_OF_MEMORY: return "out of memory";
+    case HSI_ERROR_BUFFER_TOO_SMALL: return "buffer too small";
+    case HSI_ERROR_CANCELLED: return "cancelled";
+    case HSI_ERROR_INTERNAL: return "internal error";
+  }
+  return "unknown status";
+}
+
+const char* hsi_last_error(void) { return g_error.c_str(); }
+
+hsi_status hsi_set_allocator(const hsi_allocator* allocator) {
+  return guard([&] {
+    if (g_live_handles.load() != 0)
+      fail(HSI_ERROR_INVALID_ARGUMENT, "hsi_set_allocator: " + std::to_string(g_live_handles.load()) + " handle(s) still exist");
+    if (allocator && (!allocator->allocate || !allocator->release))
+      fail(HSI_ERROR_INVALID_ARGUMENT, "hsi_set_allocator: allocate and release must both be given");
+    if (allocator) {
+      g_alloc = *allocator;
+      const hsib_allocator b{baked_allocate, baked_release, nullptr};
+      hsib_set_allocator(&b);
+    } else {
+      g_alloc = {default_allocate, default_release, nullptr};
+      hsib_set_allocator(nullptr);
+    }
+  });
+}
+
+// ---------------------------------------------------------------- scenes
+
+hsi_status hsi_scene_load_file(const char* path, hsi_scene** out) {
+  if (out) *out = nullptr;
+  return guard([&] {
+    require(path && out, "hsi_scene_load_file", "path or out is NULL");
+    if (!std::filesystem::exists(path)) fail(HSI_ERROR_IO, std::string(path) + ": no such file");
+    Scene scene = load_scene(path);
+    hsi_scene* s = new_handle<hsi_scene>();
+    s->scene = std::move(scene);
+    *out = s;
+  });
+}
+
+hsi_status hsi_scene_load_memory(const char* json, size_t size, const char* base_dir, hsi_scene** out) {
+  if (out) *out = nullptr;
+  return guard([&] {
+    require(json && out, "hsi_scene_load_memory", "json or out is NULL");
+    Scene scene = parse_scene(std::string(json, size), base_dir ? base_dir : std::filesystem::current_path().string(), "scene (memory)");
+    hsi_scene* s = new_handle<hsi_scene>();
+    s->scene = std::move(scene);
+    *out = s;
+  });
+}
+
+void hsi_scene_destroy(hsi_scene* scene) { delete_handle(scene); }
+
+hsi_status hsi_scene_get_info(hsi_scene* s, hsi_scene_info* info) {
+  return guard([&] {
+    require(s && info, "hsi_scene_get_info", "scene or info is NULL");
+    if (!s->scene.cage) s->scene.cage = build_cage(s->scene.shape, s->scene.cage_options);
+    hsi_scene_info r{};
+    r.loop_count = static_cast<uint32_t>(s->scene.shape.loop_count());
+    r.hole_count = static_cast<uint32_t>(s->scene.shape.holes.size());
+    r.cage_vertex_count = static_cast<uint32_t>(s->scene.cage->vertex_count());
+    r.coefficient_count = static_cast<uint32_t>(basis_size(*s->scene.cage));
+    r.handle_count = static_cast<uint32_t>(s->scene.handles.size());
+    r.keyframe_count = static_cast<uint32_t>(s->scene.keyframes.size());
+    r.samples = static_cast<uint32_t>(s->samples > 0 ? s->samples : s->scene.samples);
+    r.hessian_ratio = s->hessian_ratio > 0 ? s->hessian_ratio : s->scene.hessian_ratio;
+    const BoundingBox bb = bounding_box(s->scene.shape);
+    r.bbox[0] = bb.lo.real();
+    r.bbox[1] = bb.lo.imag();
+    r.bbox[2] = bb.hi.real();
+    r.bbox[3] = bb.hi.imag();
+    r.size = bb.diagonal();
+    r.has_texture = !s->scene.texture.empty();
+    *info = r;
+  });
+}
+
+hsi_status hsi_scene_set_sampling(hsi_scene* s, uint32_t samples, double ratio) {
+  return guard([&] {
+    require(s, "hsi_scene_set_sampling", "scene is NULL");
+    if (samples != 0 && (samples < 100 || samples > 10000000))
+      fail(HSI_ERROR_INVALID_ARGUMENT, "hsi_scene_set_sampling: samples must be 0 (the scene's) or in [100, 1e7], got " + std::to_string(samples));
+    if (!(ratio == 0 || (ratio > 0 && ratio <= 1)))
+      fail(HSI_ERROR_INVALID_ARGUMENT, "hsi_scene_set_sampling: the Hessian ratio must be 0 (the scene's) or in (0, 1]");
+    s->samples = static_cast<int>(samples);
+    s->hessian_ratio = ratio;
+    s->setup.reset();  // interpolators and sequences keep their own
+  });
+}
+
+hsi_status hsi_scene_set_handles(hsi_scene* s, const double* xy, uint32_t count) {
+  return guard([&] {
+    require(s && (xy || count == 0), "hsi_scene_set_handles", "scene or xy is NULL");
+    std::vector<cd> handles = read_points(xy, count);
+    for (size_t i = 0; i < handles.size(); ++i)
+      if (!point_in_shape(s->scene.shape, handles[i]))
+        fail(HSI_ERROR_INPUT, "handle " + std::to_string(i) + " at (" + std::to_string(handles[i].real()) + ", " +
+                                  std::to_string(handles[i].imag()) + ") is not inside the shape");
+    s->scene.handles = std::move(handles);
+    auto& ks = s->scene.keyframes;
+    for (auto it = ks.begin(); it != ks.end();) {
+      if (it->targets.size() != count) {
+        if (!it->coefficients) {
+          it = ks.erase(it);
+          continue;
+        }
+        it->targets.clear();
+      }
+      ++it;
+    }
+  });
+}
+
+hsi_status hsi_scene_get_handles(hsi_scene* s, double* xy, uint32_t capacity, uint32_t* count) {
+  return guard([&] {
+    require(s && (xy || capacity == 0), "hsi_scene_get_handles", "scene or xy is NULL");
+    const auto& h = s->scene.handles;
+    if (count) *count = static_cast<uint32_t>(h.size());
+    for (size_t i = 0; i < h.size() && i < capacity; ++i) {
+      xy[2 * i] = h[i].real();
+      xy[2 * i + 1] = h[i].imag();
+    }
+  });
+}
+
+hsi_status hsi_scene_clear_keyframes(hsi_scene* s) {
+  return guard([&] {
+    require(s, "hsi_scene_clear_keyframes", "scene is NULL");
+    s->scene.keyframes.clear();
+  });
+}
+
+hsi_status hsi_scene_add_keyframe(hsi_scene* s, double time, const double* targets_xy, uint32_t count, hsi_keyframe_report* report) {
+  return guard([&] {
+    require(s && (targets_xy || count == 0), "hsi_scene_add_keyframe", "scene or targets are NULL");
+    if (!std::isfinite(time)) fail(HSI_ERROR_INVALID_ARGUMENT, "hsi_scene_add_keyframe: time is not finite");
+    if (count != s->scene.handles.size())
+      fail(HSI_ERROR_INVALID_ARGUMENT, "hsi_scene_add_keyframe: " + std::to_string(count) + " targets for " +
+                                           std::to_string(s->scene.handles.size()) + " handles");
+    if (!s->scene.keyframes.empty() && !(time > s->scene.keyframes.back().time))
+      fail(HSI_ERROR_INVALID_ARGUMENT, "hsi_scene_add_keyframe: time " + std::to_string(time) + " must exceed the last keyframe's (" +
+                                           std::to_string(s->scene.keyframes.back().time) + ")");
+    const std::vector<cd> targets = read_points(targets_xy, count);
+    for (size_t i = 0; i < targets.size(); ++i)
+      if (!std::isfinite(targets[i].real()) || !std::isfinite(targets[i].imag()))
+        fail(HSI_ERROR_INPUT, "hsi_scene_add_keyframe: target " + std::to_string(i) + " is not finite");
+    const ShapeSetup& setup = ensure_setup(s);
+    if (!s->scene.keyframes.empty()) solve_scene_keyframes(s->scene, setup);  // the start map must be certified
+    const HarmonicMap start = s->scene.keyframes.empty() ? identity_map(setup.cage) : *s->scene.keyframes.back().coefficients;
+    const KeyframeResult k = author_keyframe(setup, s->scene.handles, targets, start);
+    if (!k.certified)
+      fail(HSI_ERROR_NOT_CERTIFIED, "keyframe at time " + std::to_string(time) + " could not be certified: " + k.message);
+    s->scene.keyframes.push_back({time, targets, k.map});
+    if (report) {
+      hsi_keyframe_report r{};
+      r.certified = k.certified;
+      r.reached = k.reached;
+      r.max_target_error = k.max_target_error;
+      r.worst_handle = k.worst_handle;
+      r.iterations = k.iterations;
+      r.energy = k.energy;
+      r.ms = k.ms;
+      std::snprintf(r.message, sizeof r.message, "%s", k.message.c_str());
+      *report = r;
+    }
+  });
+}
+
+hsi_status hsi_scene_solve_keyframes(hsi_scene* s) {
+  return guard([&] {
+    require(s, "hsi_scene_solve_keyframes", "scene is NULL");
+    solve_scene_keyframes(s->scene, ensure_setup(s));
+  });
+}
+
+hsi_status hsi_scene_to_json(hsi_scene* s, char* buffer, size_t capacity, size_t* length) {
+  return guard([&] {
+    require(s, "hsi_scene_to_json", "scene is NULL");
+    copy_out(scene_to_json(s->scene), buffer, capacity, length, true);
+  });
+}
+
+hsi_status hsi_scene_save_file(hsi_scene* s, const char* path) {
+  return guard([&] {
+    require(s && path, "hsi_scene_save_file", "scene or path is NULL");
+    save_scene(s->scene, path);
+  });
+}
+
+// ---------------------------------------------------------------- interpolation
+
+void hsi_interpolation_options_default(hsi_interpolation_options* o) {
+  if (!o) return;
+  const InterpolationOptions d;
+  o->tolerance = d.tolerance;
+  o->max_iterations = d.max_iterations;
+  o->projection = HSI_PROJECTION_PARTPROJ;
+}
+
+hsi_status hsi_interpolator_create(hsi_scene* s, const hsi_interpolation_options* options, hsi_interpolator** out) {
+  if (out) *out = nullptr;
+  return guard([&] {
+    require(s && out, "hsi_interpolator_create", "scene or out is NULL");
+    hsi_interpolation_options o;
+    hsi_interpolation_options_default(&o);
+    if (options) o = *options;
+    if (!(o.tolerance >= 0) || o.max_iterations < 1 || o.projection < HSI_PROJECTION_PARTPROJ || o.projection > HSI_PROJECTION_DELETE)
+      fail(HSI_ERROR_INVALID_ARGUMENT, "hsi_interpolator_create: tolerance must be >= 0, max_iterations >= 1, projection 0, 1 or 2");
+    if (s->scene.keyframes.size() < 2)
+      fail(HSI_ERROR_INPUT, "scene '" + s->scene.name + "': interpolation needs at least two keyframes (it has " +
+                                std::to_string(s->scene.keyframes.size()) + ")");
+    const ShapeSetup& setup = ensure_setup(s);
+    solve_scene_keyframes(s->scene, setup);
+    InterpolationOptions io;
+    io.tolerance = o.tolerance;
+    io.max_iterations = o.max_iterations;
+    io.projection = o.projection == HSI_PROJECTION_FULLPROJ ? HessianProjection::FullProj
+                    : o.projection == HSI_PROJECTION_DELETE ? HessianProjection::Delete
+                                                            : HessianProjection::PartProj;
+    std::vector<double> times;
+    std::vector<HarmonicMap> maps;
+    for (const Keyframe& k : s->scene.keyframes) {
+      times.push_back(k.time);
+      maps.push_back(*k.coefficients);
+    }
+    hsi_interpolator* h = new_handle<hsi_interpolator>();
+    try {
+      h->scene = std::make_shared<const Scene>(s->scene);
+      h->setup = s->setup;
+      h->interp = std::make_unique<Interpolator>(*h->setup, times, maps, io, make_cpu_newton_core(h->setup->D_G, h->setup->H));
+    } catch (...) {
+      delete_handle(h);
+      throw;
+    }
+    *out = h;
+  });
+}
+
+void hsi_interpolator_destroy(hsi_interpolator* i) { delete_handle(i); }
+
+hsi_status hsi_interpolator_time_range(hsi_interpolator* i, double* t_begin, double* t_end) {
+  return guard([&] {
+    require(i, "hsi_interpolator_time_range", "interpolator is NULL");
+    if (t_begin) *t_begin = i->interp->t_begin();
+    if (t_end) *t_end = i->interp->t_end();
+  });
+}
+
+hsi_status hsi_interpolator_frame(hsi_interpolator* i, double t, hsi_sequence** out) {
+  if (out) *out = nullptr;
+  return guard([&] {
+    require(i && out, "hsi_interpolator_frame", "interpolator or out is NULL");
+    if (!std::isfinite(t)) fail(HSI_ERROR_INVALID_ARGUMENT, "hsi_interpolator_frame: t is not finite");
+    t = std::clamp(t, i->interp->t_begin(), i->interp->t_end());
+    hsi_sequence* s = new_handle<hsi_sequence>();
+    try {
+      s->scene = i->scene;
+      s->seq.setup = i->setup;
+      s->seq.frames.push_back(i->interp->frame(t, i->warm));
+      s->seq.total_s = s->seq.frames.back().ms / 1000;
+      if (s->seq.frames.back().certified) i->warm = s->seq.frames.back().x;
+    } catch (...) {
+      delete_handle(s);
+      throw;
+    }
+    *out = s;
+  });
+}
+
+hsi_status hsi_interpolator_sequence(hsi_interpolator* i, uint32_t frame_count, hsi_progress_fn progress, void* user, hsi_sequence** out) {
+  if (out) *out = nullptr;
+  return guard([&] {
+    require(i && out, "hsi_interpolator_sequence", "interpolator or out is NULL");
+    if (frame_count < 2 || frame_count > 10000000)
+      fail(HSI_ERROR_INVALID_ARGUMENT, "hsi_interpolator_sequence: frame_count must be in [2, 1e7], got " + std::to_string(frame_count));
+    struct Cancelled {};
+    hsi_sequence* s = new_handle<hsi_sequence>();
+    try {
+      s->scene = i->scene;
+      s->seq.setup = i->setup;
+      const auto t0 = std::chrono::steady_clock::now();
+      s->seq.frames = i->interp->sequence(static_cast<int>(frame_count), [&](const FrameResult& f, int k, int n) {
+        if (!progress) return;
+        const hsi_frame_report r = to_report(f);
+        if (progress(static_cast<uint32_t>(k), static_cast<uint32_t>(n), &r, user)) throw Cancelled{};
+      });
+      s->seq.total_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+      for (auto it = s->seq.frames.rbegin(); it != s->seq.frames.rend(); ++it)
+        if (it->certified) {
+          i->warm = it->x;
+          break;
+        }
+    } catch (const Cancelled&) {
+      delete_handle(s);
+      fail(HSI_ERROR_CANCELLED, "hsi_interpolator_sequence: cancelled by the progress callback");
+    } catch (...) {
+      delete_handle(s);
+      throw;
+    }
+    *out = s;
+  });
+}
+
+// ---------------------------------------------------------------- sequences
+
+void hsi_sequence_destroy(hsi_sequence* s) { delete_handle(s); }
+
+uint32_t hsi_sequence_frame_count(const hsi_sequence* s) { return s ? static_cast<uint32_t>(s->seq.frames.size()) : 0; }
+
+hsi_status hsi_sequence_frame_report(const hsi_sequence* s, uint32_t frame, hsi_frame_report* report) {
+  return guard([&] {
+    const FrameResult& f = frame_of(s, frame, "hsi_sequence_frame_report");
+    require(report, "hsi_sequence_frame_report", "report is NULL");
+    *report = to_report(f);
+  });
+}
+
+hsi_status hsi_sequence_summary_get(const hsi_sequence* s, hsi_sequence_summary* out) {
+  return guard([&] {
+    require(s && out, "hsi_sequence_summary_get", "sequence or summary is NULL");
+    const SequenceSummary m = summarize(s->seq.frames, s->seq.total_s);
+    hsi_sequence_summary r{};
+    r.frames = static_cast<uint32_t>(m.frames);
+    r.certified = static_cast<uint32_t>(m.certified);
+    r.uncertified = static_cast<uint32_t>(m.uncertified);
+    r.within_bounds = static_cast<uint32_t>(m.within_bounds);
+    r.mean_iterations = m.mean_iterations;
+    r.mean_ms = m.mean_ms;
+    r.max_ms = m.max_ms;
+    r.total_s = m.total_s;
+    r.max_bound_excess = m.max_bound_excess;
+    *out = r;
+  });
+}
+
+hsi_status hsi_sequence_report_json(const hsi_sequence* s, char* buffer, size_t capacity, size_t* length) {
+  return guard([&] {
+    require(s, "hsi_sequence_report_json", "sequence is NULL");
+    copy_out(report_json(*s->scene, s->seq), buffer, capacity, length, true);
+  });
+}
+
+hsi_status hsi_sequence_report_csv(const hsi_sequence* s, char* buffer, size_t capacity, size_t* length) {
+  return guard([&] {
+    require(s, "hsi_sequence_report_csv", "sequence is NULL");
+    copy_out(report_csv(s->seq), buffer, capacity, length, true);
+  });
+}
+
+hsi_status hsi_sequence_evaluate(const hsi_sequence* s, uint32_t frame, const double* points_xy, size_t count, double* out_xy) {
+  return guard([&] {
+    const FrameResult& f = frame_of(s, frame, "hsi_sequence_evaluate");
+    require((points_xy && out_xy) || count == 0, "hsi_sequence_evaluate", "points or out is NULL");
+    const std::vector<cd> pts = read_points(points_xy, count);
+    check_in_cage(s->seq.setup->cage, s->seq.setup->size, pts);
+    const VectorXcd v = evaluate_map(evaluate_basis(s->seq.setup->cage, pts, kBasisC), f.map).f;
+    for (size_t i = 0; i < count; ++i) {
+      out_xy[2 * i] = v(static_cast<Eigen::Index>(i)).real();
+      out_xy[2 * i + 1] = v(static_cast<Eigen::Index>(i)).imag();
+    }
+  });
+}
+
+hsi_status hsi_sequence_coefficients(const hsi_sequence* s, uint32_t frame, double* phi, double* psi, uint32_t coefficient_count) {
+  return guard([&] {
+    const FrameResult& f = frame_of(s, frame, "hsi_sequence_coefficients");
+    if (coefficient_count != static_cast<uint32_t>(f.map.phi.size()))
+      fail(HSI_ERROR_INVALID_ARGUMENT, "hsi_sequence_coefficients: the cage has " + std::to_string(f.map.phi.size()) +
+                                           " coefficients, not " + std::to_string(coefficient_count));
+    for (Eigen::Index j = 0; j < f.map.phi.size(); ++j) {
+      if (phi) {
+        phi[2 * j] = f.map.phi(j).real();
+        phi[2 * j + 1] = f.map.phi(j).imag();
+      }
+      if (psi) {
+        psi[2 * j] = f.map.psi(j).real();
+        psi[2 * j + 1] = f.map.psi(j).imag();
+      }
+    }
+  });
+}
+
+hsi_status hsi_sequence_bake_file(const hsi_sequence* s, const char* path, int single_precision) {
+  return guard([&] {
+    require(s && path, "hsi_sequence_bake_file", "sequence or path is NULL");
+    write_baked(path, s->scene->shape, s->seq.frame_file(), {single_precision != 0});
+  });
+}
+
+hsi_status hsi_sequence_bake_memory(const hsi_sequence* s, int single_precision, void* buffer, size_t capacity, size_t* size) {
+  return guard([&] {
+    require(s, "hsi_sequence_bake_memory", "sequence is NULL");
+    copy_out(encode_baked(s->scene->shape, s->seq.frame_file(), {single_precision != 0}), static_cast<char*>(buffer), capacity, size, false);
+  });
+}
+
+hsi_status hsi_sequence_save_frames(const hsi_sequence* s, const char* path) {
+  return guard([&] {
+    require(s && path, "hsi_sequence_save_frames", "sequence or path is NULL");
+    write_frames(path, s->seq.frame_file());
+  });
+}
+
+// ---------------------------------------------------------------- rendering
+
+void hsi_render_options_default(hsi_render_options* o) {
+  if (!o) return;
+  *o = hsi_render_options{};
+  o->width = o->height = 512;
+  o->background[0] = o->background[1] = o->background[2] = o->background[3] = 1.0f;
+  o->draw_boundary = 1;
+  o->mesh_vertices = 4000;
+  o->msaa_samples = 4;
+}
+
+int hsi_render_available(const char** why) {
+#ifdef HSI_CAPI_RENDER
+  static thread_local std::string reason;
+  try {
+    if (hsi::capi::render_available(&reason)) return 1;
+  } catch (...) {
+    reason = "the Vulkan renderer could not be queried";
+  }
+  if (why) *why = reason.c_str();
+  return 0;
+#else
+  if (why) *why = "this hsi library was built without Vulkan (HSI_WITH_VULKAN=OFF)";
+  return 0;
+#endif
+}
+
+hsi_status hsi_sequence_render(hsi_sequence* s, uint32_t frame, const hsi_render_options* options, uint8_t* rgba, size_t row_stride) {
+  return guard([&] {
+    frame_of(s, frame, "hsi_sequence_render");
+    require(rgba, "hsi_sequence_render", "rgba is NULL");
+    hsi_render_options o;
+    hsi_render_options_default(&o);
+    if (options) o = *options;
+    if (o.width < 1 || o.height < 1 || o.width > 16384 || o.height > 16384)
+      fail(HSI_ERROR_INVALID_ARGUMENT, "hsi_sequence_render: width and height must be in [1, 16384]");
+    if (row_stride != 0 && row_stride < 4 * static_cast<size_t>(o.width))
+      fail(HSI_ERROR_INVALID_ARGUMENT, "hsi_sequence_render: row_stride is smaller than 4 * width");
+#ifdef HSI_CAPI_RENDER
+    hsi::capi::render_frame(*s, frame, o, rgba, row_stride ? row_stride : 4 * static_cast<size_t>(o.width));
+#else
+    fail(HSI_ERROR_UNSUPPORTED, "hsi_sequence_render: this hsi library was built without Vulkan (HSI_WITH_VULKAN=OFF)");
+#endif
+  });
+}
+
+}  // extern "C"

@@ -1,0 +1,138 @@
+// Scene → certified keyframes → interpolated sequence → report (hsi/scene_sequence.h).
+#include "hsi/scene_sequence.h"
+
+#include <chrono>
+#include <cstdio>
+#include <nlohmann/json.hpp>
+
+#include "hsi/keyframes.h"
+
+namespace hsi {
+
+int SceneSequence::uncertified() const {
+  int n = 0;
+  for (const FrameResult& f : frames) n += !f.certified;
+  return n;
+}
+
+FrameFile SceneSequence::frame_file() const {
+  FrameFile ff;
+  ff.cage = setup->cage;
+  for (const FrameResult& f : frames)
+    ff.frames.push_back({f.t, f.certified, f.keyframe, f.converged, static_cast<uint32_t>(f.iterations), f.energy, f.map});
+  return ff;
+}
+
+std::shared_ptr<const ShapeSetup> scene_setup(Scene& scene, int samples, double hessian_ratio) {
+  if (!scene.cage) scene.cage = build_cage(scene.shape, scene.cage_options);
+  return make_shape_setup(scene, samples, hessian_ratio);
+}
+
+SceneSequence interpolate_scene(Scene& scene, const SceneSequenceOptions& options,
+                                const std::function<void(const FrameResult&, int, int)>& progress,
+                                std::unique_ptr<NewtonCore> core, std::shared_ptr<const ShapeSetup> setup) {
+  if (scene.keyframes.size() < 2)
+    throw InputError("scene '" + scene.name + "': interpolation needs at least two keyframes (it has " +
+                     std::to_string(scene.keyframes.size()) + ")");
+  if (options.frames < 2) throw InputError("a sequence needs at least 2 frames (got " + std::to_string(options.frames) + ")");
+  if (!setup) setup = scene_setup(scene, options.samples, options.hessian_ratio);
+  solve_scene_keyframes(scene, *setup);
+  std::vector<double> times;
+  std::vector<HarmonicMap> maps;
+  for (const Keyframe& k : scene.keyframes) {
+    times.push_back(k.time);
+    maps.push_back(*k.coefficients);
+  }
+  if (!core) core = make_cpu_newton_core(setup->D_G, setup->H);
+  Interpolator interp(*setup, times, maps, options.interpolation, std::move(core));
+  SceneSequence seq;
+  seq.setup = setup;
+  const auto t0 = std::chrono::steady_clock::now();
+  seq.frames = interp.sequence(options.frames, progress);
+  seq.total_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  return seq;
+}
+
+SequenceSummary summarize(const std::vector<FrameResult>& frames, double total_s) {
+  SequenceSummary s;
+  s.frames = static_cast<int>(frames.size());
+  s.total_s = total_s;
+  int solved = 0;
+  double it = 0, ms = 0;
+  for (const FrameResult& f : frames) {
+    s.certified += f.certified;
+    s.within_bounds += f.bound_excess <= 1e-9;
+    s.max_bound_excess = std::max(s.max_bound_excess, f.bound_excess);
+    if (!f.keyframe) {
+      ++solved;
+      it += f.iterations;
+      ms += f.ms;
+      s.max_ms = std::max(s.max_ms, f.ms);
+    }
+  }
+  s.uncertified = s.frames - s.certified;
+  s.mean_iterations = solved ? it / solved : 0.0;
+  s.mean_ms = solved ? ms / solved : 0.0;
+  return s;
+}
+
+std::string report_json(const Scene& scene, const SceneSequence& seq, const std::string& scene_path) {
+  nlohmann::json rep;
+  rep["scene"] = scene_path;
+  rep["name"] = scene.name;
+  rep["samples"] = seq.setup->G.size();
+  rep["hessian_samples"] = seq.setup->H.size();
+  rep["n"] = seq.setup->map_space.n();
+  nlohmann::json fr = nlohmann::json::array();
+  for (size_t i = 0; i < seq.frames.size(); ++i) {
+    const FrameResult& f = seq.frames[i];
+    fr.push_back({{"frame", i},
+                  {"t", f.t},
+                  {"keyframe", f.keyframe},
+                  {"certified", f.certified},
+                  {"converged", f.converged},
+                  {"iterations", f.iterations},
+                  {"energy", f.energy},
+                  {"ms", f.ms},
+                  {"sigma1_max", f.distortion.sigma1_max},
+                  {"sigma2_min", f.distortion.sigma2_min},
+                  {"conformal_max", f.distortion.conformal_max},
+                  {"isometric_max", f.distortion.isometric_max},
+                  {"bound", {{"sigma1_max", f.bound.sigma1_max}, {"sigma2_min", f.bound.sigma2_min},
+                             {"conformal_max", f.bound.conformal_max}, {"isometric_max", f.bound.isometric_max}}},
+                  {"bound_excess", f.bound_excess},
+                  {"certificate", {{"sigma1_max", f.certificate.sigma1_max}, {"sigma2_min", f.certificate.sigma2_min},
+                                   {"k_max", f.certificate.k_max}, {"reason", f.certificate.reason}}},
+                  {"message", f.message}});
+  }
+  const SequenceSummary s = summarize(seq.frames, seq.total_s);
+  rep["summary"] = {{"frames", s.frames},
+                    {"certified", s.certified},
+                    {"uncertified", s.uncertified},
+                    {"mean_iterations", s.mean_iterations},
+                    {"mean_ms", s.mean_ms},
+                    {"max_ms", s.max_ms},
+                    {"total_s", s.total_s},
+                    {"frames_within_keyframe_bounds", s.within_bounds},
+                    {"max_bound_excess", s.max_bound_excess}};
+  rep["frames"] = fr;
+  return rep.dump(1) + "\n";
+}
+
+std::string report_csv(const SceneSequence& seq) {
+  std::string out =
+      "frame,t,keyframe,certified,converged,iterations,energy,ms,sigma1_max,sigma2_min,conformal_max,isometric_max,"
+      "bound_sigma1_max,bound_sigma2_min,bound_conformal_max,bound_isometric_max,bound_excess\n";
+  char line[512];
+  for (size_t i = 0; i < seq.frames.size(); ++i) {
+    const FrameResult& f = seq.frames[i];
+    std::snprintf(line, sizeof line, "%zu,%.17g,%d,%d,%d,%d,%.17g,%.6g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g\n", i,
+                  f.t, f.keyframe ? 1 : 0, f.certified ? 1 : 0, f.converged ? 1 : 0, f.iterations, f.energy, f.ms,
+                  f.distortion.sigma1_max, f.distortion.sigma2_min, f.distortion.conformal_max, f.distortion.isometric_max,
+                  f.bound.sigma1_max, f.bound.sigma2_min, f.bound.conformal_max, f.bound.isometric_max, f.bound_excess);
+    out += line;
+  }
+  return out;
+}
+
+}  // namespace hsi
