@@ -7,11 +7,14 @@ pkgs=(
   libfreetype-dev fonts-dejavu-core libcgal-dev libpolyclipping-dev libcairo2-dev
   python3 python3-numpy
   libvulkan-dev libvulkan-volk-dev glslang-tools spirv-tools mesa-vulkan-drivers vulkan-validationlayers
+  libtinygltf-dev
 )
 missing=()
 for p in "${pkgs[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
 done
+# npm (with node) for the Khronos glTF validator, unless a node install already has it.
+command -v npm >/dev/null 2>&1 || missing+=(npm)
 if ((${#missing[@]})); then
   echo "[setup] installing: ${missing[*]}"
   SUDO=""; [ "$(id -u)" = 0 ] || SUDO="sudo"
@@ -20,4 +23,12 @@ if ((${#missing[@]})); then
   $SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}"
 else
   echo "[setup] all packages present"
+fi
+
+# The Khronos glTF validator (npm gltf-validator), project-local in .tools/: the glTF
+# export tests run it on every file they write.
+root="$(cd "$(dirname "$0")/.." && pwd)"
+if [ ! -f "$root/.tools/node_modules/gltf-validator/package.json" ]; then
+  echo "[setup] installing gltf-validator into .tools/"
+  npm install --no-audit --no-fund --silent --prefix "$root/.tools" gltf-validator@2.0.0-dev.3.10
 fi

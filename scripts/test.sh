@@ -5,5 +5,7 @@ cd "$(dirname "$0")/.."
 bash scripts/build.sh -DHSI_WARNINGS_AS_ERRORS=ON
 # lavapipe is installed by setup.sh: Vulkan tests must run, not skip.
 export HSI_REQUIRE_VULKAN=1
+# setup.sh installs the Khronos glTF validator: glTF exports must be validated, not skipped.
+export HSI_REQUIRE_GLTF_VALIDATOR=1
 cd build
 ctest --output-on-failure -j"$(nproc)" --timeout 900
