@@ -54,10 +54,12 @@
  * reduced x and the pose is how the file stays compact (D ~ 4 reals per cage vertex,
  * a few kilobytes per frame): E has at most 4 non-zeros per column.
  *
- * Why weights and not expanded per-vertex rows: a vertex's row has R = 2(n - N) + N
- * entries (n active Cauchy columns), half of the 2D = 2(4n - 2N - 5) a reduced-space
- * row would need, so precomputed rows take half the memory and a frame half the
- * multiply-adds; expanding x into w costs O(Z) per frame, independent of the mesh.
+ * Why weights and not per-vertex rows over x: a vertex's row has R = 2(n - N) + N
+ * floats (n active Cauchy columns) and serves both outputs, 2R multiply-adds; rows
+ * over the reduced coefficients would need 2D = 2(4n - 2N - 5) floats and as many
+ * multiply-adds. So bindings take a quarter of the memory and a frame half the
+ * arithmetic (bench/bench_baked measures both); expanding x into w costs O(Z) per
+ * frame, independent of the mesh.
  *
  * Readers refuse, with a message naming the problem and the byte or frame: a wrong
  * magic, another version, a header or static-section checksum mismatch, impossible
