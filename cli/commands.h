@@ -11,5 +11,6 @@ void register_import_png(CLI::App& app);
 void register_import_glyph(CLI::App& app);
 void register_keyframes(CLI::App& app);
 void register_interpolate(CLI::App& app);
+void register_render(CLI::App& app);
 
 }  // namespace hsi::cli

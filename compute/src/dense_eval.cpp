@@ -104,6 +104,7 @@ struct DenseEvaluator::Job {
   std::span<const cd> points;  // point mode
   const Grid* grid = nullptr;  // grid mode
   const Shape* shape = nullptr;
+  VkCommandBuffer record_into = VK_NULL_HANDLE;  // record_points: record one pass here, no readback
 };
 
 DenseEvaluator::DenseEvaluator(const Context& context, const DenseEvalOptions& options)
@@ -127,6 +128,13 @@ DenseEvaluator::DenseEvaluator(const Context& context, const DenseEvalOptions& o
 
 DenseField DenseEvaluator::evaluate_points(const Cage& cage, const HarmonicMap& map, std::span<const cd> points) {
   return run(Job{cage, map, points, nullptr, nullptr});
+}
+
+void DenseEvaluator::record_points(VkCommandBuffer cmd, const Cage& cage, const HarmonicMap& map,
+                                   std::span<const cd> points) {
+  Job job{cage, map, points, nullptr, nullptr};
+  job.record_into = cmd;
+  run(job);
 }
 
 DenseField DenseEvaluator::evaluate_grid(const Cage& cage, const HarmonicMap& map, const Grid& grid,
@@ -256,6 +264,31 @@ DenseField DenseEvaluator::run(const Job& job) {
   for (uint32_t k = 0; k < 5; ++k) set_.bind(kOutBinding + k, out_[k]);
   stats_.upload_ms += ms_since(t_upload);
 
+  auto record_dispatch = [&](VkCommandBuffer cmd, uint32_t n) {
+    const auto [gx, gy] = split_dispatch(ctx, (n + kWorkgroupSize - 1) / kWorkgroupSize);
+    vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, pipeline_.pipeline());
+    const VkDescriptorSet set = set_.handle();
+    vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, pipeline_.layout(), 0, 1, &set, 0, nullptr);
+    vkCmdPushConstants(cmd, pipeline_.layout(), VK_SHADER_STAGE_COMPUTE_BIT, 0, sizeof(pc), &pc);
+    vkCmdDispatch(cmd, gx, gy, 1);
+  };
+  if (job.record_into) {
+    if (total > pass_max)
+      throw InputError("dense evaluation: " + std::to_string(total) + " points do not fit one pass (at most " +
+                       std::to_string(pass_max) + " on this device with these options)");
+    std::vector<double> all;
+    all.reserve(2 * total);
+    for (const cd& p : job.points) {
+      all.push_back(p.real());
+      all.push_back(p.imag());
+    }
+    upload_reals(ctx, points_, all, double_);
+    pc.base = 0;
+    pc.count = static_cast<uint32_t>(total);
+    record_dispatch(job.record_into, pc.count);
+    return out;
+  }
+
   std::vector<double> chunk;
   std::vector<float> chunk_f;
   std::vector<uint32_t> flags;
@@ -275,14 +308,9 @@ DenseField DenseEvaluator::run(const Job& job) {
     }
 
     const auto t_gpu = Clock::now();
-    const auto [gx, gy] = split_dispatch(ctx, (n + kWorkgroupSize - 1) / kWorkgroupSize);
     const bool staged = static_cast<bool>(readback_[0]) || static_cast<bool>(readback_[4]);
     ctx.submit_and_wait([&](VkCommandBuffer cmd) {
-      vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, pipeline_.pipeline());
-      const VkDescriptorSet set = set_.handle();
-      vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, pipeline_.layout(), 0, 1, &set, 0, nullptr);
-      vkCmdPushConstants(cmd, pipeline_.layout(), VK_SHADER_STAGE_COMPUTE_BIT, 0, sizeof(pc), &pc);
-      vkCmdDispatch(cmd, gx, gy, 1);
+      record_dispatch(cmd, n);
       VkMemoryBarrier barrier{};
       barrier.sType = VK_STRUCTURE_TYPE_MEMORY_BARRIER;
       barrier.srcAccessMask = VK_ACCESS_SHADER_WRITE_BIT;

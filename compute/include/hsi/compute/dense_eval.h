@@ -111,6 +111,16 @@ class DenseEvaluator {
   DenseField evaluate_grid(const Cage& cage, const HarmonicMap& map, const Grid& grid,
                            const Shape* mask_shape = nullptr);
 
+  // For passes that consume the fields on the GPU (the renderer draws f directly):
+  // uploads the inputs and records the point-list evaluation of all `points` into
+  // `cmd` as one dispatch, without reading anything back. The results land in
+  // device_output(k), k = 0..4 for bindings 3..7 above (f, f_z, fzbar_conj, fields,
+  // flags). The caller submits `cmd`, puts a barrier (compute shader write -> its
+  // reads) after this, and calls no other evaluate_* / record_* before the
+  // submission has finished. Throws InputError if the points need more than one pass.
+  void record_points(VkCommandBuffer cmd, const Cage& cage, const HarmonicMap& map, std::span<const cd> points);
+  const Buffer& device_output(int k) const { return out_[k]; }
+
  private:
   struct Job;
   DenseField run(const Job& job);

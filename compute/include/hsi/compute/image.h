@@ -1,0 +1,32 @@
+// RGBA images for offscreen rendering: the renderer's textures and results, read
+// and written as PNG (libpng). Straight (not premultiplied) alpha, 8 bits per
+// channel, rows from the top of the image down.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <filesystem>
+#include <vector>
+
+namespace hsi::vk {
+
+struct RgbaImage {
+  int width = 0, height = 0;
+  std::vector<uint8_t> pixels;  // width × height × 4 bytes: R, G, B, A
+
+  RgbaImage() = default;
+  RgbaImage(int w, int h, std::array<uint8_t, 4> fill = {0, 0, 0, 0});
+  bool empty() const { return width <= 0 || height <= 0; }
+  uint8_t* at(int x, int y) { return pixels.data() + (static_cast<size_t>(y) * static_cast<size_t>(width) + static_cast<size_t>(x)) * 4; }
+  const uint8_t* at(int x, int y) const {
+    return pixels.data() + (static_cast<size_t>(y) * static_cast<size_t>(width) + static_cast<size_t>(x)) * 4;
+  }
+};
+
+// Reads any PNG (grey, palette, RGB, with or without alpha, 8 or 16 bits) as RGBA8.
+// Throws hsi::InputError naming the file: missing, not a PNG, corrupt, too large.
+RgbaImage read_png(const std::filesystem::path& path);
+// Writes an RGBA8 PNG atomically (temporary file, then rename). Throws InputError.
+void write_png(const std::filesystem::path& path, const RgbaImage& image);
+
+}  // namespace hsi::vk

@@ -1,0 +1,126 @@
+// Offscreen rendering of a deformed shape (Vulkan, headless; lavapipe where there
+// is no GPU). The shape's triangulation (hsi::triangulate) is drawn at f(rest vertex)
+// with its own texture (texture coordinates = rest positions in the texture's
+// rectangle), so the outline and every hole clip exactly where the map sends them;
+// optional overlays: the conformal-distortion colour map, the boundary as lines,
+// handles as discs; an uncertified frame gets a red tint and a red border. 4× MSAA,
+// resolved, read back as an RGBA image.
+//
+// One command buffer per frame: the dense evaluation (DenseEvaluator::record_points)
+// computes f and the distortion at the mesh vertices and handles on the GPU, and the
+// vertex shaders read them from its output buffer: nothing goes through the host
+// between evaluating and drawing. Text (legends, labels) is the caller's job (the
+// hsi tool composites it with cairo); colormap() gives the colours for a legend.
+#pragma once
+
+#include <array>
+#include <span>
+#include <vector>
+
+#include "hsi/compute/dense_eval.h"
+#include "hsi/compute/image.h"
+#include "hsi/triangulate.h"
+
+namespace hsi::vk {
+
+// Overlay bits, combinable.
+enum Overlay : uint32_t {
+  kOverlayNone = 0,
+  kOverlayDistortion = 1u,  // conformal distortion σ1/σ2 as a colour map over the texture
+  kOverlayBoundary = 2u,    // the image of the shape's outline and holes, as lines
+  kOverlayHandles = 4u,     // the handles, as discs at f(handle)
+};
+
+// The colour map of the distortion overlay at t in [0, 1] (clamped): viridis, as
+// the shaders compute it. RGB in [0, 1].
+std::array<double, 3> colormap(double t);
+
+// World (the shape's plane, y up) to pixels (x right, y down from the image's
+// top-left corner): a uniform scale about a centre.
+struct View {
+  cd world_center{0, 0};
+  double pixels_per_unit = 1;
+  cd pixel_center{0, 0};
+
+  cd to_pixel(cd w) const {
+    return {pixel_center.real() + pixels_per_unit * (w.real() - world_center.real()),
+            pixel_center.imag() - pixels_per_unit * (w.imag() - world_center.imag())};
+  }
+  // The largest view showing `world` in a width × height image with `margin_px` on
+  // every side and `bottom_px` more kept free at the bottom (e.g. for a legend),
+  // centred in what remains. Throws InputError for an empty box or no room.
+  static View fit(const BoundingBox& world, int width, int height, double margin_px = 0, double bottom_px = 0);
+};
+
+struct RenderStyle {
+  uint32_t overlays = kOverlayNone;
+  std::array<float, 4> background{1, 1, 1, 1};  // straight RGBA in [0, 1]; alpha 0 for a transparent image
+  std::array<float, 4> fill{0.78f, 0.84f, 0.92f, 1};  // the shape's colour when no texture is set
+  // Distortion colour map: t = (κ − lo) / (hi − lo), κ = σ1/σ2 ≥ 1 (folds saturate).
+  double distortion_lo = 1, distortion_hi = 2;
+  float distortion_opacity = 0.85f;  // over the texture
+  std::array<float, 4> boundary_color{0.05f, 0.07f, 0.12f, 1};
+  float boundary_width_px = 2;
+  std::array<float, 4> handle_color{1.0f, 0.62f, 0.1f, 1}, handle_outline{0.08f, 0.08f, 0.1f, 1};
+  float handle_radius_px = 6, handle_outline_px = 1.5f;
+  // The frame could not be certified: the shape is tinted red and the image gets a
+  // red border of border_px pixels (≤ 0: max(4, min(width, height) / 64)).
+  bool uncertified = false;
+  float border_px = 0;
+};
+
+struct RendererOptions {
+  int msaa_samples = 4;  // 1, 2, 4 or 8; lowered to what the device supports
+  DenseEvalOptions evaluation;  // precision of the positions (double where the device has it)
+};
+
+// Host wall-clock times of the last render() call, in milliseconds.
+struct RenderStats {
+  double upload_ms = 0;    // recording, uploading the map and the points
+  double gpu_ms = 0;       // submit to fence: evaluation, drawing, resolve, copy to host-visible memory
+  double readback_ms = 0;  // un-premultiplying into the RgbaImage
+};
+
+class Renderer {
+ public:
+  // Throws VulkanUnavailable if the context's queue cannot draw, InputError for a bad size.
+  Renderer(const Context& context, int width, int height, const RendererOptions& options = {});
+  ~Renderer();
+  Renderer(const Renderer&) = delete;
+  Renderer& operator=(const Renderer&) = delete;
+
+  int width() const { return width_; }
+  int height() const { return height_; }
+  int msaa_samples() const { return samples_; }
+  bool double_precision() const { return eval_.double_precision(); }
+
+  // The rest mesh and the handles (rest positions), fixed for a scene. Throws
+  // InputError for an empty mesh or an index out of range.
+  void set_mesh(const TriMesh& mesh, std::span<const cd> handles = {});
+  // The texture (straight alpha) and the world rectangle [x0, y0, x1, y1] it covers:
+  // (x0, y1) is its top-left pixel corner. Mipmapped, sampled bilinearly. An empty
+  // image removes the texture (the shape is then filled with RenderStyle::fill).
+  void set_texture(const RgbaImage& texture, const std::array<double, 4>& rect);
+  bool has_texture() const { return has_texture_; }
+
+  // One frame: f = map over `cage` (m + N coefficients each, else InputError).
+  RgbaImage render(const Cage& cage, const HarmonicMap& map, const View& view, const RenderStyle& style);
+  const RenderStats& last_stats() const { return stats_; }
+
+ private:
+  struct Impl;
+  void upload_uv();
+
+  const Context* context_;
+  int width_, height_, samples_ = 1;
+  DenseEvaluator eval_;
+  std::vector<cd> points_;  // mesh vertices, then handles
+  std::vector<cd> rest_vertices_;
+  size_t vertex_count_ = 0, handle_count_ = 0, index_count_ = 0, segment_count_ = 0;
+  std::array<double, 4> texture_rect_{0, 0, 1, 1};
+  bool has_texture_ = false, uv_dirty_ = true;
+  RenderStats stats_;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace hsi::vk

@@ -1,0 +1,66 @@
+// PNG reading and writing through libpng's simplified API (png_image), which
+// converts every PNG colour type and bit depth to RGBA8.
+#include "hsi/compute/image.h"
+
+#include <png.h>
+
+#include <cstring>
+#include <fstream>
+#include <iterator>
+#include <string>
+
+#include "hsi/domain.h"
+
+namespace hsi::vk {
+
+namespace {
+constexpr int kMaxSide = 16384;
+}
+
+RgbaImage::RgbaImage(int w, int h, std::array<uint8_t, 4> fill) : width(w), height(h) {
+  if (w < 0 || h < 0) throw InputError("image: negative size " + std::to_string(w) + " x " + std::to_string(h));
+  pixels.resize(static_cast<size_t>(w) * static_cast<size_t>(h) * 4);
+  for (size_t i = 0; i < pixels.size(); i += 4) std::memcpy(&pixels[i], fill.data(), 4);
+}
+
+RgbaImage read_png(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw InputError(path.string() + ": cannot open the image (missing or unreadable)");
+  const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  png_image img;
+  std::memset(&img, 0, sizeof img);
+  img.version = PNG_IMAGE_VERSION;
+  if (!png_image_begin_read_from_memory(&img, bytes.data(), bytes.size()))
+    throw InputError(path.string() + ": not a readable PNG (" + img.message + ")");
+  if (img.width == 0 || img.height == 0 || img.width > kMaxSide || img.height > kMaxSide) {
+    png_image_free(&img);
+    throw InputError(path.string() + ": image size " + std::to_string(img.width) + " x " +
+                     std::to_string(img.height) + " is outside 1.." + std::to_string(kMaxSide));
+  }
+  img.format = PNG_FORMAT_RGBA;
+  RgbaImage out(static_cast<int>(img.width), static_cast<int>(img.height));
+  if (!png_image_finish_read(&img, nullptr, out.pixels.data(), 0, nullptr))
+    throw InputError(path.string() + ": corrupt or truncated PNG (" + img.message + ")");
+  return out;
+}
+
+void write_png(const std::filesystem::path& path, const RgbaImage& image) {
+  if (image.empty() || image.pixels.size() != static_cast<size_t>(image.width) * static_cast<size_t>(image.height) * 4)
+    throw InputError(path.string() + ": cannot write an empty or inconsistent image");
+  png_image img;
+  std::memset(&img, 0, sizeof img);
+  img.version = PNG_IMAGE_VERSION;
+  img.width = static_cast<png_uint_32>(image.width);
+  img.height = static_cast<png_uint_32>(image.height);
+  img.format = PNG_FORMAT_RGBA;
+  png_alloc_size_t size = 0;
+  if (!png_image_write_get_memory_size(img, size, 0, image.pixels.data(), 0, nullptr))
+    throw InputError(path.string() + ": PNG encoding failed (" + img.message + ")");
+  std::string bytes(size, '\0');
+  if (!png_image_write_to_memory(&img, bytes.data(), &size, 0, image.pixels.data(), 0, nullptr))
+    throw InputError(path.string() + ": PNG encoding failed (" + img.message + ")");
+  bytes.resize(size);
+  write_file_atomic(path, bytes);
+}
+
+}  // namespace hsi::vk

@@ -1,0 +1,767 @@
+// Offscreen renderer (see renderer.h and shaders/render_*.{vert,frag}): a render
+// pass with a 4× MSAA colour attachment resolved into a single-sample image that is
+// copied to host-visible memory; three pipelines (textured mesh, boundary lines,
+// handle discs) over one descriptor set whose position and distortion buffers are
+// the dense evaluation's outputs. Colours are premultiplied throughout (texture,
+// blending, clear colour) and un-premultiplied on the way out.
+#include "hsi/compute/renderer.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstring>
+#include <limits>
+#include <string>
+
+#include "hsi/compute/spirv/render_disc_frag.h"
+#include "hsi/compute/spirv/render_disc_vert_f32.h"
+#include "hsi/compute/spirv/render_disc_vert_f64.h"
+#include "hsi/compute/spirv/render_line_frag.h"
+#include "hsi/compute/spirv/render_line_vert_f32.h"
+#include "hsi/compute/spirv/render_line_vert_f64.h"
+#include "hsi/compute/spirv/render_mesh_frag.h"
+#include "hsi/compute/spirv/render_mesh_vert_f32.h"
+#include "hsi/compute/spirv/render_mesh_vert_f64.h"
+
+namespace hsi::vk {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double ms_since(Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); }
+
+constexpr VkFormat kColorFormat = VK_FORMAT_R8G8B8A8_UNORM;
+constexpr int kMaxSide = 16384;
+
+// Mirrors `Push` in shaders/render_common.glsl (std430 offsets).
+struct RenderPush {
+  float color[4];
+  float color2[4];
+  float scale[2];
+  float offset[2];
+  float viewport[2];
+  float size_px, size2_px;
+  float dist_lo, dist_inv;
+  float overlay_alpha;
+  uint32_t flags;
+  uint32_t first;
+};
+static_assert(sizeof(RenderPush) == 84);
+constexpr uint32_t kTextured = 1u, kDistortion = 2u, kUncertified = 4u;
+constexpr VkShaderStageFlags kPushStages = VK_SHADER_STAGE_VERTEX_BIT | VK_SHADER_STAGE_FRAGMENT_BIT;
+
+template <class T>
+using Destroy = void (*)(VkDevice, T);
+
+template <class T>
+DeviceHandle<T> own(VkDevice d, T handle, Destroy<T> destroy) {
+  return DeviceHandle<T>(d, handle, destroy);
+}
+
+// A device image with its memory and a view (destroyed view, image, memory).
+struct Image {
+  DeviceHandle<VkDeviceMemory> memory;
+  DeviceHandle<VkImage> image;
+  DeviceHandle<VkImageView> view;
+  uint32_t mips = 1;
+
+  Image() = default;
+  Image(Image&&) = default;
+  Image& operator=(Image&& o) noexcept {
+    if (this != &o) {
+      reset();  // view, image, then memory (member-wise assignment would free the memory first)
+      memory = std::move(o.memory);
+      image = std::move(o.image);
+      view = std::move(o.view);
+      mips = o.mips;
+    }
+    return *this;
+  }
+  ~Image() { reset(); }
+  void reset() {
+    view.reset();
+    image.reset();
+    memory.reset();
+  }
+};
+
+Image make_image(const Context& ctx, uint32_t w, uint32_t h, VkImageUsageFlags usage, VkSampleCountFlagBits samples,
+                 uint32_t mips, VkMemoryPropertyFlags preferred = 0) {
+  const VkDevice dev = ctx.device();
+  Image img;
+  img.mips = mips;
+  VkImageCreateInfo info{};
+  info.sType = VK_STRUCTURE_TYPE_IMAGE_CREATE_INFO;
+  info.imageType = VK_IMAGE_TYPE_2D;
+  info.format = kColorFormat;
+  info.extent = {w, h, 1};
+  info.mipLevels = mips;
+  info.arrayLayers = 1;
+  info.samples = samples;
+  info.tiling = VK_IMAGE_TILING_OPTIMAL;
+  info.usage = usage;
+  info.sharingMode = VK_SHARING_MODE_EXCLUSIVE;
+  info.initialLayout = VK_IMAGE_LAYOUT_UNDEFINED;
+  VkImage raw = VK_NULL_HANDLE;
+  check(vkCreateImage(dev, &info, nullptr, &raw), "vkCreateImage");
+  // Declared before `image`, so memory is freed after the image is destroyed.
+  DeviceHandle<VkImage> image = own<VkImage>(dev, raw, [](VkDevice d, VkImage i) { vkDestroyImage(d, i, nullptr); });
+  VkMemoryRequirements req;
+  vkGetImageMemoryRequirements(dev, raw, &req);
+  VkMemoryAllocateInfo alloc{};
+  alloc.sType = VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO;
+  alloc.allocationSize = req.size;
+  alloc.memoryTypeIndex = ctx.memory_type(req.memoryTypeBits, 0, VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT | preferred);
+  VkDeviceMemory mem = VK_NULL_HANDLE;
+  check(vkAllocateMemory(dev, &alloc, nullptr, &mem), "vkAllocateMemory (image)");
+  img.memory = own<VkDeviceMemory>(dev, mem, [](VkDevice d, VkDeviceMemory m) { vkFreeMemory(d, m, nullptr); });
+  check(vkBindImageMemory(dev, raw, mem, 0), "vkBindImageMemory");
+  img.image = std::move(image);
+
+  VkImageViewCreateInfo view{};
+  view.sType = VK_STRUCTURE_TYPE_IMAGE_VIEW_CREATE_INFO;
+  view.image = raw;
+  view.viewType = VK_IMAGE_VIEW_TYPE_2D;
+  view.format = kColorFormat;
+  view.subresourceRange = {VK_IMAGE_ASPECT_COLOR_BIT, 0, mips, 0, 1};
+  VkImageView raw_view = VK_NULL_HANDLE;
+  check(vkCreateImageView(dev, &view, nullptr, &raw_view), "vkCreateImageView");
+  img.view = own<VkImageView>(dev, raw_view, [](VkDevice d, VkImageView v) { vkDestroyImageView(d, v, nullptr); });
+  return img;
+}
+
+// A device-local buffer holding `bytes` (through a staging copy unless the memory
+// is host-visible).
+Buffer static_buffer(const Context& ctx, VkBufferUsageFlags usage, const void* data, VkDeviceSize bytes) {
+  Buffer b(ctx, std::max<VkDeviceSize>(bytes, 16), usage | VK_BUFFER_USAGE_TRANSFER_DST_BIT, MemoryUse::kDeviceLocal);
+  if (bytes == 0) return b;
+  if (b.host_visible()) {
+    b.write(data, bytes);
+    return b;
+  }
+  Buffer staging(ctx, bytes, VK_BUFFER_USAGE_TRANSFER_SRC_BIT, MemoryUse::kUpload);
+  staging.write(data, bytes);
+  ctx.submit_and_wait([&](VkCommandBuffer cmd) {
+    const VkBufferCopy region{0, 0, bytes};
+    vkCmdCopyBuffer(cmd, staging.handle(), b.handle(), 1, &region);
+    VkMemoryBarrier barrier{};
+    barrier.sType = VK_STRUCTURE_TYPE_MEMORY_BARRIER;
+    barrier.srcAccessMask = VK_ACCESS_TRANSFER_WRITE_BIT;
+    barrier.dstAccessMask = VK_ACCESS_VERTEX_ATTRIBUTE_READ_BIT | VK_ACCESS_INDEX_READ_BIT | VK_ACCESS_SHADER_READ_BIT;
+    vkCmdPipelineBarrier(cmd, VK_PIPELINE_STAGE_TRANSFER_BIT,
+                         VK_PIPELINE_STAGE_VERTEX_INPUT_BIT | VK_PIPELINE_STAGE_VERTEX_SHADER_BIT, 0, 1, &barrier, 0,
+                         nullptr, 0, nullptr);
+  });
+  return b;
+}
+
+void image_barrier(VkCommandBuffer cmd, VkImage image, uint32_t mip, uint32_t count, VkImageLayout from,
+                   VkImageLayout to, VkAccessFlags src_access, VkAccessFlags dst_access, VkPipelineStageFlags src_stage,
+                   VkPipelineStageFlags dst_stage) {
+  VkImageMemoryBarrier b{};
+  b.sType = VK_STRUCTURE_TYPE_IMAGE_MEMORY_BARRIER;
+  b.srcAccessMask = src_access;
+  b.dstAccessMask = dst_access;
+  b.oldLayout = from;
+  b.newLayout = to;
+  b.srcQueueFamilyIndex = VK_QUEUE_FAMILY_IGNORED;
+  b.dstQueueFamilyIndex = VK_QUEUE_FAMILY_IGNORED;
+  b.image = image;
+  b.subresourceRange = {VK_IMAGE_ASPECT_COLOR_BIT, mip, count, 0, 1};
+  vkCmdPipelineBarrier(cmd, src_stage, dst_stage, 0, 0, nullptr, 0, nullptr, 1, &b);
+}
+
+// A sampled, mipmapped texture from straight-alpha RGBA (premultiplied on upload,
+// mip levels by linear blits of the premultiplied colours).
+Image make_texture(const Context& ctx, const RgbaImage& src) {
+  const uint32_t w = static_cast<uint32_t>(src.width), h = static_cast<uint32_t>(src.height);
+  uint32_t mips = 1;
+  while ((std::max(w, h) >> mips) > 0) ++mips;
+  Image tex = make_image(ctx, w, h,
+                         VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT,
+                         VK_SAMPLE_COUNT_1_BIT, mips);
+  std::vector<uint8_t> pre(src.pixels.size());
+  for (size_t i = 0; i < pre.size(); i += 4) {
+    const unsigned a = src.pixels[i + 3];
+    for (size_t c = 0; c < 3; ++c) pre[i + c] = static_cast<uint8_t>((src.pixels[i + c] * a + 127) / 255);
+    pre[i + 3] = static_cast<uint8_t>(a);
+  }
+  Buffer staging(ctx, pre.size(), VK_BUFFER_USAGE_TRANSFER_SRC_BIT, MemoryUse::kUpload);
+  staging.write(pre.data(), pre.size());
+  const VkImage image = tex.image.get();
+  ctx.submit_and_wait([&](VkCommandBuffer cmd) {
+    image_barrier(cmd, image, 0, mips, VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, 0,
+                  VK_ACCESS_TRANSFER_WRITE_BIT, VK_PIPELINE_STAGE_TOP_OF_PIPE_BIT, VK_PIPELINE_STAGE_TRANSFER_BIT);
+    VkBufferImageCopy copy{};
+    copy.imageSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, 1};
+    copy.imageExtent = {w, h, 1};
+    vkCmdCopyBufferToImage(cmd, staging.handle(), image, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, 1, &copy);
+    int32_t mw = static_cast<int32_t>(w), mh = static_cast<int32_t>(h);
+    for (uint32_t level = 1; level < mips; ++level) {
+      image_barrier(cmd, image, level - 1, 1, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL,
+                    VK_ACCESS_TRANSFER_WRITE_BIT, VK_ACCESS_TRANSFER_READ_BIT, VK_PIPELINE_STAGE_TRANSFER_BIT,
+                    VK_PIPELINE_STAGE_TRANSFER_BIT);
+      const int32_t nw = std::max(1, mw / 2), nh = std::max(1, mh / 2);
+      VkImageBlit blit{};
+      blit.srcSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, level - 1, 0, 1};
+      blit.srcOffsets[1] = {mw, mh, 1};
+      blit.dstSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, level, 0, 1};
+      blit.dstOffsets[1] = {nw, nh, 1};
+      vkCmdBlitImage(cmd, image, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, image, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, 1,
+                     &blit, VK_FILTER_LINEAR);
+      mw = nw;
+      mh = nh;
+    }
+    if (mips > 1)
+      image_barrier(cmd, image, 0, mips - 1, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL,
+                    VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL, VK_ACCESS_TRANSFER_READ_BIT, VK_ACCESS_SHADER_READ_BIT,
+                    VK_PIPELINE_STAGE_TRANSFER_BIT, VK_PIPELINE_STAGE_FRAGMENT_SHADER_BIT);
+    image_barrier(cmd, image, mips - 1, 1, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL,
+                  VK_ACCESS_TRANSFER_WRITE_BIT, VK_ACCESS_SHADER_READ_BIT, VK_PIPELINE_STAGE_TRANSFER_BIT,
+                  VK_PIPELINE_STAGE_FRAGMENT_SHADER_BIT);
+  });
+  return tex;
+}
+
+DeviceHandle<VkShaderModule> shader_module(VkDevice dev, std::span<const uint32_t> code) {
+  VkShaderModuleCreateInfo info{};
+  info.sType = VK_STRUCTURE_TYPE_SHADER_MODULE_CREATE_INFO;
+  info.codeSize = code.size_bytes();
+  info.pCode = code.data();
+  VkShaderModule m = VK_NULL_HANDLE;
+  check(vkCreateShaderModule(dev, &info, nullptr, &m), "vkCreateShaderModule");
+  return own<VkShaderModule>(dev, m, [](VkDevice d, VkShaderModule s) { vkDestroyShaderModule(d, s, nullptr); });
+}
+
+std::array<float, 4> premultiplied(const std::array<float, 4>& c) { return {c[0] * c[3], c[1] * c[3], c[2] * c[3], c[3]}; }
+
+}  // namespace
+
+// --- colour map, view ----------------------------------------------------------------------
+
+std::array<double, 3> colormap(double t) {
+  t = std::clamp(std::isnan(t) ? 1.0 : t, 0.0, 1.0);
+  static constexpr double c[7][3] = {
+      {0.2777273272234177, 0.005407344544966578, 0.3340998053353061},
+      {0.1050930431085774, 1.404613529898575, 1.384590162594685},
+      {-0.3308618287255563, 0.214847559468213, 0.09509516302823659},
+      {-4.634230498983486, -5.799100973351585, -19.33244095627987},
+      {6.228269936347081, 14.17993336680509, 56.69055260068105},
+      {4.776384997670288, -13.74514537774601, -65.35303263337234},
+      {-5.435455855934631, 4.645852612178535, 26.3124352495832}};
+  std::array<double, 3> out{};
+  for (int k = 0; k < 3; ++k) {
+    double v = c[6][k];
+    for (int i = 5; i >= 0; --i) v = c[i][k] + t * v;
+    out[static_cast<size_t>(k)] = std::clamp(v, 0.0, 1.0);
+  }
+  return out;
+}
+
+View View::fit(const BoundingBox& world, int width, int height, double margin_px, double bottom_px) {
+  const cd ext = world.hi - world.lo;
+  const double aw = width - 2 * margin_px, ah = height - 2 * margin_px - bottom_px;
+  if (!(std::isfinite(ext.real()) && std::isfinite(ext.imag())) || (ext.real() <= 0 && ext.imag() <= 0))
+    throw InputError("View::fit: the box to show is empty or not finite");
+  if (aw <= 1 || ah <= 1)
+    throw InputError("View::fit: a " + std::to_string(width) + " x " + std::to_string(height) +
+                     " image leaves no room inside its margins");
+  double s = std::numeric_limits<double>::infinity();
+  if (ext.real() > 0) s = std::min(s, aw / ext.real());
+  if (ext.imag() > 0) s = std::min(s, ah / ext.imag());
+  View v;
+  v.world_center = 0.5 * (world.lo + world.hi);
+  v.pixels_per_unit = s;
+  v.pixel_center = {0.5 * width, margin_px + 0.5 * ah};
+  return v;
+}
+
+// --- renderer -----------------------------------------------------------------------------
+
+struct Renderer::Impl {
+  // Destroyed in reverse order: pipelines before their layout, views before images.
+  VkSampleCountFlagBits samples = VK_SAMPLE_COUNT_1_BIT;
+  DeviceHandle<VkRenderPass> render_pass;
+  Image msaa, resolve;  // msaa unused (empty) with 1 sample
+  DeviceHandle<VkFramebuffer> framebuffer;
+  DeviceHandle<VkSampler> sampler;
+  Image texture, white;
+  DeviceHandle<VkDescriptorSetLayout> set_layout;
+  DeviceHandle<VkDescriptorPool> pool;
+  VkDescriptorSet set = VK_NULL_HANDLE;
+  DeviceHandle<VkPipelineLayout> layout;
+  DeviceHandle<VkPipeline> mesh, line, disc;
+  Buffer uv, index, segments;
+  Buffer readback;
+};
+
+Renderer::~Renderer() = default;
+
+Renderer::Renderer(const Context& context, int width, int height, const RendererOptions& options)
+    : context_(&context), width_(width), height_(height), eval_(context, options.evaluation),
+      impl_(std::make_unique<Impl>()) {
+  if (width < 1 || height < 1 || width > kMaxSide || height > kMaxSide)
+    throw InputError("renderer: image size " + std::to_string(width) + " x " + std::to_string(height) +
+                     " is outside 1.." + std::to_string(kMaxSide));
+  const VkDevice dev = context.device();
+  {
+    uint32_t n = 0;
+    vkGetPhysicalDeviceQueueFamilyProperties(context.physical_device(), &n, nullptr);
+    std::vector<VkQueueFamilyProperties> families(n);
+    vkGetPhysicalDeviceQueueFamilyProperties(context.physical_device(), &n, families.data());
+    if (context.queue_family() >= n || !(families[context.queue_family()].queueFlags & VK_QUEUE_GRAPHICS_BIT))
+      throw VulkanUnavailable("renderer: the Vulkan device " + context.info().name +
+                              " has no queue that can both compute and draw");
+  }
+  VkPhysicalDeviceProperties props;
+  vkGetPhysicalDeviceProperties(context.physical_device(), &props);
+  const VkSampleCountFlags supported = props.limits.framebufferColorSampleCounts;
+  Impl& r = *impl_;
+  for (int s : {8, 4, 2, 1})
+    if (s <= options.msaa_samples && (supported & static_cast<VkSampleCountFlags>(s))) {
+      samples_ = s;
+      r.samples = static_cast<VkSampleCountFlagBits>(s);
+      break;
+    }
+  const bool msaa = samples_ > 1;
+  const uint32_t w = static_cast<uint32_t>(width), h = static_cast<uint32_t>(height);
+
+  // --- render pass: MSAA colour, resolved into the image we read back ------------------
+  std::vector<VkAttachmentDescription> attachments;
+  VkAttachmentDescription color{};
+  color.format = kColorFormat;
+  color.samples = r.samples;
+  color.loadOp = VK_ATTACHMENT_LOAD_OP_CLEAR;
+  color.storeOp = msaa ? VK_ATTACHMENT_STORE_OP_DONT_CARE : VK_ATTACHMENT_STORE_OP_STORE;
+  color.stencilLoadOp = VK_ATTACHMENT_LOAD_OP_DONT_CARE;
+  color.stencilStoreOp = VK_ATTACHMENT_STORE_OP_DONT_CARE;
+  color.initialLayout = VK_IMAGE_LAYOUT_UNDEFINED;
+  color.finalLayout = msaa ? VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL : VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL;
+  attachments.push_back(color);
+  if (msaa) {
+    VkAttachmentDescription resolve = color;
+    resolve.samples = VK_SAMPLE_COUNT_1_BIT;
+    resolve.loadOp = VK_ATTACHMENT_LOAD_OP_DONT_CARE;
+    resolve.storeOp = VK_ATTACHMENT_STORE_OP_STORE;
+    resolve.finalLayout = VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL;
+    attachments.push_back(resolve);
+  }
+  const VkAttachmentReference color_ref{0, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL};
+  const VkAttachmentReference resolve_ref{1, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL};
+  VkSubpassDescription subpass{};
+  subpass.pipelineBindPoint = VK_PIPELINE_BIND_POINT_GRAPHICS;
+  subpass.colorAttachmentCount = 1;
+  subpass.pColorAttachments = &color_ref;
+  subpass.pResolveAttachments = msaa ? &resolve_ref : nullptr;
+  VkSubpassDependency deps[2] = {};
+  // The previous frame's copy out of the image (a read) before this frame's writes.
+  deps[0].srcSubpass = VK_SUBPASS_EXTERNAL;
+  deps[0].dstSubpass = 0;
+  deps[0].srcStageMask = VK_PIPELINE_STAGE_TRANSFER_BIT | VK_PIPELINE_STAGE_COLOR_ATTACHMENT_OUTPUT_BIT;
+  deps[0].dstStageMask = VK_PIPELINE_STAGE_COLOR_ATTACHMENT_OUTPUT_BIT;
+  deps[0].srcAccessMask = 0;
+  deps[0].dstAccessMask = VK_ACCESS_COLOR_ATTACHMENT_WRITE_BIT | VK_ACCESS_COLOR_ATTACHMENT_READ_BIT;
+  // The rendered (resolved) image before the copy to the host.
+  deps[1].srcSubpass = 0;
+  deps[1].dstSubpass = VK_SUBPASS_EXTERNAL;
+  deps[1].srcStageMask = VK_PIPELINE_STAGE_COLOR_ATTACHMENT_OUTPUT_BIT;
+  deps[1].dstStageMask = VK_PIPELINE_STAGE_TRANSFER_BIT;
+  deps[1].srcAccessMask = VK_ACCESS_COLOR_ATTACHMENT_WRITE_BIT;
+  deps[1].dstAccessMask = VK_ACCESS_TRANSFER_READ_BIT;
+  VkRenderPassCreateInfo rp{};
+  rp.sType = VK_STRUCTURE_TYPE_RENDER_PASS_CREATE_INFO;
+  rp.attachmentCount = static_cast<uint32_t>(attachments.size());
+  rp.pAttachments = attachments.data();
+  rp.subpassCount = 1;
+  rp.pSubpasses = &subpass;
+  rp.dependencyCount = 2;
+  rp.pDependencies = deps;
+  VkRenderPass raw_rp = VK_NULL_HANDLE;
+  check(vkCreateRenderPass(dev, &rp, nullptr, &raw_rp), "vkCreateRenderPass");
+  r.render_pass = own<VkRenderPass>(dev, raw_rp, [](VkDevice d, VkRenderPass p) { vkDestroyRenderPass(d, p, nullptr); });
+
+  r.resolve = make_image(context, w, h, VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT,
+                         VK_SAMPLE_COUNT_1_BIT, 1);
+  std::vector<VkImageView> views;
+  if (msaa) {
+    r.msaa = make_image(context, w, h, VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_TRANSIENT_ATTACHMENT_BIT,
+                        r.samples, 1, VK_MEMORY_PROPERTY_LAZILY_ALLOCATED_BIT);
+    views = {r.msaa.view.get(), r.resolve.view.get()};
+  } else {
+    views = {r.resolve.view.get()};
+  }
+  VkFramebufferCreateInfo fb{};
+  fb.sType = VK_STRUCTURE_TYPE_FRAMEBUFFER_CREATE_INFO;
+  fb.renderPass = raw_rp;
+  fb.attachmentCount = static_cast<uint32_t>(views.size());
+  fb.pAttachments = views.data();
+  fb.width = w;
+  fb.height = h;
+  fb.layers = 1;
+  VkFramebuffer raw_fb = VK_NULL_HANDLE;
+  check(vkCreateFramebuffer(dev, &fb, nullptr, &raw_fb), "vkCreateFramebuffer");
+  r.framebuffer = own<VkFramebuffer>(dev, raw_fb, [](VkDevice d, VkFramebuffer f) { vkDestroyFramebuffer(d, f, nullptr); });
+  r.readback = Buffer(context, static_cast<VkDeviceSize>(w) * h * 4, VK_BUFFER_USAGE_TRANSFER_DST_BIT, MemoryUse::kReadback);
+
+  // --- sampler, placeholder texture ----------------------------------------------------------
+  VkSamplerCreateInfo si{};
+  si.sType = VK_STRUCTURE_TYPE_SAMPLER_CREATE_INFO;
+  si.magFilter = VK_FILTER_LINEAR;
+  si.minFilter = VK_FILTER_LINEAR;
+  si.mipmapMode = VK_SAMPLER_MIPMAP_MODE_LINEAR;
+  si.addressModeU = si.addressModeV = si.addressModeW = VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE;
+  si.maxLod = VK_LOD_CLAMP_NONE;
+  VkSampler raw_sampler = VK_NULL_HANDLE;
+  check(vkCreateSampler(dev, &si, nullptr, &raw_sampler), "vkCreateSampler");
+  r.sampler = own<VkSampler>(dev, raw_sampler, [](VkDevice d, VkSampler s) { vkDestroySampler(d, s, nullptr); });
+  r.white = make_texture(context, RgbaImage(1, 1, {255, 255, 255, 255}));
+
+  // --- descriptor set: f, fields (the evaluation's outputs), texture, segments --------------
+  const VkDescriptorSetLayoutBinding bindings[4] = {
+      {0, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, VK_SHADER_STAGE_VERTEX_BIT, nullptr},
+      {1, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, VK_SHADER_STAGE_VERTEX_BIT, nullptr},
+      {2, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, 1, VK_SHADER_STAGE_FRAGMENT_BIT, nullptr},
+      {3, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, VK_SHADER_STAGE_VERTEX_BIT, nullptr}};
+  VkDescriptorSetLayoutCreateInfo sl{};
+  sl.sType = VK_STRUCTURE_TYPE_DESCRIPTOR_SET_LAYOUT_CREATE_INFO;
+  sl.bindingCount = 4;
+  sl.pBindings = bindings;
+  VkDescriptorSetLayout raw_sl = VK_NULL_HANDLE;
+  check(vkCreateDescriptorSetLayout(dev, &sl, nullptr, &raw_sl), "vkCreateDescriptorSetLayout");
+  r.set_layout = own<VkDescriptorSetLayout>(
+      dev, raw_sl, [](VkDevice d, VkDescriptorSetLayout l) { vkDestroyDescriptorSetLayout(d, l, nullptr); });
+  const VkDescriptorPoolSize sizes[2] = {{VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 3},
+                                         {VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, 1}};
+  VkDescriptorPoolCreateInfo pi{};
+  pi.sType = VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO;
+  pi.maxSets = 1;
+  pi.poolSizeCount = 2;
+  pi.pPoolSizes = sizes;
+  VkDescriptorPool raw_pool = VK_NULL_HANDLE;
+  check(vkCreateDescriptorPool(dev, &pi, nullptr, &raw_pool), "vkCreateDescriptorPool");
+  r.pool = own<VkDescriptorPool>(dev, raw_pool, [](VkDevice d, VkDescriptorPool p) { vkDestroyDescriptorPool(d, p, nullptr); });
+  VkDescriptorSetAllocateInfo ai{};
+  ai.sType = VK_STRUCTURE_TYPE_DESCRIPTOR_SET_ALLOCATE_INFO;
+  ai.descriptorPool = raw_pool;
+  ai.descriptorSetCount = 1;
+  ai.pSetLayouts = &raw_sl;
+  check(vkAllocateDescriptorSets(dev, &ai, &r.set), "vkAllocateDescriptorSets");
+
+  const VkPushConstantRange push{kPushStages, 0, sizeof(RenderPush)};
+  VkPipelineLayoutCreateInfo li{};
+  li.sType = VK_STRUCTURE_TYPE_PIPELINE_LAYOUT_CREATE_INFO;
+  li.setLayoutCount = 1;
+  li.pSetLayouts = &raw_sl;
+  li.pushConstantRangeCount = 1;
+  li.pPushConstantRanges = &push;
+  VkPipelineLayout raw_layout = VK_NULL_HANDLE;
+  check(vkCreatePipelineLayout(dev, &li, nullptr, &raw_layout), "vkCreatePipelineLayout");
+  r.layout = own<VkPipelineLayout>(dev, raw_layout, [](VkDevice d, VkPipelineLayout l) { vkDestroyPipelineLayout(d, l, nullptr); });
+
+  // --- pipelines --------------------------------------------------------------------------------
+  const bool f64 = eval_.double_precision();
+  auto make_pipeline = [&](std::span<const uint32_t> vert, std::span<const uint32_t> frag, bool uv_input) {
+    const DeviceHandle<VkShaderModule> vs = shader_module(dev, vert), fs = shader_module(dev, frag);
+    VkPipelineShaderStageCreateInfo stages[2] = {};
+    stages[0].sType = stages[1].sType = VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO;
+    stages[0].stage = VK_SHADER_STAGE_VERTEX_BIT;
+    stages[0].module = vs.get();
+    stages[0].pName = "main";
+    stages[1].stage = VK_SHADER_STAGE_FRAGMENT_BIT;
+    stages[1].module = fs.get();
+    stages[1].pName = "main";
+    const VkVertexInputBindingDescription vb{0, 2 * sizeof(float), VK_VERTEX_INPUT_RATE_VERTEX};
+    const VkVertexInputAttributeDescription va{0, 0, VK_FORMAT_R32G32_SFLOAT, 0};
+    VkPipelineVertexInputStateCreateInfo vi{};
+    vi.sType = VK_STRUCTURE_TYPE_PIPELINE_VERTEX_INPUT_STATE_CREATE_INFO;
+    if (uv_input) {
+      vi.vertexBindingDescriptionCount = 1;
+      vi.pVertexBindingDescriptions = &vb;
+      vi.vertexAttributeDescriptionCount = 1;
+      vi.pVertexAttributeDescriptions = &va;
+    }
+    VkPipelineInputAssemblyStateCreateInfo ia{};
+    ia.sType = VK_STRUCTURE_TYPE_PIPELINE_INPUT_ASSEMBLY_STATE_CREATE_INFO;
+    ia.topology = VK_PRIMITIVE_TOPOLOGY_TRIANGLE_LIST;
+    const VkViewport viewport{0, 0, static_cast<float>(w), static_cast<float>(h), 0, 1};
+    const VkRect2D scissor{{0, 0}, {w, h}};
+    VkPipelineViewportStateCreateInfo vp{};
+    vp.sType = VK_STRUCTURE_TYPE_PIPELINE_VIEWPORT_STATE_CREATE_INFO;
+    vp.viewportCount = 1;
+    vp.pViewports = &viewport;
+    vp.scissorCount = 1;
+    vp.pScissors = &scissor;
+    VkPipelineRasterizationStateCreateInfo rs{};
+    rs.sType = VK_STRUCTURE_TYPE_PIPELINE_RASTERIZATION_STATE_CREATE_INFO;
+    rs.polygonMode = VK_POLYGON_MODE_FILL;
+    rs.cullMode = VK_CULL_MODE_NONE;  // a folded (uncertified) frame has flipped triangles: draw them too
+    rs.frontFace = VK_FRONT_FACE_COUNTER_CLOCKWISE;
+    rs.lineWidth = 1;
+    VkPipelineMultisampleStateCreateInfo ms{};
+    ms.sType = VK_STRUCTURE_TYPE_PIPELINE_MULTISAMPLE_STATE_CREATE_INFO;
+    ms.rasterizationSamples = r.samples;
+    VkPipelineColorBlendAttachmentState blend{};
+    blend.blendEnable = VK_TRUE;  // premultiplied "over"
+    blend.srcColorBlendFactor = VK_BLEND_FACTOR_ONE;
+    blend.dstColorBlendFactor = VK_BLEND_FACTOR_ONE_MINUS_SRC_ALPHA;
+    blend.colorBlendOp = VK_BLEND_OP_ADD;
+    blend.srcAlphaBlendFactor = VK_BLEND_FACTOR_ONE;
+    blend.dstAlphaBlendFactor = VK_BLEND_FACTOR_ONE_MINUS_SRC_ALPHA;
+    blend.alphaBlendOp = VK_BLEND_OP_ADD;
+    blend.colorWriteMask =
+        VK_COLOR_COMPONENT_R_BIT | VK_COLOR_COMPONENT_G_BIT | VK_COLOR_COMPONENT_B_BIT | VK_COLOR_COMPONENT_A_BIT;
+    VkPipelineColorBlendStateCreateInfo cb{};
+    cb.sType = VK_STRUCTURE_TYPE_PIPELINE_COLOR_BLEND_STATE_CREATE_INFO;
+    cb.attachmentCount = 1;
+    cb.pAttachments = &blend;
+    VkGraphicsPipelineCreateInfo gp{};
+    gp.sType = VK_STRUCTURE_TYPE_GRAPHICS_PIPELINE_CREATE_INFO;
+    gp.stageCount = 2;
+    gp.pStages = stages;
+    gp.pVertexInputState = &vi;
+    gp.pInputAssemblyState = &ia;
+    gp.pViewportState = &vp;
+    gp.pRasterizationState = &rs;
+    gp.pMultisampleState = &ms;
+    gp.pColorBlendState = &cb;
+    gp.layout = raw_layout;
+    gp.renderPass = raw_rp;
+    gp.subpass = 0;
+    VkPipeline p = VK_NULL_HANDLE;
+    check(vkCreateGraphicsPipelines(dev, VK_NULL_HANDLE, 1, &gp, nullptr, &p), "vkCreateGraphicsPipelines");
+    return own<VkPipeline>(dev, p, [](VkDevice d, VkPipeline q) { vkDestroyPipeline(d, q, nullptr); });
+  };
+  using S = std::span<const uint32_t>;
+  r.mesh = make_pipeline(f64 ? S(render_mesh_vert_f64) : S(render_mesh_vert_f32), S(render_mesh_frag), true);
+  r.line = make_pipeline(f64 ? S(render_line_vert_f64) : S(render_line_vert_f32), S(render_line_frag), false);
+  r.disc = make_pipeline(f64 ? S(render_disc_vert_f64) : S(render_disc_vert_f32), S(render_disc_frag), false);
+}
+
+void Renderer::set_mesh(const TriMesh& mesh, std::span<const cd> handles) {
+  if (mesh.vertices.empty() || mesh.triangles.empty())
+    throw InputError("renderer: the mesh is empty (" + std::to_string(mesh.vertices.size()) + " vertices, " +
+                     std::to_string(mesh.triangles.size()) + " triangles)");
+  const int n = mesh.vertex_count();
+  std::vector<uint32_t> indices;
+  indices.reserve(mesh.triangles.size() * 3);
+  for (size_t t = 0; t < mesh.triangles.size(); ++t)
+    for (int v : mesh.triangles[t]) {
+      if (v < 0 || v >= n)
+        throw InputError("renderer: triangle " + std::to_string(t) + " has vertex index " + std::to_string(v) +
+                         " outside 0.." + std::to_string(n - 1));
+      indices.push_back(static_cast<uint32_t>(v));
+    }
+  std::vector<uint32_t> segments;
+  segments.reserve(mesh.boundary_edges.size() * 2);
+  for (size_t e = 0; e < mesh.boundary_edges.size(); ++e)
+    for (int v : mesh.boundary_edges[e]) {
+      if (v < 0 || v >= n)
+        throw InputError("renderer: boundary edge " + std::to_string(e) + " has vertex index " + std::to_string(v) +
+                         " outside 0.." + std::to_string(n - 1));
+      segments.push_back(static_cast<uint32_t>(v));
+    }
+  for (size_t k = 0; k < handles.size(); ++k)
+    if (!std::isfinite(handles[k].real()) || !std::isfinite(handles[k].imag()))
+      throw InputError("renderer: handle " + std::to_string(k) + " is not finite");
+  Impl& r = *impl_;
+  r.index = static_buffer(*context_, VK_BUFFER_USAGE_INDEX_BUFFER_BIT, indices.data(), indices.size() * sizeof(uint32_t));
+  r.segments = static_buffer(*context_, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, segments.data(),
+                             segments.size() * sizeof(uint32_t));
+  rest_vertices_ = mesh.vertices;
+  points_ = mesh.vertices;
+  points_.insert(points_.end(), handles.begin(), handles.end());
+  vertex_count_ = mesh.vertices.size();
+  handle_count_ = handles.size();
+  index_count_ = indices.size();
+  segment_count_ = mesh.boundary_edges.size();
+  uv_dirty_ = true;
+}
+
+void Renderer::set_texture(const RgbaImage& texture, const std::array<double, 4>& rect) {
+  Impl& r = *impl_;
+  if (texture.empty()) {
+    r.texture = Image();
+    has_texture_ = false;
+    return;
+  }
+  if (texture.pixels.size() != static_cast<size_t>(texture.width) * static_cast<size_t>(texture.height) * 4)
+    throw InputError("renderer: the texture's pixel data does not match its size");
+  if (texture.width > kMaxSide || texture.height > kMaxSide)
+    throw InputError("renderer: texture size " + std::to_string(texture.width) + " x " +
+                     std::to_string(texture.height) + " is larger than " + std::to_string(kMaxSide));
+  if (!(rect[2] > rect[0] && rect[3] > rect[1]) || !std::all_of(rect.begin(), rect.end(), [](double v) { return std::isfinite(v); }))
+    throw InputError("renderer: the texture rectangle [x0, y0, x1, y1] needs x1 > x0 and y1 > y0, finite");
+  r.texture = make_texture(*context_, texture);
+  texture_rect_ = rect;
+  has_texture_ = true;
+  uv_dirty_ = true;
+}
+
+void Renderer::upload_uv() {
+  const auto& [x0, y0, x1, y1] = texture_rect_;
+  std::vector<float> uv;
+  uv.reserve(2 * rest_vertices_.size());
+  for (const cd& p : rest_vertices_) {
+    uv.push_back(static_cast<float>((p.real() - x0) / (x1 - x0)));
+    uv.push_back(static_cast<float>((y1 - p.imag()) / (y1 - y0)));  // row 0 is the top (y1)
+  }
+  impl_->uv = static_buffer(*context_, VK_BUFFER_USAGE_VERTEX_BUFFER_BIT, uv.data(), uv.size() * sizeof(float));
+  uv_dirty_ = false;
+}
+
+RgbaImage Renderer::render(const Cage& cage, const HarmonicMap& map, const View& view, const RenderStyle& style) {
+  if (points_.empty()) throw InputError("renderer: no mesh (call set_mesh first)");
+  if (!(view.pixels_per_unit > 0) || !std::isfinite(view.pixels_per_unit))
+    throw InputError("renderer: the view needs a finite positive scale");
+  if (!(style.distortion_hi > style.distortion_lo))
+    throw InputError("renderer: the distortion range needs hi > lo (got " + std::to_string(style.distortion_lo) +
+                     ", " + std::to_string(style.distortion_hi) + ")");
+  Impl& r = *impl_;
+  const auto t0 = Clock::now();
+  stats_ = {};
+  if (uv_dirty_) upload_uv();
+  const VkDevice dev = context_->device();
+
+  RenderPush pc{};
+  const double s = view.pixels_per_unit;
+  pc.scale[0] = static_cast<float>(s);
+  pc.scale[1] = static_cast<float>(-s);
+  pc.offset[0] = static_cast<float>(view.pixel_center.real() - s * view.world_center.real());
+  pc.offset[1] = static_cast<float>(view.pixel_center.imag() + s * view.world_center.imag());
+  pc.viewport[0] = static_cast<float>(width_);
+  pc.viewport[1] = static_cast<float>(height_);
+  pc.dist_lo = static_cast<float>(style.distortion_lo);
+  pc.dist_inv = static_cast<float>(1.0 / (style.distortion_hi - style.distortion_lo));
+  pc.overlay_alpha = std::clamp(style.distortion_opacity, 0.0f, 1.0f);
+  const float border = style.border_px > 0 ? style.border_px : std::max(4.0f, static_cast<float>(std::min(width_, height_)) / 64);
+  const uint32_t border_px = std::min(static_cast<uint32_t>(std::lround(border)), static_cast<uint32_t>(std::min(width_, height_) / 2));
+  const VkImage resolve = r.resolve.image.get();
+  const uint32_t w = static_cast<uint32_t>(width_), h = static_cast<uint32_t>(height_);
+
+  context_->submit_and_wait([&](VkCommandBuffer cmd) {
+    // The previous frame's vertex shaders read the evaluation's outputs; this frame rewrites them.
+    VkMemoryBarrier war{};
+    war.sType = VK_STRUCTURE_TYPE_MEMORY_BARRIER;
+    vkCmdPipelineBarrier(cmd, VK_PIPELINE_STAGE_VERTEX_SHADER_BIT, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, 0, 1, &war, 0,
+                         nullptr, 0, nullptr);
+    eval_.record_points(cmd, cage, map, points_);
+    VkMemoryBarrier raw{};
+    raw.sType = VK_STRUCTURE_TYPE_MEMORY_BARRIER;
+    raw.srcAccessMask = VK_ACCESS_SHADER_WRITE_BIT;
+    raw.dstAccessMask = VK_ACCESS_SHADER_READ_BIT;
+    vkCmdPipelineBarrier(cmd, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_PIPELINE_STAGE_VERTEX_SHADER_BIT, 0, 1, &raw, 0,
+                         nullptr, 0, nullptr);
+
+    // The set is not bound in any pending command buffer: point it at this frame's buffers.
+    const Buffer& f = eval_.device_output(0);
+    const Buffer& fields = eval_.device_output(3);
+    const VkDescriptorBufferInfo infos[3] = {{f.handle(), 0, VK_WHOLE_SIZE},
+                                             {fields.handle(), 0, VK_WHOLE_SIZE},
+                                             {r.segments.handle(), 0, VK_WHOLE_SIZE}};
+    const VkDescriptorImageInfo image_info{r.sampler.get(), (has_texture_ ? r.texture : r.white).view.get(),
+                                           VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL};
+    VkWriteDescriptorSet writes[4] = {};
+    const uint32_t binding_of[4] = {0, 1, 3, 2};
+    for (int k = 0; k < 4; ++k) {
+      writes[k].sType = VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET;
+      writes[k].dstSet = r.set;
+      writes[k].dstBinding = binding_of[k];
+      writes[k].descriptorCount = 1;
+      if (k < 3) {
+        writes[k].descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
+        writes[k].pBufferInfo = &infos[k];
+      } else {
+        writes[k].descriptorType = VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER;
+        writes[k].pImageInfo = &image_info;
+      }
+    }
+    vkUpdateDescriptorSets(dev, 4, writes, 0, nullptr);
+
+    const std::array<float, 4> bg = premultiplied(style.background);
+    VkClearValue clear{};
+    std::memcpy(clear.color.float32, bg.data(), sizeof(float) * 4);
+    VkRenderPassBeginInfo begin{};
+    begin.sType = VK_STRUCTURE_TYPE_RENDER_PASS_BEGIN_INFO;
+    begin.renderPass = r.render_pass.get();
+    begin.framebuffer = r.framebuffer.get();
+    begin.renderArea = {{0, 0}, {w, h}};
+    begin.clearValueCount = 1;
+    begin.pClearValues = &clear;
+    vkCmdBeginRenderPass(cmd, &begin, VK_SUBPASS_CONTENTS_INLINE);
+    vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, r.layout.get(), 0, 1, &r.set, 0, nullptr);
+
+    if (style.uncertified && border_px > 0) {
+      VkClearAttachment red{};
+      red.aspectMask = VK_IMAGE_ASPECT_COLOR_BIT;
+      red.colorAttachment = 0;
+      red.clearValue.color = {{0.86f, 0.04f, 0.04f, 1.0f}};
+      const uint32_t b = border_px;
+      const VkClearRect rects[4] = {{{{0, 0}, {w, b}}, 0, 1},
+                                    {{{0, static_cast<int32_t>(h - b)}, {w, b}}, 0, 1},
+                                    {{{0, static_cast<int32_t>(b)}, {b, h - 2 * b}}, 0, 1},
+                                    {{{static_cast<int32_t>(w - b), static_cast<int32_t>(b)}, {b, h - 2 * b}}, 0, 1}};
+      vkCmdClearAttachments(cmd, 1, &red, h > 2 * b ? 4 : 2, rects);
+    }
+
+    // The shape.
+    pc.flags = (has_texture_ ? kTextured : 0u) | ((style.overlays & kOverlayDistortion) ? kDistortion : 0u) |
+               (style.uncertified ? kUncertified : 0u);
+    std::memcpy(pc.color, style.fill.data(), sizeof pc.color);
+    vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, r.mesh.get());
+    vkCmdPushConstants(cmd, r.layout.get(), kPushStages, 0, sizeof pc, &pc);
+    const VkDeviceSize zero = 0;
+    const VkBuffer uv = r.uv.handle();
+    vkCmdBindVertexBuffers(cmd, 0, 1, &uv, &zero);
+    vkCmdBindIndexBuffer(cmd, r.index.handle(), 0, VK_INDEX_TYPE_UINT32);
+    vkCmdDrawIndexed(cmd, static_cast<uint32_t>(index_count_), 1, 0, 0, 0);
+
+    if ((style.overlays & kOverlayBoundary) && segment_count_ > 0 && style.boundary_width_px > 0) {
+      std::memcpy(pc.color, style.boundary_color.data(), sizeof pc.color);
+      pc.size_px = style.boundary_width_px;
+      vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, r.line.get());
+      vkCmdPushConstants(cmd, r.layout.get(), kPushStages, 0, sizeof pc, &pc);
+      vkCmdDraw(cmd, 6, static_cast<uint32_t>(segment_count_), 0, 0);
+    }
+    if ((style.overlays & kOverlayHandles) && handle_count_ > 0 && style.handle_radius_px > 0) {
+      std::memcpy(pc.color, style.handle_color.data(), sizeof pc.color);
+      std::memcpy(pc.color2, style.handle_outline.data(), sizeof pc.color2);
+      pc.size_px = style.handle_radius_px;
+      pc.size2_px = std::clamp(style.handle_outline_px, 0.0f, style.handle_radius_px);
+      pc.first = static_cast<uint32_t>(vertex_count_);
+      vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, r.disc.get());
+      vkCmdPushConstants(cmd, r.layout.get(), kPushStages, 0, sizeof pc, &pc);
+      vkCmdDraw(cmd, 6, static_cast<uint32_t>(handle_count_), 0, 0);
+    }
+    vkCmdEndRenderPass(cmd);
+
+    VkBufferImageCopy copy{};
+    copy.imageSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, 1};
+    copy.imageExtent = {w, h, 1};
+    vkCmdCopyImageToBuffer(cmd, resolve, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, r.readback.handle(), 1, &copy);
+    VkMemoryBarrier host{};
+    host.sType = VK_STRUCTURE_TYPE_MEMORY_BARRIER;
+    host.srcAccessMask = VK_ACCESS_TRANSFER_WRITE_BIT;
+    host.dstAccessMask = VK_ACCESS_HOST_READ_BIT;
+    vkCmdPipelineBarrier(cmd, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_PIPELINE_STAGE_HOST_BIT, 0, 1, &host, 0, nullptr, 0,
+                         nullptr);
+    stats_.upload_ms = ms_since(t0);
+  });
+  stats_.gpu_ms = ms_since(t0) - stats_.upload_ms;
+
+  const auto t_read = Clock::now();
+  RgbaImage out(width_, height_);
+  r.readback.read(out.pixels.data(), out.pixels.size());
+  for (size_t i = 0; i < out.pixels.size(); i += 4) {
+    const unsigned a = out.pixels[i + 3];
+    if (a == 255) continue;
+    if (a == 0) {
+      out.pixels[i] = out.pixels[i + 1] = out.pixels[i + 2] = 0;
+      continue;
+    }
+    for (size_t c = 0; c < 3; ++c) out.pixels[i + c] = static_cast<uint8_t>(std::min(255u, (out.pixels[i + c] * 255 + a / 2) / a));
+  }
+  stats_.readback_ms = ms_since(t_read);
+  return out;
+}
+
+}  // namespace hsi::vk

@@ -1,0 +1,19 @@
+// The deformed mesh: vertex i sits at f(rest vertex i), read from the dense
+// evaluation's output; its texture coordinate is the rest position in the texture's
+// rectangle; its colour-map parameter comes from the conformal distortion sigma1/sigma2.
+#version 460
+#extension GL_GOOGLE_include_directive : require
+#include "render_common.glsl"
+
+layout(location = 0) in vec2 in_uv;
+layout(location = 0) out vec2 uv;
+layout(location = 1) out float kappa_t;  // unclamped; the fragment shader clamps after interpolation
+
+void main() {
+  const uint i = uint(gl_VertexIndex);
+  gl_Position = ndc_of(pixel_of(i));
+  uv = in_uv;
+  const float kappa = float(fields[i].z);
+  // A fold (sigma2 <= 0: kappa negative or infinite) or NaN saturates the map.
+  kappa_t = (kappa > 0.0 && kappa < 1e30) ? (kappa - pc.dist_lo) * pc.dist_inv : 1.0;
+}

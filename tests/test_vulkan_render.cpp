@@ -1,0 +1,481 @@
+// Offscreen rendering (compute/renderer.h) on whatever Vulkan device the loader finds
+// (lavapipe on a machine without a GPU), with the validation layer on: any message
+// fails the test. Pixels are checked against what the map must produce (texture
+// colours where the shape maps, background in holes and outside, the colour map,
+// overlays, the red of an uncertified frame), and a few frames of bundled scenes
+// against golden images in tests/golden/ with a perceptual tolerance.
+//
+// Goldens: HSI_UPDATE_GOLDEN=1 ./hsi_tests "[golden]" rewrites tests/golden/*.png
+// from this machine's rendering (see tests/golden/README.md); look at them before
+// committing. Without a Vulkan device the tests WARN and pass, unless
+// HSI_REQUIRE_VULKAN=1 (CI) turns that into a failure.
+#include <catch2/catch.hpp>
+
+#include <cmath>
+#include <cstdlib>
+#include <memory>
+
+#include "hsi/compute/renderer.h"
+#include "hsi/compute/vulkan_context.h"
+#include "hsi/interpolation.h"
+#include "hsi/shape_setup.h"
+#include "hsi/triangulate.h"
+#include "test_shapes.h"
+
+using namespace hsi;
+using Catch::Matchers::Contains;
+
+namespace {
+
+bool env_set(const char* name) {
+  const char* env = std::getenv(name);
+  return env && *env && std::string(env) != "0";
+}
+
+// Runs body(context) with validation on, then destroys the context (so teardown
+// messages are caught too) and fails on any message.
+template <class Body>
+void with_vulkan(Body&& body) {
+  vk::ContextOptions options;
+  options.validation = true;
+  std::shared_ptr<vk::ValidationLog> log;
+  {
+    std::unique_ptr<vk::Context> ctx;
+    try {
+      ctx = std::make_unique<vk::Context>(options);
+    } catch (const vk::VulkanUnavailable& e) {
+      if (env_set("HSI_REQUIRE_VULKAN")) FAIL("HSI_REQUIRE_VULKAN is set but: " << e.what());
+      WARN("skipping Vulkan test: " << e.what());
+      return;
+    }
+    log = ctx->validation_log();
+    body(*ctx);
+  }
+  INFO(log->summary(10));
+  CHECK(log->count() == 0);
+}
+
+// A 2 × 1.5 rectangle with a rectangular hole right of centre.
+Shape framed_shape() {
+  return normalize(Shape{test::rect(-1, -0.75, 1, 0.75), {test::rect(0.2, -0.3, 0.6, 0.3)}});
+}
+constexpr std::array<double, 4> kRect = {-1, -0.75, 1, 0.75};
+
+// A linear gradient: R grows left to right, G top to bottom, B = 128.
+vk::RgbaImage gradient(int w, int h) {
+  vk::RgbaImage img(w, h);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      uint8_t* p = img.at(x, y);
+      p[0] = static_cast<uint8_t>(std::lround(255.0 * x / (w - 1)));
+      p[1] = static_cast<uint8_t>(std::lround(255.0 * y / (h - 1)));
+      p[2] = 128;
+      p[3] = 255;
+    }
+  return img;
+}
+
+// The world point at the centre of pixel (x, y).
+cd world_at(const vk::View& v, int x, int y) {
+  return {v.world_center.real() + (x + 0.5 - v.pixel_center.real()) / v.pixels_per_unit,
+          v.world_center.imag() - (y + 0.5 - v.pixel_center.imag()) / v.pixels_per_unit};
+}
+
+// Signed distance to the shape's boundary: > 0 inside, < 0 outside or in a hole.
+double signed_distance(const Shape& s, cd p) { return (point_in_shape(s, p) ? 1 : -1) * boundary_distance(s, p); }
+
+int max_channel_diff(const uint8_t* a, const uint8_t* b) {
+  int d = 0;
+  for (int c = 0; c < 4; ++c) d = std::max(d, std::abs(int(a[c]) - int(b[c])));
+  return d;
+}
+
+struct Setup {
+  Shape shape = framed_shape();
+  Cage cage = build_cage(shape);
+  TriMesh mesh;
+  Setup(double edge = 0.05) {
+    TriangulateOptions o;
+    o.max_edge = edge;
+    mesh = triangulate(shape, o);
+  }
+};
+
+// Solves f(w) = a w + b conj(w) + c for w.
+cd affine_inverse(cd a, cd b, cd c, cd q) {
+  // [Re; Im] of a w + b conj(w) = M [x; y] with M = [[ar + br, -ai + bi], [ai + bi, ar - br]].
+  const double m00 = a.real() + b.real(), m01 = -a.imag() + b.imag(), m10 = a.imag() + b.imag(), m11 = a.real() - b.real();
+  const cd r = q - c;
+  const double det = m00 * m11 - m01 * m10;
+  return {(m11 * r.real() - m01 * r.imag()) / det, (-m10 * r.real() + m00 * r.imag()) / det};
+}
+
+// Perceptual comparison with a golden image: mean absolute difference over all
+// channels, and the fraction of pixels differing by more than 48/255 in some channel
+// (a shifted edge, a missing line). Rasterizers differ in edge coverage and
+// rounding, never in what is drawn where.
+struct Difference {
+  double mean_abs = 0, outlier_fraction = 0;
+};
+Difference compare(const vk::RgbaImage& a, const vk::RgbaImage& b) {
+  Difference d;
+  size_t outliers = 0, n = static_cast<size_t>(a.width) * a.height;
+  double sum = 0;
+  for (int y = 0; y < a.height; ++y)
+    for (int x = 0; x < a.width; ++x) {
+      const uint8_t *p = a.at(x, y), *q = b.at(x, y);
+      for (int c = 0; c < 4; ++c) sum += std::abs(int(p[c]) - int(q[c]));
+      outliers += max_channel_diff(p, q) > 48;
+    }
+  d.mean_abs = sum / (4.0 * static_cast<double>(n));
+  d.outlier_fraction = static_cast<double>(outliers) / static_cast<double>(n);
+  return d;
+}
+
+void check_golden(const vk::RgbaImage& img, const std::string& name) {
+  const std::filesystem::path golden = std::filesystem::path(HSI_TESTS_DIR) / "golden" / (name + ".png");
+  if (env_set("HSI_UPDATE_GOLDEN")) {
+    std::filesystem::create_directories(golden.parent_path());
+    vk::write_png(golden, img);
+    WARN("HSI_UPDATE_GOLDEN: wrote " << golden.string());
+    return;
+  }
+  INFO("golden " << golden.string() << " (regenerate with HSI_UPDATE_GOLDEN=1, see tests/golden/README.md)");
+  REQUIRE(std::filesystem::exists(golden));
+  const vk::RgbaImage ref = vk::read_png(golden);
+  REQUIRE(ref.width == img.width);
+  REQUIRE(ref.height == img.height);
+  const Difference d = compare(img, ref);
+  if (d.mean_abs > 1.5 || d.outlier_fraction > 0.01) {
+    const std::filesystem::path dir = std::filesystem::path(HSI_TEST_TMP) / "golden";
+    std::filesystem::create_directories(dir);
+    vk::write_png(dir / (name + ".actual.png"), img);
+    vk::RgbaImage diff(img.width, img.height, {0, 0, 0, 255});
+    for (int y = 0; y < img.height; ++y)
+      for (int x = 0; x < img.width; ++x) {
+        const int m = std::min(255, 4 * max_channel_diff(img.at(x, y), ref.at(x, y)));
+        diff.at(x, y)[0] = static_cast<uint8_t>(m);
+      }
+    vk::write_png(dir / (name + ".diff.png"), diff);
+    INFO("wrote " << (dir / (name + ".actual.png")).string() << " and .diff.png");
+  }
+  INFO("mean abs diff " << d.mean_abs << "/255, pixels off by > 48: " << 100 * d.outlier_fraction << "%");
+  CHECK(d.mean_abs <= 1.5);
+  CHECK(d.outlier_fraction <= 0.01);
+}
+
+// A view showing where the map sends the shape (its boundary and handles), as the
+// hsi tool frames it.
+vk::View frame_view(const Shape& shape, const Cage& cage, const HarmonicMap& map, int w, int h, double margin) {
+  std::vector<cd> pts;
+  for (int l = 0; l < shape.loop_count(); ++l)
+    for (const cd& z : subdivide_edges(shape.loop(l), bounding_box(shape).diagonal() / 200)) pts.push_back(z);
+  const MapValues v = evaluate_map(cage, map, pts);
+  BoundingBox box{v.f(0), v.f(0)};
+  for (Eigen::Index k = 0; k < v.f.size(); ++k) {
+    box.lo = {std::min(box.lo.real(), v.f(k).real()), std::min(box.lo.imag(), v.f(k).imag())};
+    box.hi = {std::max(box.hi.real(), v.f(k).real()), std::max(box.hi.imag(), v.f(k).imag())};
+  }
+  return vk::View::fit(box, w, h, margin);
+}
+
+}  // namespace
+
+TEST_CASE("render: the identity map shows the texture unchanged, clipped at the outline and the hole", "[vulkan][render]") {
+  with_vulkan([](vk::Context& ctx) {
+    const Setup s;
+    const int W = 256, H = 192;
+    const vk::RgbaImage tex = gradient(W, H);
+    vk::Renderer r(ctx, W, H);
+    CHECK(r.msaa_samples() >= 1);
+    r.set_mesh(s.mesh);
+    r.set_texture(tex, kRect);
+    // The texture's rectangle fills the image exactly: texel (x, y) lies under pixel (x, y).
+    const vk::View view = vk::View::fit({{-1, -0.75}, {1, 0.75}}, W, H);
+    REQUIRE(view.pixels_per_unit == Approx(128.0));
+    vk::RenderStyle style;
+    style.background = {1, 1, 1, 1};
+    const vk::RgbaImage img = r.render(s.cage, identity_map(s.cage), view, style);
+    REQUIRE(img.width == W);
+    REQUIRE(img.height == H);
+    int inside = 0, hole = 0, worst_inside = 0, worst_hole = 0;
+    const uint8_t white[4] = {255, 255, 255, 255};
+    for (int y = 0; y < H; ++y)
+      for (int x = 0; x < W; ++x) {
+        const double d = signed_distance(s.shape, world_at(view, x, y)) * view.pixels_per_unit;
+        if (d > 1.5) {
+          ++inside;
+          worst_inside = std::max(worst_inside, max_channel_diff(img.at(x, y), tex.at(x, y)));
+        } else if (d < -1.5) {
+          ++hole;
+          worst_hole = std::max(worst_hole, max_channel_diff(img.at(x, y), white));
+        }
+      }
+    CHECK(inside > 30000);
+    CHECK(hole > 2000);  // the hole is 0.4 × 0.6 = 51 × 77 px
+    CHECK(worst_inside <= 2);
+    CHECK(worst_hole == 0);
+  });
+}
+
+TEST_CASE("render: an affine map moves the texture with the shape, holes stay empty", "[vulkan][render]") {
+  with_vulkan([](vk::Context& ctx) {
+    const Setup s;
+    const int W = 240, H = 240;
+    const vk::RgbaImage tex = gradient(200, 150);
+    const cd a(0.8, 0.35), b(0.12, -0.05), c(0.3, -0.2);
+    const HarmonicMap map = affine_map(s.cage, a, b, c);
+    vk::Renderer r(ctx, W, H);
+    r.set_mesh(s.mesh);
+    r.set_texture(tex, kRect);
+    const vk::View view = frame_view(s.shape, s.cage, map, W, H, 10);
+    vk::RenderStyle style;
+    style.background = {0, 0, 0, 0};  // transparent
+    const vk::RgbaImage img = r.render(s.cage, map, view, style);
+    const double sigma2 = std::abs(a) - std::abs(b);
+    // The expected colour: the gradient's value at the rest point, as texel centres define it.
+    auto expected = [&](cd w, int channel) {
+      const double u = (w.real() - kRect[0]) / (kRect[2] - kRect[0]), v = (kRect[3] - w.imag()) / (kRect[3] - kRect[1]);
+      const double t = channel == 0 ? (u * tex.width - 0.5) / (tex.width - 1) : (v * tex.height - 0.5) / (tex.height - 1);
+      return 255.0 * std::clamp(t, 0.0, 1.0);
+    };
+    int inside = 0, outside = 0, bad_inside = 0, bad_outside = 0, in_hole = 0;
+    double worst = 0;
+    for (int y = 0; y < H; ++y)
+      for (int x = 0; x < W; ++x) {
+        const cd w = affine_inverse(a, b, c, world_at(view, x, y));
+        const double d = signed_distance(s.shape, w) * sigma2 * view.pixels_per_unit;  // ≤ the distance in pixels
+        const uint8_t* p = img.at(x, y);
+        if (d > 3) {
+          ++inside;
+          const double e = std::max(std::abs(p[0] - expected(w, 0)), std::abs(p[1] - expected(w, 1)));
+          worst = std::max(worst, e);
+          bad_inside += e > 4 || std::abs(p[2] - 128) > 2 || p[3] != 255;
+        } else if (d < -1.5 * (std::abs(a) + std::abs(b)) / sigma2) {
+          ++outside;
+          in_hole += point_in_loop(s.shape.outer, w);
+          bad_outside += p[3] != 0;
+        }
+      }
+    INFO("worst colour error inside: " << worst);
+    CHECK(inside > 10000);
+    CHECK(in_hole > 500);
+    CHECK(outside > 10000);
+    CHECK(bad_inside == 0);
+    CHECK(bad_outside == 0);
+  });
+}
+
+TEST_CASE("render: the distortion overlay shows sigma1/sigma2 through the colour map", "[vulkan][render]") {
+  with_vulkan([](vk::Context& ctx) {
+    const Setup s(0.1);
+    const cd a(1.1, 0.2), b(0.3, 0.1);
+    const double kappa = (std::abs(a) + std::abs(b)) / (std::abs(a) - std::abs(b));
+    const HarmonicMap map = affine_map(s.cage, a, b, 0);
+    vk::Renderer r(ctx, 160, 160);
+    r.set_mesh(s.mesh);
+    r.set_texture(gradient(64, 48), kRect);
+    const vk::View view = frame_view(s.shape, s.cage, map, 160, 160, 8);
+    for (const double t : {0.0, 0.3, 0.75}) {
+      vk::RenderStyle style;
+      style.overlays = vk::kOverlayDistortion;
+      style.distortion_opacity = 1;
+      style.distortion_lo = kappa - t;  // κ lands at t of the range [κ − t, κ − t + 1]
+      style.distortion_hi = kappa - t + 1;
+      const vk::RgbaImage img = r.render(s.cage, map, view, style);
+      const auto cm = vk::colormap(t);
+      const cd centre = view.to_pixel(a * cd(-0.5, 0) + b * std::conj(cd(-0.5, 0)));
+      const uint8_t* p = img.at(static_cast<int>(centre.real()), static_cast<int>(centre.imag()));
+      INFO("t = " << t << ": pixel " << int(p[0]) << "," << int(p[1]) << "," << int(p[2]) << " colour map "
+                  << cm[0] * 255 << "," << cm[1] * 255 << "," << cm[2] * 255);
+      for (int c = 0; c < 3; ++c) CHECK(std::abs(p[c] - cm[static_cast<size_t>(c)] * 255) <= 2.5);
+    }
+  });
+  // The host colour map is viridis: dark purple to yellow.
+  const auto lo = vk::colormap(0), hi = vk::colormap(1);
+  CHECK(lo[2] > lo[1]);
+  CHECK(hi[0] > 0.9);
+  CHECK(hi[1] > 0.85);
+  CHECK(hi[2] < 0.2);
+}
+
+TEST_CASE("render: boundary lines, handle discs, and the red of an uncertified frame", "[vulkan][render]") {
+  with_vulkan([](vk::Context& ctx) {
+    const Setup s;
+    const int W = 200, H = 160;
+    vk::Renderer r(ctx, W, H);
+    const std::vector<cd> handles = {{-0.6, 0.4}, {0.4, 0.5}};
+    r.set_mesh(s.mesh, handles);
+    const HarmonicMap id = identity_map(s.cage);
+    const vk::View view = vk::View::fit({{-1, -0.75}, {1, 0.75}}, W, H, 16);
+    auto px = [&](const vk::RgbaImage& img, cd w) {
+      const cd q = view.to_pixel(w);
+      return img.at(static_cast<int>(q.real()), static_cast<int>(q.imag()));
+    };
+    vk::RenderStyle style;
+    style.fill = {0.5f, 0.5f, 0.5f, 1};  // no texture: a grey fill
+    style.overlays = vk::kOverlayBoundary | vk::kOverlayHandles;
+    style.boundary_width_px = 3;
+    style.handle_radius_px = 8;
+    style.handle_outline_px = 3;
+    const vk::RgbaImage img = r.render(s.cage, id, view, style);
+    CHECK(!r.has_texture());
+    const uint8_t* grey = px(img, {-0.5, -0.3});
+    CHECK(std::abs(grey[0] - 128) <= 1);
+    CHECK(grey[0] == grey[1]);
+    CHECK(grey[1] == grey[2]);
+    // On the outline and the hole's edge: the boundary colour.
+    for (const cd& on : {cd(0, -0.75), cd(-1, 0.1), cd(0.2, 0.0), cd(0.4, 0.3)}) {
+      const uint8_t* p = px(img, on);
+      INFO("boundary point " << on);
+      CHECK(max_channel_diff(p, std::array<uint8_t, 4>{13, 18, 31, 255}.data()) <= 20);
+    }
+    // Handle centres: the handle colour; the outline ring is dark.
+    for (const cd& h : handles) {
+      const uint8_t* p = px(img, h);
+      CHECK(max_channel_diff(p, std::array<uint8_t, 4>{255, 158, 26, 255}.data()) <= 3);
+      const uint8_t* ring = px(img, h + cd(6.5 / view.pixels_per_unit, 0));
+      CHECK(ring[0] < 100);
+    }
+    // Without overlays, those pixels are the fill or the background.
+    style.overlays = vk::kOverlayNone;
+    const vk::RgbaImage plain = r.render(s.cage, id, view, style);
+    CHECK(max_channel_diff(px(plain, handles[0]), grey) <= 1);
+
+    // Uncertified: red border around the image, the shape tinted red.
+    style.uncertified = true;
+    const vk::RgbaImage red = r.render(s.cage, id, view, style);
+    for (const auto& [x, y] : std::vector<std::pair<int, int>>{{0, 0}, {W - 1, H - 1}, {W / 2, 1}, {1, H / 2}, {W - 2, H / 2}}) {
+      const uint8_t* p = red.at(x, y);
+      INFO("border pixel " << x << ", " << y);
+      CHECK(p[0] > 200);
+      CHECK(p[1] < 30);
+      CHECK(p[2] < 30);
+    }
+    const uint8_t* tinted = px(red, {-0.5, -0.3});
+    CHECK(tinted[0] > tinted[1] + 80);
+    CHECK(tinted[0] > tinted[2] + 80);
+    const uint8_t* bg = px(red, {0.4, 0.0});  // in the hole: still the background, not tinted
+    CHECK(max_channel_diff(bg, std::array<uint8_t, 4>{255, 255, 255, 255}.data()) == 0);
+  });
+}
+
+TEST_CASE("render: float precision, 1 sample, refusals", "[vulkan][render]") {
+  with_vulkan([](vk::Context& ctx) {
+    const Setup s(0.1);
+    vk::RendererOptions o;
+    o.msaa_samples = 1;
+    o.evaluation.precision = vk::Precision::kFloat;
+    vk::Renderer r(ctx, 96, 72, o);
+    CHECK(r.msaa_samples() == 1);
+    CHECK(!r.double_precision());
+    const vk::View view = vk::View::fit({{-1, -0.75}, {1, 0.75}}, 96, 72);
+    CHECK_THROWS_WITH(r.render(s.cage, identity_map(s.cage), view, {}), Contains("no mesh"));
+    r.set_mesh(s.mesh);
+    r.set_texture(gradient(96, 72), kRect);
+    const vk::RgbaImage img = r.render(s.cage, identity_map(s.cage), view, {});
+    CHECK(max_channel_diff(img.at(20, 36), gradient(96, 72).at(20, 36)) <= 2);
+    HarmonicMap bad = identity_map(s.cage);
+    bad.phi.conservativeResize(bad.phi.size() - 1);
+    CHECK_THROWS_AS(r.render(s.cage, bad, view, {}), InputError);
+    vk::RenderStyle style;
+    style.distortion_hi = style.distortion_lo;
+    CHECK_THROWS_WITH(r.render(s.cage, identity_map(s.cage), view, style), Contains("hi > lo"));
+    CHECK_THROWS_AS(r.set_texture(gradient(8, 8), {1, 0, 0, 1}), InputError);
+    TriMesh broken = s.mesh;
+    broken.triangles[0][1] = broken.vertex_count();
+    CHECK_THROWS_WITH(r.set_mesh(broken), Contains("outside"));
+    CHECK_THROWS_AS(vk::Renderer(ctx, 0, 10), InputError);
+  });
+  CHECK_THROWS_AS(vk::View::fit({{0, 0}, {0, 0}}, 10, 10), InputError);
+  CHECK_THROWS_WITH(vk::read_png(std::filesystem::path(HSI_TEST_TMP) / "no_such.png"), Contains("no_such.png"));
+}
+
+TEST_CASE("render: PNG round trip", "[render]") {
+  const vk::RgbaImage img = gradient(37, 21);
+  const auto path = std::filesystem::path(HSI_TEST_TMP) / "render_roundtrip.png";
+  std::filesystem::create_directories(path.parent_path());
+  vk::write_png(path, img);
+  const vk::RgbaImage back = vk::read_png(path);
+  CHECK(back.width == 37);
+  CHECK(back.height == 21);
+  CHECK(back.pixels == img.pixels);
+}
+
+// --- goldens: bundled scenes, a keyframe and interpolated frames ---------------------------
+
+namespace {
+
+struct Bundled {
+  Scene scene;
+  Cage cage;
+  TriMesh mesh;
+  vk::RgbaImage texture;
+  std::array<double, 4> rect;
+  explicit Bundled(const std::string& name) : scene(load_scene(std::filesystem::path(HSI_ASSETS_DIR) / (name + ".json"))) {
+    cage = scene_cage(scene);
+    TriangulateOptions o;
+    o.max_edge = edge_for_vertex_count(scene.shape, 6000);
+    mesh = triangulate(scene.shape, o);
+    texture = vk::read_png(scene.texture_path());
+    const BoundingBox bb = bounding_box(scene.shape);
+    rect = scene.texture_rect.value_or(std::array<double, 4>{bb.lo.real(), bb.lo.imag(), bb.hi.real(), bb.hi.imag()});
+  }
+  std::vector<HarmonicMap> keyframes() const {
+    std::vector<HarmonicMap> out;
+    for (const Keyframe& k : scene.keyframes) {
+      REQUIRE(k.coefficients);
+      out.push_back(*k.coefficients);
+    }
+    return out;
+  }
+};
+
+}  // namespace
+
+TEST_CASE("render goldens: keyframes and interpolated frames of bundled scenes", "[vulkan][render][golden]") {
+  with_vulkan([](vk::Context& ctx) {
+    SECTION("bar_holes: keyframe 1, interpolated t = 0.5 (distortion), uncertified marking") {
+      const Bundled b("bar_holes");
+      const std::vector<HarmonicMap> keys = b.keyframes();
+      vk::Renderer r(ctx, 256, 160);
+      r.set_mesh(b.mesh, b.scene.handles);
+      r.set_texture(b.texture, b.rect);
+      vk::RenderStyle style;
+      style.overlays = vk::kOverlayBoundary | vk::kOverlayHandles;
+      style.boundary_width_px = 1.5f;
+      style.handle_radius_px = 4;
+      style.handle_outline_px = 1;
+      const vk::View key_view = frame_view(b.scene.shape, b.cage, keys[1], 256, 160, 8);
+      check_golden(r.render(b.cage, keys[1], key_view, style), "bar_holes_key1");
+
+      // An interpolated frame, half way between keyframes 0 and 1.
+      const auto setup = make_shape_setup(b.scene, 2000);
+      std::vector<double> times;
+      for (const Keyframe& k : b.scene.keyframes) times.push_back(k.time);
+      Interpolator interp(*setup, times, keys);
+      const FrameResult f = interp.frame(0.5 * (times[0] + times[1]));
+      REQUIRE(f.certified);
+      REQUIRE(!f.keyframe);
+      const vk::View view = frame_view(b.scene.shape, setup->cage, f.map, 256, 160, 8);
+      style.overlays = vk::kOverlayDistortion | vk::kOverlayBoundary;
+      style.distortion_lo = 1;
+      style.distortion_hi = 1.5;
+      check_golden(r.render(setup->cage, f.map, view, style), "bar_holes_t0.5_distortion");
+      style.overlays = vk::kOverlayNone;
+      style.uncertified = true;
+      check_golden(r.render(setup->cage, f.map, view, style), "bar_holes_t0.5_uncertified");
+    }
+    SECTION("sprite_pretzel: the sprite's own alpha, on a transparent background") {
+      const Bundled b("sprite_pretzel");
+      const std::vector<HarmonicMap> keys = b.keyframes();
+      vk::Renderer r(ctx, 192, 192);
+      r.set_mesh(b.mesh, b.scene.handles);
+      r.set_texture(b.texture, b.rect);
+      vk::RenderStyle style;
+      style.background = {0, 0, 0, 0};
+      const HarmonicMap& k = keys.back();
+      check_golden(r.render(b.cage, k, frame_view(b.scene.shape, b.cage, k, 192, 192, 6), style), "pretzel_last_key");
+    }
+  });
+}
