@@ -11,6 +11,7 @@
 
 #include "hsi/compute/dense_eval.h"
 #include "hsi/scene_io.h"
+#include "bench_render.h"
 
 using namespace hsi;
 
@@ -64,6 +65,9 @@ int main(int argc, char** argv) {
   app.add_option("--device", device, "Vulkan device name substring (default: best device)");
   app.add_flag("--float", use_float, "Use the float shader (default: double where supported)");
   app.add_flag("--validation", validation, "Enable the validation layer (slower)");
+  int render_frames = 5;
+  app.add_option("--render-frames", render_frames, "Frames per size for the render rows (0: no render table)")
+      ->capture_default_str();
   CLI11_PARSE(app, argc, argv);
 
   vk::ContextOptions co;
@@ -133,6 +137,7 @@ int main(int argc, char** argv) {
       std::fflush(stdout);
     }
   }
+  if (render_frames > 0) bench::render_table(*ctx, scenes, sizes, render_frames, use_float);
   std::printf("\nload average at the end: %s\n", load_average().c_str());
   if (validation && ctx->validation_log()->count()) {
     std::fprintf(stderr, "%s\n", ctx->validation_log()->summary().c_str());

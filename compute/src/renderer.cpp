@@ -610,6 +610,28 @@ void Renderer::upload_uv() {
 }
 
 RgbaImage Renderer::render(const Cage& cage, const HarmonicMap& map, const View& view, const RenderStyle& style) {
+  frame(cage, map, view, style, true);
+  const auto t_read = Clock::now();
+  RgbaImage out(width_, height_);
+  impl_->readback.read(out.pixels.data(), out.pixels.size());
+  for (size_t i = 0; i < out.pixels.size(); i += 4) {
+    const unsigned a = out.pixels[i + 3];
+    if (a == 255) continue;
+    if (a == 0) {
+      out.pixels[i] = out.pixels[i + 1] = out.pixels[i + 2] = 0;
+      continue;
+    }
+    for (size_t c = 0; c < 3; ++c) out.pixels[i + c] = static_cast<uint8_t>(std::min(255u, (out.pixels[i + c] * 255 + a / 2) / a));
+  }
+  stats_.readback_ms = ms_since(t_read);
+  return out;
+}
+
+void Renderer::draw(const Cage& cage, const HarmonicMap& map, const View& view, const RenderStyle& style) {
+  frame(cage, map, view, style, false);
+}
+
+void Renderer::frame(const Cage& cage, const HarmonicMap& map, const View& view, const RenderStyle& style, bool copy_out) {
   if (points_.empty()) throw InputError("renderer: no mesh (call set_mesh first)");
   if (!(view.pixels_per_unit > 0) || !std::isfinite(view.pixels_per_unit))
     throw InputError("renderer: the view needs a finite positive scale");
@@ -733,6 +755,10 @@ RgbaImage Renderer::render(const Cage& cage, const HarmonicMap& map, const View&
       vkCmdDraw(cmd, 6, static_cast<uint32_t>(handle_count_), 0, 0);
     }
     vkCmdEndRenderPass(cmd);
+    if (!copy_out) {
+      stats_.upload_ms = ms_since(t0);
+      return;
+    }
 
     VkBufferImageCopy copy{};
     copy.imageSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, 1};
@@ -747,21 +773,6 @@ RgbaImage Renderer::render(const Cage& cage, const HarmonicMap& map, const View&
     stats_.upload_ms = ms_since(t0);
   });
   stats_.gpu_ms = ms_since(t0) - stats_.upload_ms;
-
-  const auto t_read = Clock::now();
-  RgbaImage out(width_, height_);
-  r.readback.read(out.pixels.data(), out.pixels.size());
-  for (size_t i = 0; i < out.pixels.size(); i += 4) {
-    const unsigned a = out.pixels[i + 3];
-    if (a == 255) continue;
-    if (a == 0) {
-      out.pixels[i] = out.pixels[i + 1] = out.pixels[i + 2] = 0;
-      continue;
-    }
-    for (size_t c = 0; c < 3; ++c) out.pixels[i + c] = static_cast<uint8_t>(std::min(255u, (out.pixels[i + c] * 255 + a / 2) / a));
-  }
-  stats_.readback_ms = ms_since(t_read);
-  return out;
 }
 
 }  // namespace hsi::vk

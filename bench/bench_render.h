@@ -1,0 +1,119 @@
+// Render rows of bench_vulkan: per frame, the dense evaluation of an n × n grid over
+// the shape and the offscreen rendering of the frame at n × n pixels (the mesh
+// evaluated at f on the GPU and drawn textured with the boundary, 4× MSAA), against
+// the CPU evaluation of the same mesh vertices in the same run.
+#pragma once
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <string>
+#include <vector>
+
+#include "hsi/basis.h"
+#include "hsi/compute/dense_eval.h"
+#include "hsi/compute/renderer.h"
+#include "hsi/scene_io.h"
+#include "hsi/triangulate.h"
+
+namespace hsi::bench {
+
+// f and f_z at the points on the CPU (the reference), in chunks so memory stays bounded.
+inline void cpu_mesh_eval(const Cage& cage, const HarmonicMap& map, const std::vector<cd>& pts, std::vector<cd>& f) {
+  constexpr size_t kChunk = 16384;
+  f.resize(pts.size());
+  for (size_t s = 0; s < pts.size(); s += kChunk) {
+    const size_t n = std::min(kChunk, pts.size() - s);
+    const BasisRows rows = evaluate_basis(cage, std::span<const cd>(pts.data() + s, n), kBasisC | kBasisD);
+    const MapValues v = evaluate_map(rows, map);
+    for (size_t i = 0; i < n; ++i) f[s + i] = v.f(static_cast<Eigen::Index>(i));
+  }
+}
+
+inline void render_table(const vk::Context& ctx, const std::vector<std::string>& scenes, const std::vector<int>& sizes,
+                         int frames, bool use_float) {
+  using Clock = std::chrono::steady_clock;
+  auto ms_since = [](Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); };
+  auto median = [](std::vector<double> v) {
+    std::sort(v.begin(), v.end());
+    return v.empty() ? 0.0 : v[v.size() / 2];
+  };
+  std::printf("\nRendering: per frame at n × n pixels, the render mesh (about n²/50 vertices, as hsi render uses)\n"
+              "evaluated at f on the GPU and drawn with its texture and boundary, 4x MSAA. grid eval: median\n"
+              "evaluate_grid wall time of the n² grid (with readback). draw: median Renderer::draw wall time (evaluate\n"
+              "the mesh + draw + resolve, the frame stays on the device); render: Renderer::render (plus the copy to\n"
+              "host memory and conversion to RGBA). grid eval + draw: the sum, per frame. CPU mesh eval: the CPU\n"
+              "reference evaluate_map at the same mesh vertices, mean; CPU / draw: its ratio to the draw.\n\n");
+  std::printf("| scene | image | mesh vertices | grid eval ms | draw ms | render ms | readback ms | grid eval + draw ms | "
+              "CPU mesh eval ms | CPU / draw |\n|---|---|---|---|---|---|---|---|---|---|\n");
+  vk::RendererOptions ro;
+  ro.evaluation.precision = use_float ? vk::Precision::kFloat : vk::Precision::kAuto;
+  vk::DenseEvalOptions eo = ro.evaluation;
+  eo.skip_outside = true;
+  vk::DenseEvaluator grid_eval(ctx, eo);
+  for (const std::string& path : scenes) {
+    const Scene scene = load_scene(path);
+    const Cage cage = scene_cage(scene);
+    HarmonicMap map = affine_map(cage, {1.1, 0.2}, {0.1, 0.0}, {0.0, 0.0});
+    for (const Keyframe& k : scene.keyframes)
+      if (k.coefficients) map = *k.coefficients;
+    vk::RgbaImage texture;
+    std::array<double, 4> rect{0, 0, 1, 1};
+    if (!scene.texture.empty()) {
+      texture = vk::read_png(scene.texture_path());
+      const BoundingBox bb = bounding_box(scene.shape);
+      rect = scene.texture_rect.value_or(std::array<double, 4>{bb.lo.real(), bb.lo.imag(), bb.hi.real(), bb.hi.imag()});
+    }
+    const std::string name = scene.name.empty() ? path : scene.name;
+    for (int n : sizes) {
+      TriangulateOptions to;
+      to.max_edge = edge_for_vertex_count(scene.shape, std::max(2000, n * n / 50));
+      const TriMesh mesh = triangulate(scene.shape, to);
+      vk::Renderer renderer(ctx, n, n, ro);
+      renderer.set_mesh(mesh, scene.handles);
+      renderer.set_texture(texture, rect);
+      // The frame's view: where the map sends the mesh (CPU, once).
+      std::vector<cd> f;
+      cpu_mesh_eval(cage, map, mesh.vertices, f);
+      BoundingBox box{f[0], f[0]};
+      for (const cd& z : f) {
+        box.lo = {std::min(box.lo.real(), z.real()), std::min(box.lo.imag(), z.imag())};
+        box.hi = {std::max(box.hi.real(), z.real()), std::max(box.hi.imag(), z.imag())};
+      }
+      const vk::View view = vk::View::fit(box, n, n, 0.04 * n);
+      vk::RenderStyle style;
+      style.overlays = vk::kOverlayBoundary;
+      const vk::Grid grid = vk::Grid::covering(bounding_box(scene.shape), n, n);
+
+      grid_eval.evaluate_grid(cage, map, grid, &scene.shape);  // warm-ups
+      renderer.draw(cage, map, view, style);
+      renderer.render(cage, map, view, style);
+      std::vector<double> grid_ms, draw_ms, render_ms, readback_ms, pair_ms;
+      for (int i = 0; i < std::max(frames, 1); ++i) {
+        auto t0 = Clock::now();
+        grid_eval.evaluate_grid(cage, map, grid, &scene.shape);
+        const double g = ms_since(t0);
+        t0 = Clock::now();
+        renderer.draw(cage, map, view, style);
+        const double d = ms_since(t0);
+        t0 = Clock::now();
+        renderer.render(cage, map, view, style);
+        render_ms.push_back(ms_since(t0));
+        readback_ms.push_back(renderer.last_stats().readback_ms);
+        grid_ms.push_back(g);
+        draw_ms.push_back(d);
+        pair_ms.push_back(g + d);
+      }
+      const auto t_cpu = Clock::now();
+      cpu_mesh_eval(cage, map, mesh.vertices, f);
+      const double cpu = ms_since(t_cpu);
+      const double draw = median(draw_ms);
+      std::printf("| %s | %d² | %d | %.2f | %.2f | %.2f | %.2f | %.2f | %.1f | %.1f |\n", name.c_str(), n,
+                  mesh.vertex_count(), median(grid_ms), draw, median(render_ms), median(readback_ms), median(pair_ms),
+                  cpu, cpu / draw);
+      std::fflush(stdout);
+    }
+  }
+}
+
+}  // namespace hsi::bench
