@@ -11,51 +11,78 @@
 
 namespace hsi {
 
+CertificateSegments certificate_segments(const Shape& shape, const BoundarySamples& s) {
+  CertificateSegments g;
+  for (int l = 0; l < shape.loop_count(); ++l) {
+    const Loop& L = shape.loop(l);
+    const int first = static_cast<int>(g.points.size());
+    size_t k = static_cast<size_t>(s.loop_begin[static_cast<size_t>(l)]);
+    const size_t end = static_cast<size_t>(s.loop_begin[static_cast<size_t>(l) + 1]);
+    for (int e = 0; e < static_cast<int>(L.size()); ++e) {
+      g.points.push_back(L[static_cast<size_t>(e)]);
+      g.edge.push_back(e);
+      for (; k < end && s.edge[k] == e; ++k) {
+        if (std::abs(s.points[k] - g.points.back()) < 1e-14 * std::abs(g.points.back()) + 1e-300) continue;
+        g.points.push_back(s.points[k]);
+        g.edge.push_back(e);
+      }
+    }
+    const int count = static_cast<int>(g.points.size()) - first;
+    for (int i = 0; i < count; ++i) {
+      g.next.push_back(first + (i + 1) % count);
+      g.loop.push_back(l);
+    }
+  }
+  return g;
+}
+
+Eigen::VectorXd certificate_jumps(const Cage& cage, const VectorXcd& c, Eigen::VectorXd* rounding) {
+  const int m = cage.vertex_count();
+  Eigen::VectorXd out(m);
+  if (rounding) rounding->resize(m);
+  // δ_j carries a relative error of a few ulps (one complex difference and one
+  // complex division); their difference adds one more rounding.
+  constexpr double u = std::numeric_limits<double>::epsilon() / 2;
+  int off = 0;
+  for (const Loop& z : cage.loops) {
+    const size_t k = z.size();
+    auto delta = [&](size_t j) {  // slope on the edge ending at vertex j
+      const size_t jm = (j + k - 1) % k;
+      return (c(off + static_cast<Eigen::Index>(j)) - c(off + static_cast<Eigen::Index>(jm))) / (z[j] - z[jm]);
+    };
+    for (size_t j = 0; j < k; ++j) {
+      const cd d0 = delta(j), d1 = delta((j + 1) % k);
+      const Eigen::Index i = off + static_cast<Eigen::Index>(j);
+      out(i) = std::abs(d1 - d0);
+      if (rounding) (*rounding)(i) = 16 * u * (std::abs(d0) + std::abs(d1)) + 4 * u * out(i);
+    }
+    off += static_cast<int>(k);
+  }
+  return out;
+}
+
 struct Certifier::Impl {
   const Cage cage;
   int m = 0, N = 0;
-  // Breakpoints, loop by loop; segment i joins breakpoint i to its successor in the loop.
-  std::vector<cd> points;
-  std::vector<int> next, loop, edge;
+  CertificateSegments seg;      // breakpoints; segment i joins breakpoint i to its successor in the loop
   MatrixXcd D, E;               // basis rows at the breakpoints (full columns)
   Eigen::MatrixXd W;            // segments × m: 1 / dist(z_j, σ)²
   Eigen::MatrixXd Wh;           // segments × N: 1 / dist(ρ_i, σ)³
-  std::vector<std::vector<int>> cage_loop_index;  // full index of each cage loop's vertices
 
-  Impl(const Shape& shape, const Cage& c, const BoundarySamples& s) : cage(c) {
+  Impl(const Shape& shape, const Cage& c, const BoundarySamples& s) : cage(c), seg(certificate_segments(shape, s)) {
     m = cage.vertex_count();
     N = cage.hole_count();
-    for (int l = 0; l < shape.loop_count(); ++l) {
-      const Loop& L = shape.loop(l);
-      const int first = static_cast<int>(points.size());
-      size_t k = static_cast<size_t>(s.loop_begin[static_cast<size_t>(l)]);
-      const size_t end = static_cast<size_t>(s.loop_begin[static_cast<size_t>(l) + 1]);
-      for (int e = 0; e < static_cast<int>(L.size()); ++e) {
-        points.push_back(L[static_cast<size_t>(e)]);
-        edge.push_back(e);
-        for (; k < end && s.edge[k] == e; ++k) {
-          if (std::abs(s.points[k] - points.back()) < 1e-14 * std::abs(points.back()) + 1e-300) continue;
-          points.push_back(s.points[k]);
-          edge.push_back(e);
-        }
-      }
-      const int count = static_cast<int>(points.size()) - first;
-      for (int i = 0; i < count; ++i) {
-        next.push_back(first + (i + 1) % count);
-        loop.push_back(l);
-      }
-    }
-    const BasisRows rows = evaluate_basis(cage, points, kBasisD | kBasisE);
+    const BasisRows rows = evaluate_basis(cage, seg.points, kBasisD | kBasisE);
     D = rows.D;
     E = rows.E;
-    const Eigen::Index S = static_cast<Eigen::Index>(points.size());
+    const Eigen::Index S = static_cast<Eigen::Index>(seg.size());
     W.resize(S, m);
     Wh.resize(S, N);
     std::vector<cd> z;
     for (const Loop& l : cage.loops) z.insert(z.end(), l.begin(), l.end());
 #pragma omp parallel for schedule(static)
     for (Eigen::Index i = 0; i < S; ++i) {
-      const cd p = points[static_cast<size_t>(i)], q = points[static_cast<size_t>(next[static_cast<size_t>(i)])];
+      const cd p = seg.points[static_cast<size_t>(i)], q = seg.points[static_cast<size_t>(seg.next[static_cast<size_t>(i)])];
       for (int j = 0; j < m; ++j) {
         const double d = segment_distance(z[static_cast<size_t>(j)], p, q);
         W(i, j) = 1 / (d * d);
@@ -65,27 +92,6 @@ struct Certifier::Impl {
         Wh(i, h) = 1 / (d * d * d);
       }
     }
-    int off = 0;
-    for (const Loop& l : cage.loops) {
-      cage_loop_index.emplace_back();
-      for (size_t j = 0; j < l.size(); ++j) cage_loop_index.back().push_back(off++);
-    }
-  }
-
-  // |S_j| of summation by parts: f_zz = 1/(2πi) Σ S_j/(z_j − w) − Σ φ_log/(w − ρ)².
-  Eigen::VectorXd jump_magnitudes(const VectorXcd& c) const {
-    Eigen::VectorXd out(m);
-    for (size_t l = 0; l < cage.loops.size(); ++l) {
-      const Loop& z = cage.loops[l];
-      const auto& idx = cage_loop_index[l];
-      const size_t k = z.size();
-      auto delta = [&](size_t j) {  // slope on the edge ending at vertex j
-        const size_t jm = (j + k - 1) % k;
-        return (c(idx[j]) - c(idx[jm])) / (z[j] - z[jm]);
-      };
-      for (size_t j = 0; j < k; ++j) out(idx[j]) = std::abs(delta((j + 1) % k) - delta(j));
-    }
-    return out;
   }
 };
 
@@ -94,21 +100,13 @@ Certifier::Certifier(const Shape& shape, const Cage& cage, const BoundarySamples
 Certifier::~Certifier() = default;
 Certifier::Certifier(Certifier&&) noexcept = default;
 Certifier& Certifier::operator=(Certifier&&) noexcept = default;
-int Certifier::breakpoint_count() const { return static_cast<int>(impl_->points.size()); }
+int Certifier::breakpoint_count() const { return static_cast<int>(impl_->seg.size()); }
+const CertificateSegments& Certifier::segments() const { return impl_->seg; }
 
 namespace {
 
 struct Values {
   cd a, b, a1, b1;  // f_z, conj f_zbar and their z-derivatives
-};
-
-struct SegmentOutcome {
-  bool ok = true;
-  double arg = 0;  // change of arg f_z along the segment
-  double margin = std::numeric_limits<double>::infinity();
-  double sigma1 = 0, sigma2 = std::numeric_limits<double>::infinity(), k = 0;
-  long pieces = 0;
-  cd fail_point{0, 0};
 };
 
 }  // namespace
@@ -126,13 +124,17 @@ CertificateResult Certifier::certify(const HarmonicMap& map, const CertificateOp
   const VectorXcd a = I.D * map.phi, b = I.D * map.psi, a1 = I.E * map.phi, b1 = I.E * map.psi;
   // Lipschitz constants of f_zz and of (conj f_zbar)' per segment (bounds on the third derivatives).
   const double inv2pi = 1 / (2 * std::numbers::pi);
-  Eigen::VectorXd logmag(I.N);
-  for (int h = 0; h < I.N; ++h) logmag(h) = std::abs(map.phi(I.m + h));
-  const Eigen::VectorXd La = inv2pi * (I.W * I.jump_magnitudes(map.phi)) + 2 * (I.Wh * logmag);
-  const Eigen::VectorXd Lb = inv2pi * (I.W * I.jump_magnitudes(map.psi)) + 2 * (I.Wh * logmag);
+  // The log columns contribute −φ_log/(w − ρ)² to f_zz and −ψ_log/(w − ρ)² to (conj f_zbar)'.
+  Eigen::VectorXd logmag_phi(I.N), logmag_psi(I.N);
+  for (int h = 0; h < I.N; ++h) {
+    logmag_phi(h) = std::abs(map.phi(I.m + h));
+    logmag_psi(h) = std::abs(map.psi(I.m + h));
+  }
+  const Eigen::VectorXd La = inv2pi * (I.W * certificate_jumps(I.cage, map.phi)) + 2 * (I.Wh * logmag_phi);
+  const Eigen::VectorXd Lb = inv2pi * (I.W * certificate_jumps(I.cage, map.psi)) + 2 * (I.Wh * logmag_psi);
 
-  const Eigen::Index S = static_cast<Eigen::Index>(I.points.size());
-  std::vector<SegmentOutcome> out(static_cast<size_t>(S));
+  const Eigen::Index S = static_cast<Eigen::Index>(I.seg.size());
+  std::vector<SegmentCertificate> out(static_cast<size_t>(S));
   std::atomic<bool> stop{false};
 
   // f_z, conj f_zbar and their derivatives at one point, straight from the cage
@@ -176,7 +178,7 @@ CertificateResult Certifier::certify(const HarmonicMap& map, const CertificateOp
   // Proves (b) and the arg condition on [p, q] from values at its ends, subdividing
   // (new basis rows at midpoints; the parent's Lipschitz constants stay valid).
   auto prove = [&](auto&& self, cd p, cd q, const Values& vp, const Values& vq, double lipA, double lipB, int depth,
-                   SegmentOutcome& o) -> void {
+                   SegmentCertificate& o) -> void {
     const double len = std::abs(q - p);
     const double fzz_max = (std::abs(vp.a1) + std::abs(vq.a1)) / 2 + lipA * len / 2;  // bound of |f_zz| on σ
     const double bz_max = (std::abs(vp.b1) + std::abs(vq.b1)) / 2 + lipB * len / 2;
@@ -215,28 +217,43 @@ CertificateResult Certifier::certify(const HarmonicMap& map, const CertificateOp
 #pragma omp parallel for schedule(dynamic, 64)
   for (Eigen::Index i = 0; i < S; ++i) {
     if (stop.load(std::memory_order_relaxed)) continue;
-    const size_t u = static_cast<size_t>(i), v = static_cast<size_t>(I.next[u]);
+    const size_t u = static_cast<size_t>(i), v = static_cast<size_t>(I.seg.next[u]);
     const Values vp{a(i), b(i), a1(i), b1(i)};
     const Eigen::Index j = static_cast<Eigen::Index>(v);
     const Values vq{a(j), b(j), a1(j), b1(j)};
-    SegmentOutcome& o = out[u];
-    prove(prove, I.points[u], I.points[v], vp, vq, La(i), Lb(i), 0, o);
+    SegmentCertificate& o = out[u];
+    prove(prove, I.seg.points[u], I.seg.points[v], vp, vq, La(i), Lb(i), 0, o);
     if (!o.ok && opt.stop_at_first_failure) stop.store(true, std::memory_order_relaxed);
   }
 
+  std::vector<double> abs_a(static_cast<size_t>(S)), abs_b(static_cast<size_t>(S));
+  for (Eigen::Index i = 0; i < S; ++i) {
+    abs_a[static_cast<size_t>(i)] = std::abs(a(i));
+    abs_b[static_cast<size_t>(i)] = std::abs(b(i));
+  }
+  return reduce_certificate(I.seg, out, abs_a, abs_b);
+}
+
+CertificateResult reduce_certificate(const CertificateSegments& seg, std::span<const SegmentCertificate> out,
+                                     std::span<const double> abs_a, std::span<const double> abs_b) {
+  const size_t S = seg.size();
+  if (out.size() != S || abs_a.size() != S || abs_b.size() != S)
+    throw InputError("certificate: " + std::to_string(out.size()) + " segment outcomes and " +
+                     std::to_string(abs_a.size()) + " breakpoint values for " + std::to_string(S) + " segments");
+  CertificateResult r;
   r.certified = true;
   double arg_total = 0;
   r.min_margin = std::numeric_limits<double>::infinity();
   r.sigma2_min = std::numeric_limits<double>::infinity();
   r.observed_sigma2_min = std::numeric_limits<double>::infinity();
-  for (Eigen::Index i = 0; i < S; ++i) {
-    const SegmentOutcome& o = out[static_cast<size_t>(i)];
+  for (size_t i = 0; i < S; ++i) {
+    const SegmentCertificate& o = out[i];
     r.segments++;
     r.subdivisions += std::max<long>(0, o.pieces - 1);
     if (!o.ok && r.certified) {
       r.certified = false;
-      r.fail_loop = I.loop[static_cast<size_t>(i)];
-      r.fail_edge = I.edge[static_cast<size_t>(i)];
+      r.fail_loop = seg.loop[i];
+      r.fail_edge = seg.edge[i];
       r.fail_point = o.fail_point;
     }
     arg_total += o.arg;
@@ -244,13 +261,17 @@ CertificateResult Certifier::certify(const HarmonicMap& map, const CertificateOp
     r.sigma1_max = std::max(r.sigma1_max, o.sigma1);
     r.sigma2_min = std::min(r.sigma2_min, o.sigma2);
     r.k_max = std::max(r.k_max, o.k);
-    const double aa = std::abs(a(i)), bb = std::abs(b(i));
+    const double aa = abs_a[i], bb = abs_b[i];
     r.observed_sigma1_max = std::max(r.observed_sigma1_max, aa + bb);
     r.observed_sigma2_min = std::min(r.observed_sigma2_min, aa - bb);
     r.observed_k_max = std::max(r.observed_k_max, bb / aa);
     const double s1 = aa + bb, s2 = aa - bb;
     r.observed_isometric_max = std::max(r.observed_isometric_max, 0.5 * (s1 * s1 + 1 / (s1 * s1) + s2 * s2 + 1 / (s2 * s2)));
   }
+  return finish_certificate(std::move(r), arg_total);
+}
+
+CertificateResult finish_certificate(CertificateResult r, double arg_total) {
   if (!r.certified) {
     std::ostringstream s;
     s.precision(6);

@@ -7,8 +7,11 @@
 // This is the CPU reference that every other backend is checked against.
 #pragma once
 
+#include <limits>
 #include <memory>
+#include <span>
 #include <string>
+#include <vector>
 
 #include "hsi/harmonic_map.h"
 #include "hsi/samples.h"
@@ -40,6 +43,46 @@ struct CertificateResult {
   long segments = 0, subdivisions = 0;
 };
 
+// --- The certificate's parts, shared by every backend (the CPU Certifier below and
+// the GPU one in compute/include/hsi/compute/dense_certify.h), so that both work on
+// the same segments and reduce to the same verdict.
+
+// The boundary broken at polygon vertices and samples (a sample equal to its edge's
+// first vertex is dropped), loop by loop. Segment i joins points[i] to points[next[i]]
+// (the next breakpoint of the same loop) and lies on polygon edge edge[i] of loop loop[i].
+struct CertificateSegments {
+  std::vector<cd> points;
+  std::vector<int> next, loop, edge;
+  size_t size() const { return points.size(); }
+};
+CertificateSegments certificate_segments(const Shape& shape, const BoundarySamples& samples);
+
+// |S_j| per cage vertex (full column index), from summation by parts over each cage
+// loop: S_j = δ_{j+1} − δ_j, δ_j = (c_j − c_{j−1}) / (z_j − z_{j−1}) (math.md §6).
+// With `rounding`: also an upper bound on the floating-point error of each |S_j|.
+Eigen::VectorXd certificate_jumps(const Cage& cage, const VectorXcd& coefficients, Eigen::VectorXd* rounding = nullptr);
+
+// What the Lipschitz test with adaptive subdivision found on one segment: its pieces
+// in depth-first order, up to the first one that failed.
+struct SegmentCertificate {
+  bool ok = true;   // (b) and the arg condition proved on every piece (also: never tried, stopped early)
+  double arg = 0;   // change of arg f_z along the proved pieces
+  double margin = std::numeric_limits<double>::infinity();  // min over pieces of (lower |f_z| − upper |f_zbar|)
+  double sigma1 = 0, sigma2 = std::numeric_limits<double>::infinity(), k = 0;  // certified bounds over the pieces
+  long pieces = 0;
+  cd fail_point{0, 0};  // midpoint of the failing piece
+};
+
+// The verdict from every segment's outcome and |f_z|, |f_zbar| at each breakpoint
+// (= the start of each segment): the first failing segment in breakpoint order names
+// the failure; otherwise the argument principle on the summed arg increments.
+CertificateResult reduce_certificate(const CertificateSegments& segments, std::span<const SegmentCertificate> outcomes,
+                                     std::span<const double> abs_fz, std::span<const double> abs_fzbar_conj);
+// The last step of every backend's reduction: from a result whose verdict (b), failing
+// place and bounds are filled in, and the total change of arg f_z over ∂Ω, the reason
+// text, the winding number (argument principle) and the conformal bound.
+CertificateResult finish_certificate(CertificateResult partial, double arg_total);
+
 // Precomputed per shape and cage: the boundary broken at polygon vertices and
 // samples, the basis rows there, and the distance weights of the Lipschitz bound.
 class Certifier {
@@ -51,6 +94,7 @@ class Certifier {
 
   CertificateResult certify(const HarmonicMap& map, const CertificateOptions& options = {}) const;
   int breakpoint_count() const;
+  const CertificateSegments& segments() const;
 
  private:
   struct Impl;
