@@ -1,0 +1,78 @@
+// Dense certification on the GPU (shaders/certify.comp): the local injectivity
+// certificate of hsi::Certifier (engine/include/hsi/certificate.h, the CPU
+// reference) with one shader invocation per boundary segment. Same segments
+// (hsi::certificate_segments), same Lipschitz bound, same adaptive subdivision
+// (depth first, the same depth cap and per-segment piece budget), same argument
+// principle, reduced on the host by hsi::reduce_certificate into the same
+// CertificateResult: verdict, failing loop / edge / point, margin and bounds.
+//
+// Precision: double only. The device must have shaderFloat64 (lavapipe, NVIDIA and
+// AMD desktop GPUs do); without it the constructor throws VulkanError: use the CPU
+// Certifier there. A float version is not offered because it could not keep the
+// certificate sound.
+//
+// Soundness: the GPU test is the CPU's with explicit rounding allowances (error
+// bounds on the evaluated f_z, f_zbar and derivatives, on the distances, Lipschitz
+// constants and the few operations of each bound), all on the conservative side. So
+// it never certifies a piece the CPU's exact-math test would reject; bounds agree
+// with the CPU's to ~1e-12 relative (tests demand 1e-9), and a verdict can differ
+// only for a map whose CPU margin is within ~1e-12 of zero (relative to |f_z|), where
+// the GPU answers "not certified".
+#pragma once
+
+#include <vector>
+
+#include "hsi/certificate.h"
+#include "hsi/compute/vulkan_context.h"
+
+namespace hsi::vk {
+
+// Host wall-clock times of the last certify() call, in milliseconds.
+struct DenseCertifyStats {
+  double upload_ms = 0;    // packing and writing the coefficients and jump bounds
+  double gpu_ms = 0;       // submit to fence: both passes (breakpoint values, segments)
+  double readback_ms = 0;  // reading the segment outcomes and reducing them
+};
+
+// Per segment, as the shader reports it (finer than SegmentCertificate::ok).
+enum class SegmentStatus : uint32_t {
+  kCertified = 0,  // every piece proved
+  kFolds = 1,      // |f_zbar| >= |f_z| at an end of the failing piece: a real fold
+  kUndecided = 2,  // the depth cap or the piece budget was reached
+  kSkipped = 3,    // not started: another segment had failed (stop_at_first_failure)
+  kStopped = 4,    // interrupted: another segment had failed (stop_at_first_failure)
+};
+
+class DenseCertifier {
+ public:
+  // Precomputes the segments and uploads them. The context must outlive this.
+  // Throws VulkanError if the device has no shaderFloat64.
+  DenseCertifier(const Context& context, const Shape& shape, const Cage& cage, const BoundarySamples& samples);
+
+  // As Certifier::certify. The map must have m + N coefficients (else InputError);
+  // options.max_depth must be in [0, kMaxDepth] (else InputError).
+  CertificateResult certify(const HarmonicMap& map, const CertificateOptions& options = {});
+
+  static constexpr int kMaxDepth = 31;  // the shader's explicit stack holds 32 entries
+
+  const CertificateSegments& segments() const { return segments_; }
+  int breakpoint_count() const { return static_cast<int>(segments_.size()); }
+  // The per-segment outcomes and statuses of the last certify() call.
+  const std::vector<SegmentCertificate>& last_segments() const { return outcomes_; }
+  const std::vector<SegmentStatus>& last_status() const { return status_; }
+  const DenseCertifyStats& last_stats() const { return stats_; }
+
+ private:
+  const Context* context_;
+  Cage cage_;
+  CertificateSegments segments_;
+  ComputePipeline pipeline_;
+  DescriptorSet set_;
+  std::vector<uint32_t> loops_host_;
+  Buffer loops_, geom_, points_, next_, values_, out_, control_, readback_;
+  std::vector<SegmentCertificate> outcomes_;
+  std::vector<SegmentStatus> status_;
+  DenseCertifyStats stats_;
+};
+
+}  // namespace hsi::vk
