@@ -264,17 +264,21 @@ void check_frames_match(const Scene& scene, const std::string& scene_path, const
            std::to_string(c.hole_count()) + " holes (" + std::to_string(c.vertex_count() + c.hole_count()) +
            " coefficients per map)";
   };
-  bool same = sc.loops.size() == ff.cage.loops.size() && sc.hole_points.size() == ff.cage.hole_points.size();
+  bool sizes = sc.loops.size() == ff.cage.loops.size() && sc.hole_points.size() == ff.cage.hole_points.size();
+  for (size_t l = 0; sizes && l < sc.loops.size(); ++l) sizes = sc.loops[l].size() == ff.cage.loops[l].size();
+  if (!sizes)
+    throw InputError(frames_path + " does not belong to " + scene_path + ": its frames are maps over a cage with " +
+                     describe(ff.cage) + ", the scene's cage has " + describe(sc) +
+                     "; run hsi interpolate on this scene again");
+  bool same = true;
   const double tol = 1e-9 * std::max(1.0, bounding_box(scene.shape).diagonal());
-  for (size_t l = 0; same && l < sc.loops.size(); ++l) {
-    same = sc.loops[l].size() == ff.cage.loops[l].size();
+  for (size_t l = 0; same && l < sc.loops.size(); ++l)
     for (size_t i = 0; same && i < sc.loops[l].size(); ++i) same = std::abs(sc.loops[l][i] - ff.cage.loops[l][i]) <= tol;
-  }
   for (size_t i = 0; same && i < sc.hole_points.size(); ++i) same = std::abs(sc.hole_points[i] - ff.cage.hole_points[i]) <= tol;
   if (!same)
-    throw InputError(frames_path + " does not belong to " + scene_path + ": the frames were computed over a cage with " +
-                     describe(ff.cage) + ", the scene's cage has " + describe(sc) +
-                     " (or the same sizes at other positions); run hsi interpolate on this scene again");
+    throw InputError(frames_path + " does not belong to " + scene_path +
+                     ": its cage has the scene's sizes but other vertex positions (the scene or its cage changed since "
+                     "hsi interpolate ran); run hsi interpolate on this scene again");
 }
 
 void run_render(const Opts& o) {
