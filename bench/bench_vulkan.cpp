@@ -1,7 +1,8 @@
 // Benchmark of the Vulkan dense evaluation (compute/dense_eval.h) against the CPU
 // reference (hsi::evaluate_map at the same points) in the same run: grids of 256²,
-// 1024², 2048² over a scene's shape, ms per frame and the ratio. Prints the device
-// and a Markdown table. Not a test: timings only.
+// 1024², 2048² over a scene's shape, ms per frame and the ratio. Then dense
+// certification (compute/dense_certify.h) against the CPU hsi::Certifier on the
+// scene's keyframes. Prints the device and Markdown tables. Not a test: timings only.
 #include <CLI/CLI.hpp>
 #include <algorithm>
 #include <chrono>
@@ -9,6 +10,8 @@
 #include <cstdlib>
 #include <omp.h>
 
+#include "hsi/certificate.h"
+#include "hsi/compute/dense_certify.h"
 #include "hsi/compute/dense_eval.h"
 #include "hsi/scene_io.h"
 #include "bench_render.h"
@@ -49,6 +52,59 @@ void cpu_evaluate(const Cage& cage, const HarmonicMap& map, const std::vector<cd
   }
 }
 
+// Dense certification vs the CPU Certifier on each scene's keyframes: median ms per
+// map over `frames` runs of every keyframe, both backends in the same run.
+void certification_table(const vk::Context& ctx, const std::vector<std::string>& scenes, int frames, int samples) {
+  std::printf("\nCertification: the injectivity certificate of each keyframe map (breakpoint values, Lipschitz\n"
+              "bounds with adaptive subdivision, argument principle). GPU ms/map: median certify() wall time\n"
+              "(upload, both dispatches, readback, reduction); dispatch ms: submit to fence. CPU ms/map: median\n"
+              "hsi::Certifier::certify. Agree: identical verdicts and failing segments; bound diff: max difference\n"
+              "of sigma1 max and sigma2 min relative to sigma1 max, and of k max.\n\n");
+  std::printf("| scene | segments | m + N | maps | certified | GPU ms/map | dispatch ms | CPU ms/map | CPU / GPU | agree | "
+              "bound diff |\n|---|---|---|---|---|---|---|---|---|---|---|\n");
+  for (const std::string& path : scenes) {
+    const Scene scene = load_scene(path);
+    const Cage cage = scene_cage(scene);
+    const BoundarySamples g = sample_boundary(scene.shape, samples > 0 ? samples : scene.samples);
+    std::vector<HarmonicMap> maps;
+    for (const Keyframe& k : scene.keyframes)
+      if (k.coefficients) maps.push_back(*k.coefficients);
+    if (maps.empty()) maps.push_back(affine_map(cage, {1.1, 0.2}, {0.1, 0.0}, {0.0, 0.0}));
+    const Certifier cpu(scene.shape, cage, g);
+    vk::DenseCertifier gpu(ctx, scene.shape, cage, g);
+    std::vector<double> gpu_ms, dispatch_ms, cpu_ms;
+    int certified = 0, agree = 0;
+    double bound_diff = 0;
+    for (const HarmonicMap& map : maps) {
+      CertificateResult rg = gpu.certify(map), rc;  // warm-up
+      for (int i = 0; i < frames; ++i) {
+        auto t0 = Clock::now();
+        rg = gpu.certify(map);
+        gpu_ms.push_back(ms_since(t0));
+        dispatch_ms.push_back(gpu.last_stats().gpu_ms);
+        t0 = Clock::now();
+        rc = cpu.certify(map);
+        cpu_ms.push_back(ms_since(t0));
+      }
+      certified += rg.certified;
+      agree += rg.certified == rc.certified && rg.fail_loop == rc.fail_loop && rg.fail_edge == rc.fail_edge;
+      if (rc.certified && rg.certified)
+        bound_diff = std::max({bound_diff, std::abs(rg.k_max - rc.k_max),
+                               std::max(std::abs(rg.sigma1_max - rc.sigma1_max), std::abs(rg.sigma2_min - rc.sigma2_min)) /
+                                   rc.sigma1_max});
+    }
+    auto median = [](std::vector<double> v) {
+      std::sort(v.begin(), v.end());
+      return v[v.size() / 2];
+    };
+    const double tg = median(gpu_ms), tc = median(cpu_ms);
+    std::printf("| %s | %d | %d | %zu | %d | %.2f | %.2f | %.2f | %.2f | %d/%zu | %.1e |\n",
+                scene.name.empty() ? path.c_str() : scene.name.c_str(), gpu.breakpoint_count(), basis_size(cage),
+                maps.size(), certified, tg, median(dispatch_ms), tc, tc / tg, agree, maps.size(), bound_diff);
+    std::fflush(stdout);
+  }
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -65,6 +121,10 @@ int main(int argc, char** argv) {
   app.add_option("--device", device, "Vulkan device name substring (default: best device)");
   app.add_flag("--float", use_float, "Use the float shader (default: double where supported)");
   app.add_flag("--validation", validation, "Enable the validation layer (slower)");
+  int certify_frames = 3, certify_samples = 0;
+  app.add_option("--certify-frames", certify_frames, "Certifications per keyframe and backend (0: no certification table)")
+      ->capture_default_str();
+  app.add_option("--certify-samples", certify_samples, "|G| for the certificate (0: the scene's)")->capture_default_str();
   int render_frames = 5;
   app.add_option("--render-frames", render_frames, "Frames per size for the render rows (0: no render table)")
       ->capture_default_str();
@@ -137,6 +197,11 @@ int main(int argc, char** argv) {
       std::fflush(stdout);
     }
   }
+  if (certify_frames > 0 && !ctx->info().float64)
+    std::printf("\nCertification: skipped, %s has no shaderFloat64 (the dense certificate is double only)\n",
+                ctx->info().name.c_str());
+  else if (certify_frames > 0)
+    certification_table(*ctx, scenes, certify_frames, certify_samples);
   if (render_frames > 0) bench::render_table(*ctx, scenes, sizes, render_frames, use_float);
   std::printf("\nload average at the end: %s\n", load_average().c_str());
   if (validation && ctx->validation_log()->count()) {
