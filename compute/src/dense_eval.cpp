@@ -193,15 +193,17 @@ DenseField DenseEvaluator::run(const Job& job) {
     out.height = job.grid->height;
   }
   const bool mask = job.shape != nullptr;
-  out.f.resize(total);
-  out.f_z.resize(total);
-  out.fzbar_conj.resize(total);
-  out.sigma1.resize(total);
-  out.sigma2.resize(total);
-  out.distortion.resize(total);
-  out.dirichlet.resize(total);
-  out.det_sign.resize(total);
-  if (mask) out.inside.resize(total);
+  if (!job.record_into) {  // record_points leaves the results on the device
+    out.f.resize(total);
+    out.f_z.resize(total);
+    out.fzbar_conj.resize(total);
+    out.sigma1.resize(total);
+    out.sigma2.resize(total);
+    out.distortion.resize(total);
+    out.dirichlet.resize(total);
+    out.det_sign.resize(total);
+    if (mask) out.inside.resize(total);
+  }
   if (total == 0) return out;
 
   // --- pack the cage, coefficients and mask shape --------------------------------------
