@@ -19,7 +19,7 @@
 // their rounding, and every bound formula gets an absolute allowance for its own few
 // operations. So a piece passes here only if it passes the reference's exact-math
 // test with room to spare for the difference between the two evaluations; the
-// verdicts differ only where the reference's margin is within ~1e-12 of zero
+// verdicts differ only where the reference's margin is within ~1e-11 of zero
 // relative to |f_z|. Assumes IEEE double +, -, *, /, sqrt (lavapipe, NVIDIA, AMD)
 // and hsi_ln / hsi_atan2 good to a few ulps (hsi_complex.glsl).
 #version 460
