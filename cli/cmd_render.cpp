@@ -229,8 +229,14 @@ double nice_upper(double hi) {
 // The colour bar of the distortion overlay, with its range, centred in the band of
 // height `area` at the bottom of the image that the shape never enters.
 void draw_legend(cairo_t* cr, int W, int H, double area, double lo, double hi, double font) {
-  const double bar_w = std::min(0.6 * W, 28 * font), bar_h = 0.9 * font;
-  const double x0 = 0.5 * (W - bar_w), y0 = H - 0.5 * area - 1.05 * font;  // bar + tick labels: 2.1 font tall
+  const std::string caption = "conformal distortion \xcf\x83\xe2\x82\x81/\xcf\x83\xe2\x82\x82";  // σ₁/σ₂
+  const double caption_w = text_width(cr, caption, 0.85 * font, false);
+  // The caption left of the bar where there is room, else above it.
+  const bool beside = W - caption_w - 4 * font >= 10 * font;
+  const double bar_w = beside ? std::min(28 * font, W - caption_w - 4 * font) : std::min(28 * font, W - 4 * font);
+  const double bar_h = 0.9 * font;
+  const double x0 = beside ? 0.5 * (W + caption_w + 0.8 * font - bar_w) : 0.5 * (W - bar_w);
+  const double y0 = H - 0.5 * area - (beside ? 1.05 : 0.2) * font;  // bar + tick labels: 2.1 font tall
   cairo_pattern_t* grad = cairo_pattern_create_linear(x0, 0, x0 + bar_w, 0);
   for (int i = 0; i <= 32; ++i) {
     const auto c = vk::colormap(i / 32.0);
@@ -252,9 +258,10 @@ void draw_legend(cairo_t* cr, int W, int H, double area, double lo, double hi, d
     const std::string s = fmt((hi - lo) / 4 < 0.01 ? "%.4f" : (hi - lo) / 4 < 0.1 ? "%.3f" : "%.2f", v);
     text(cr, x - 0.5 * text_width(cr, s, 0.8 * font, false), y0 + bar_h + 1.2 * font, s, 0.8 * font, false, 0.15, 0.15, 0.15);
   }
-  const std::string caption = "conformal distortion \xcf\x83\xe2\x82\x81/\xcf\x83\xe2\x82\x82";  // σ₁/σ₂
-  text(cr, x0 - text_width(cr, caption, 0.85 * font, false) - 0.8 * font, y0 + 0.85 * bar_h, caption, 0.85 * font, false,
-       0.15, 0.15, 0.15);
+  if (beside)
+    text(cr, x0 - caption_w - 0.8 * font, y0 + 0.85 * bar_h, caption, 0.85 * font, false, 0.15, 0.15, 0.15);
+  else
+    text(cr, 0.5 * (W - caption_w), y0 - 0.5 * font, caption, 0.85 * font, false, 0.15, 0.15, 0.15);
 }
 
 void check_frames_match(const Scene& scene, const std::string& scene_path, const FrameFile& ff, const std::string& frames_path) {
