@@ -11,6 +11,8 @@ void register_import_png(CLI::App& app);
 void register_import_glyph(CLI::App& app);
 void register_keyframes(CLI::App& app);
 void register_interpolate(CLI::App& app);
+void register_bake(CLI::App& app);
+void register_export(CLI::App& app);
 void register_render(CLI::App& app);
 
 }  // namespace hsi::cli

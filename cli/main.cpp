@@ -17,6 +17,8 @@ int main(int argc, char** argv) {
   hsi::cli::register_import_glyph(app);
   hsi::cli::register_keyframes(app);
   hsi::cli::register_interpolate(app);
+  hsi::cli::register_bake(app);
+  hsi::cli::register_export(app);
   hsi::cli::register_render(app);
   try {
     app.parse(argc, argv);

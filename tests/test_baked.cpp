@@ -22,8 +22,8 @@ struct BakedFixture {
   BakedFixture() {
     scene = load_scene(std::filesystem::path(HSI_ASSETS_DIR) / "two_holes.json");
     SceneSequenceOptions o;
-    o.frames = 7;
-    o.samples = 2000;
+    o.frames = 5;
+    o.samples = 1000;
     seq = interpolate_scene(scene, o);
     for (const FrameResult& f : seq.frames) REQUIRE(f.certified);
   }

@@ -1,0 +1,85 @@
+// hsi bake SCENE -o seq.hsib: interpolates a scene (or takes the frames of an earlier
+// hsi interpolate) and bakes it for playback by the dependency-free runtime
+// (engine/include/hsi/baked_runtime.h documents the format).
+#include <unistd.h>
+
+#include <cstdio>
+
+#include "commands.h"
+#include "hsi/baked.h"
+#include "hsi/scene_sequence.h"
+#include "sequence_source.h"
+
+namespace hsi::cli {
+
+// Frames from FROM (a .hsif file or a folder holding frames.hsif), checked against the scene's cage.
+FrameFile frames_from(const std::string& from, Scene& scene) {
+  std::filesystem::path p(from);
+  if (std::filesystem::is_directory(p)) p /= "frames.hsif";
+  FrameFile ff = read_frames(p);
+  const Cage cage = scene.cage ? *scene.cage : build_cage(scene.shape, scene.cage_options);
+  if (ff.cage.loops != cage.loops || ff.cage.hole_points != cage.hole_points)
+    throw InputError(p.string() + ": its cage is not the scene's (were these frames computed for another scene?)");
+  return ff;
+}
+
+// Interpolates with a progress line on stderr; returns the sequence.
+SceneSequence interpolate_with_progress(Scene& scene, const SceneSequenceOptions& o, const char* tag) {
+  const bool tty = isatty(fileno(stderr));
+  SceneSequence seq = interpolate_scene(scene, o, [&](const FrameResult& f, int i, int n) {
+    if (tty)
+      std::fprintf(stderr, "\r[%s] frame %d/%d  t = %.4f  %s   ", tag, i + 1, n, f.t, f.certified ? "certified" : "NOT CERTIFIED");
+    else if ((i + 1) % std::max(1, n / 10) == 0 || i + 1 == n)
+      std::fprintf(stderr, "[%s] frame %d/%d\n", tag, i + 1, n);
+  });
+  if (tty) std::fprintf(stderr, "\n");
+  return seq;
+}
+
+void register_bake(CLI::App& app) {
+  struct Opts {
+    std::string scene, out = "sequence.hsib", from;
+    int frames = 120, samples = 0;
+    double ratio = 0;
+    bool f64 = false;
+  };
+  auto o = std::make_shared<Opts>();
+  CLI::App* cmd = app.add_subcommand(
+      "bake",
+      "Bake a scene's interpolation for playback in a game: a compact .hsib file (the cage once, then per frame the\n"
+      "reduced coefficients and pose, a few KB) that the dependency-free runtime hsi/baked_runtime.h plays back on\n"
+      "any mesh's vertices with one small matrix product per frame.");
+  cmd->add_option("scene", o->scene, "Scene file (.json) with two or more keyframes")->required()->check(CLI::ExistingFile);
+  cmd->add_option("-o,--output", o->out, "Baked file to write")->capture_default_str();
+  cmd->add_option("--frames", o->frames, "Frames over the keyframes' time range")->capture_default_str()->check(CLI::Range(2, 1000000));
+  cmd->add_option("--samples", o->samples, "Boundary samples |G| (default: the scene's)")->check(CLI::Range(100, 10000000));
+  cmd->add_option("--ratio", o->ratio, "Hessian sample ratio r (default: the scene's)")->check(CLI::Range(1e-6, 1.0));
+  cmd->add_option("--from", o->from, "Bake the frames of an earlier hsi interpolate (its folder or frames.hsif) instead");
+  cmd->add_flag("--f64", o->f64, "Store per-frame coefficients as f64 (default f32, about 1e-7 of the shape's size)");
+  cmd->callback([o] {
+    Scene scene = load_scene(o->scene);
+    FrameFile ff;
+    if (!o->from.empty()) {
+      ff = frames_from(o->from, scene);
+    } else {
+      SceneSequenceOptions so;
+      so.frames = o->frames;
+      so.samples = o->samples;
+      so.hessian_ratio = o->ratio;
+      ff = interpolate_with_progress(scene, so, "bake").frame_file();
+    }
+    BakeOptions bo;
+    bo.single_precision = !o->f64;
+    const std::string bytes = encode_baked(scene.shape, ff, bo);
+    write_file_atomic(o->out, bytes);
+    int uncertified = 0;
+    for (const StoredFrame& f : ff.frames) uncertified += !f.certified;
+    std::printf("wrote %s: %zu frames, %zu bytes (%.1f KB per frame), %d uncertified\n", o->out.c_str(), ff.frames.size(),
+                bytes.size(), static_cast<double>(bytes.size()) / 1024.0 / static_cast<double>(std::max<size_t>(1, ff.frames.size())),
+                uncertified);
+    if (uncertified > 0)
+      throw std::runtime_error(std::to_string(uncertified) + " frame(s) could not be certified; they are flagged in the baked file");
+  });
+}
+
+}  // namespace hsi::cli

@@ -1,0 +1,15 @@
+// Where hsi bake and hsi export get their frames: an interpolation run now (with a
+// progress line), or the frames of an earlier hsi interpolate (cmd_bake.cpp).
+#pragma once
+
+#include <string>
+
+#include "hsi/scene_sequence.h"
+
+namespace hsi::cli {
+
+// FROM is a .hsif file or a folder holding frames.hsif; its cage must be the scene's.
+FrameFile frames_from(const std::string& from, Scene& scene);
+SceneSequence interpolate_with_progress(Scene& scene, const SceneSequenceOptions& options, const char* tag);
+
+}  // namespace hsi::cli
