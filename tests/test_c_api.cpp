@@ -194,6 +194,7 @@ TEST_CASE("C API: versions, status codes and messages", "[c_api]") {
   std::vector<uint8_t> rgba(64 * 64 * 4, 0);
   const char* why = nullptr;
   const bool require_vulkan = std::getenv("HSI_REQUIRE_VULKAN") && HSI_TEST_CAPI_RENDER;
+  if (require_vulkan) setenv("HSI_VULKAN_VALIDATION", "1", 1);  // any validation message fails the render
   if (hsi_render_available(&why)) {
     REQUIRE(hsi_sequence_render(seq, 0, &ro, rgba.data(), 0) == HSI_OK);
     int coloured = 0;

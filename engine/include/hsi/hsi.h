@@ -140,7 +140,8 @@ HSI_API hsi_status hsi_scene_add_keyframe(hsi_scene* scene, double time, const d
                                           hsi_keyframe_report* report);
 /* [per handle] Makes every keyframe of the scene certified: keyframes loaded with
  * coefficients are certified, those with only targets are solved. Called by
- * hsi_interpolator_create too. HSI_ERROR_NOT_CERTIFIED names a keyframe that fails. */
+ * hsi_interpolator_create too. HSI_ERROR_INPUT names a keyframe that cannot be made
+ * certified (and why). */
 HSI_API hsi_status hsi_scene_solve_keyframes(hsi_scene* scene);
 /* [per handle] The scene as JSON (with solved keyframes' coefficients): copies up to
  * capacity bytes (NUL-terminated when it fits), *length = bytes needed without the
@@ -253,7 +254,9 @@ HSI_API int hsi_render_available(const char** why);
 /* [per handle] Renders frame `frame` (textured with the scene's texture) into rgba:
  * height rows of width RGBA8 pixels (straight alpha), row_stride bytes apart
  * (0 = 4 * width), top row first. HSI_ERROR_UNSUPPORTED without Vulkan. The first
- * call sets up the renderer (seconds on a CPU device); later calls reuse it. */
+ * call sets up the renderer (seconds on a CPU device); later calls reuse it. With the
+ * environment variable HSI_VULKAN_VALIDATION=1 the Khronos validation layer is on
+ * and any message it reports fails the call (HSI_ERROR_INTERNAL, with the messages). */
 HSI_API hsi_status hsi_sequence_render(hsi_sequence* sequence, uint32_t frame, const hsi_render_options* options,
                                        uint8_t* rgba, size_t row_stride);
 
