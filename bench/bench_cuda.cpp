@@ -26,29 +26,6 @@ namespace {
 using Clock = std::chrono::steady_clock;
 double ms_since(Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); }
 
-void check_solver(cusolverStatus_t s, const char* call) {
-  if (s != CUSOLVER_STATUS_SUCCESS) throw hc::Error(std::string(call) + " failed: cusolver status " + std::to_string(static_cast<int>(s)));
-}
-#define HSI_CUSOLVER_CHECK(call) check_solver((call), #call)
-
-class SolverHandle {
- public:
-  explicit SolverHandle(cudaStream_t stream) {
-    HSI_CUSOLVER_CHECK(cusolverDnCreate(&h_));
-    if (cusolverDnSetStream(h_, stream) != CUSOLVER_STATUS_SUCCESS) {
-      cusolverDnDestroy(h_);
-      throw hc::Error("cusolverDnSetStream failed");
-    }
-  }
-  ~SolverHandle() { cusolverDnDestroy(h_); }
-  SolverHandle(const SolverHandle&) = delete;
-  SolverHandle& operator=(const SolverHandle&) = delete;
-  operator cusolverDnHandle_t() const { return h_; }
-
- private:
-  cusolverDnHandle_t h_ = nullptr;
-};
-
 using bench::Loaded;
 using bench::load;
 
@@ -129,13 +106,13 @@ Floors time_floors(int n, int h, const Eigen::MatrixXd& spd, int reps) {
   {
     const int N = static_cast<int>(spd.rows());
     const size_t NN = static_cast<size_t>(N) * static_cast<size_t>(N);
-    SolverHandle solver(stream);
+    hc::SolverHandle solver(stream);
     hc::DeviceArray<double> A0(NN), A(NN), b(static_cast<size_t>(N));
     hc::DeviceArray<int> info(1);
     HSI_CUDA_CHECK(cudaMemcpyAsync(A0.get(), spd.data(), A0.bytes(), cudaMemcpyHostToDevice, stream));
     HSI_CUDA_CHECK(cudaMemcpyAsync(A.get(), spd.data(), A.bytes(), cudaMemcpyHostToDevice, stream));
     int lwork = 0;
-    HSI_CUSOLVER_CHECK(cusolverDnDpotrf_bufferSize(solver, CUBLAS_FILL_MODE_LOWER, N, A.get(), N, &lwork));
+    HSI_CUDA_CHECK(cusolverDnDpotrf_bufferSize(solver, CUBLAS_FILL_MODE_LOWER, N, A.get(), N, &lwork));
     hc::DeviceArray<double> work(static_cast<size_t>(std::max(lwork, 1)));
     const Eigen::VectorXd rhs = Eigen::VectorXd::Ones(N);
     // Restoring A and b is part of each timed round (a device copy of (4n)², small
@@ -143,8 +120,8 @@ Floors time_floors(int n, int h, const Eigen::MatrixXd& spd, int reps) {
     f.potrf_potrs_ms = event_ms([&] {
       HSI_CUDA_CHECK(cudaMemcpyAsync(A.get(), A0.get(), A.bytes(), cudaMemcpyDeviceToDevice, stream));
       HSI_CUDA_CHECK(cudaMemcpyAsync(b.get(), rhs.data(), b.bytes(), cudaMemcpyHostToDevice, stream));
-      HSI_CUSOLVER_CHECK(cusolverDnDpotrf(solver, CUBLAS_FILL_MODE_LOWER, N, A.get(), N, work.get(), lwork, info.get()));
-      HSI_CUSOLVER_CHECK(cusolverDnDpotrs(solver, CUBLAS_FILL_MODE_LOWER, N, 1, A.get(), N, b.get(), N, info.get()));
+      HSI_CUDA_CHECK(cusolverDnDpotrf(solver, CUBLAS_FILL_MODE_LOWER, N, A.get(), N, work.get(), lwork, info.get()));
+      HSI_CUDA_CHECK(cusolverDnDpotrs(solver, CUBLAS_FILL_MODE_LOWER, N, 1, A.get(), N, b.get(), N, info.get()));
     });
     int host_info = -1;
     HSI_CUDA_CHECK(cudaMemcpyAsync(&host_info, info.get(), sizeof(int), cudaMemcpyDeviceToHost, stream));
@@ -161,9 +138,11 @@ Floors time_floors(int n, int h, const Eigen::MatrixXd& spd, int reps) {
 
 struct SequenceStats {
   bool ran = false;
-  double mean_ms = 0, max_ms = 0, iterations = 0;
+  double mean_ms = 0, max_ms = 0, iterations = 0, ms_per_iteration = 0;
   int uncertified = 0;
   NewtonResult::Timing per_iteration;
+  double scratch_ms = 0;  // the frame midway between the first two keyframes, started from the first
+  int scratch_iterations = 0;
 };
 
 SequenceStats run_sequence(const Loaded& L, std::unique_ptr<NewtonCore> core, int frames) {
@@ -188,10 +167,16 @@ SequenceStats run_sequence(const Loaded& L, std::unique_ptr<NewtonCore> core, in
     t.certificate += f.timing.certificate;
   }
   solved = std::max(solved, 1);
+  const double total_ms = s.mean_ms;
   s.mean_ms /= solved;
   s.iterations = its / solved;
   const double per = std::max(its, 1.0);
+  s.ms_per_iteration = total_ms / per;
   s.per_iteration = {t.energy_gradient / per, t.hessian / per, t.solve / per, t.line_search / per, t.certificate / per};
+  const FrameResult scratch = interp.frame(0.5 * (L.times[0] + L.times[1]));
+  s.scratch_ms = scratch.ms;
+  s.scratch_iterations = scratch.iterations;
+  s.uncertified += !scratch.certified;
   return s;
 }
 
@@ -234,8 +219,12 @@ int main(int argc, char** argv) {
          << "| scene | |G| | n | ZGEMM n×6n×|H| ms | ZGEMM TFLOP/s | CUDA Hessian call ms | GEMM share | potrf+potrs (4n) ms | "
             "Eigen LLT (4n) CPU ms | ratio |\n|---|---|---|---|---|---|---|---|---|---|\n";
   seqs << "## Warm-started sequences (" << frames << " frames; per-iteration parts in ms)\n\n"
-       << "| scene | |G| | backend | mean ms/frame | max ms/frame | mean iters/frame | uncertified | E+∇ | Hessian | solve | "
-          "line search | certificate | mean ms CUDA/CPU |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
+       << "cuda-host: the CUDA core driven call by call from the host (Cholesky and certificate on the CPU); "
+          "cuda: the whole solve on the GPU (cuSOLVER, GPU line search and certificate). t = ½: the frame midway "
+          "between the first two keyframes solved from the first (no warm start).\n\n"
+       << "| scene | |G| | backend | mean ms/frame | max ms/frame | iters/frame | ms/iteration | uncertified | E+∇ | Hessian | "
+          "solve | line search | certificate | t = ½ ms (iters) | CPU/this per iteration |\n"
+          "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
 
   for (const std::string& path : scenes) {
     for (int samples : sample_counts) {
@@ -276,23 +265,27 @@ int main(int argc, char** argv) {
       if (skip_sequence) continue;
       cpu.reset();  // the sequences make their own cores
       gpu.reset();
-      std::fprintf(stderr, "  sequence (CUDA)\n");
-      const SequenceStats sg = run_sequence(L, hc::make_newton_core(L.setup->D_G, L.setup->H), frames);
-      SequenceStats sc;
+      SequenceStats sc, sh, sg;
+      std::fprintf(stderr, "  sequence (CUDA, device loop)\n");
+      sg = run_sequence(L, hc::make_newton_core(*L.setup), frames);
+      std::fprintf(stderr, "  sequence (CUDA, host loop)\n");
+      sh = run_sequence(L, hc::make_newton_core(L.setup->D_G, L.setup->H), frames);
       if (samples <= cpu_sequence_max) {
         std::fprintf(stderr, "  sequence (CPU)\n");
         sc = run_sequence(L, make_cpu_newton_core(L.setup->D_G, L.setup->H), frames);
       }
-      for (const SequenceStats* s : {static_cast<const SequenceStats*>(&sc), &sg}) {
-        const bool is_cuda = s == &sg;
+      const std::pair<const char*, const SequenceStats*> rows[] = {{"cpu", &sc}, {"cuda-host", &sh}, {"cuda", &sg}};
+      for (const auto& [label, s] : rows) {
         if (!s->ran) {
-          std::snprintf(row, sizeof row, "| %s | %d | cpu | skipped (--cpu-sequence-max-samples) | | | | | | | | | |\n", L.name.c_str(), G);
+          std::snprintf(row, sizeof row, "| %s | %d | %s | skipped (--cpu-sequence-max-samples) | | | | | | | | | | | |\n",
+                        L.name.c_str(), G, label);
         } else {
           const auto& t = s->per_iteration;
-          std::snprintf(row, sizeof row, "| %s | %d | %s | %.1f | %.1f | %.2f | %d | %.2f | %.2f | %.2f | %.2f | %.2f | %s |\n",
-                        L.name.c_str(), G, is_cuda ? "cuda" : "cpu", s->mean_ms, s->max_ms, s->iterations, s->uncertified,
-                        t.energy_gradient, t.hessian, t.solve, t.line_search, t.certificate,
-                        is_cuda && sc.ran ? ratio(sg.mean_ms, sc.mean_ms).c_str() : "");
+          std::snprintf(row, sizeof row,
+                        "| %s | %d | %s | %.2f | %.2f | %.2f | %.3f | %d | %.3f | %.3f | %.3f | %.3f | %.3f | %.1f (%d) | %s |\n",
+                        L.name.c_str(), G, label, s->mean_ms, s->max_ms, s->iterations, s->ms_per_iteration, s->uncertified,
+                        t.energy_gradient, t.hessian, t.solve, t.line_search, t.certificate, s->scratch_ms,
+                        s->scratch_iterations, sc.ran ? ratio(sc.ms_per_iteration, s->ms_per_iteration).c_str() : "");
         }
         seqs << row;
         std::fprintf(stderr, "  %s", row);

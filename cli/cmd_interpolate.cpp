@@ -74,7 +74,7 @@ void register_interpolate(CLI::App& app) {
     std::unique_ptr<NewtonCore> core;
     std::string why = "this hsi was built without CUDA";
 #ifdef HSI_WITH_CUDA
-    if (o->backend != "cpu" && hsi::cuda::device_available(&why)) core = hsi::cuda::make_newton_core(setup->D_G, setup->H);
+    if (o->backend != "cpu" && hsi::cuda::device_available(&why)) core = hsi::cuda::make_newton_core(*setup);
 #endif
     if (!core && o->backend == "cuda") throw std::runtime_error("--backend cuda: no CUDA device (" + why + ")");
     if (!core) core = make_cpu_newton_core(setup->D_G, setup->H);

@@ -210,6 +210,33 @@ unsigned blocks_for(long long count, long long per_block, long long cap) {
   return static_cast<unsigned>(std::clamp((count + per_block - 1) / per_block, 1LL, cap));
 }
 
+
+// One block: Σ a_i b_i over n entries (fixed order per thread, then block_sum_bad's tree).
+__global__ void __launch_bounds__(kBlock) dot_kernel(int n, const double* __restrict__ a, const double* __restrict__ b,
+                                                     double* __restrict__ out) {
+  double sum = 0;
+  int bad = 0;
+  for (int i = static_cast<int>(threadIdx.x); i < n; i += static_cast<int>(blockDim.x)) sum += a[i] * b[i];
+  block_sum_bad(sum, bad);
+  if (threadIdx.x == 0) *out = sum;
+}
+
+__global__ void __launch_bounds__(kBlock) diag_max_kernel(int n, const double* __restrict__ A, double* __restrict__ out) {
+  double v = 0;
+  for (int i = static_cast<int>(threadIdx.x); i < n; i += static_cast<int>(blockDim.x))
+    v = fmax(v, fabs(A[static_cast<size_t>(i) * static_cast<size_t>(n) + static_cast<size_t>(i)]));
+  v = -v;  // block_min of −|A_ii|
+  block_min(v);
+  if (threadIdx.x == 0) *out = -v;
+}
+
+__global__ void add_ridge_kernel(int n, const double* __restrict__ A0, double ridge, double* __restrict__ A) {
+  const size_t total = static_cast<size_t>(n) * static_cast<size_t>(n);
+  for (size_t t = blockIdx.x * static_cast<size_t>(blockDim.x) + threadIdx.x; t < total;
+       t += static_cast<size_t>(gridDim.x) * blockDim.x)
+    A[t] = A0[t] + (t % (static_cast<size_t>(n) + 1) == 0 ? ridge : 0.0);
+}
+
 }  // namespace
 
 unsigned reduction_blocks(int count) { return blocks_for(count, kBlock, kMaxPartials); }
@@ -260,6 +287,22 @@ cudaError_t max_safe_step(int G, const double2* ab, const double2* dab, double* 
   safe_step_partials<<<parts, kBlock, 0, stream>>>(G, ab, dab, part_min);
   if (const cudaError_t e = cudaGetLastError(); e != cudaSuccess) return e;
   finish_min<<<1, kBlock, 0, stream>>>(static_cast<int>(parts), part_min, out);
+  return cudaGetLastError();
+}
+
+cudaError_t dot(int n, const double* a, const double* b, double* out, cudaStream_t stream) {
+  dot_kernel<<<1, kBlock, 0, stream>>>(n, a, b, out);
+  return cudaGetLastError();
+}
+
+cudaError_t diag_abs_max(int n, const double* A, double* out, cudaStream_t stream) {
+  diag_max_kernel<<<1, kBlock, 0, stream>>>(n, A, out);
+  return cudaGetLastError();
+}
+
+cudaError_t add_ridge(int n, const double* A0, double ridge, double* A, cudaStream_t stream) {
+  const long long total = static_cast<long long>(n) * n;
+  add_ridge_kernel<<<static_cast<unsigned>(std::min<long long>((total + 255) / 256, 4096)), 256, 0, stream>>>(n, A0, ridge, A);
   return cudaGetLastError();
 }
 

@@ -46,4 +46,10 @@ cudaError_t real_hessian(int n, const double2* R, double count, double* Hv, cuda
 // part_min: reduction_blocks(G) entries.
 cudaError_t max_safe_step(int G, const double2* ab, const double2* dab, double* part_min, double* out, cudaStream_t stream);
 
+// The reduced system's small helpers (one block each, deterministic):
+// *out = Σ a_i b_i; *out = max_i |A_ii| (A n × n column-major); A = A0 + ridge·I.
+cudaError_t dot(int n, const double* a, const double* b, double* out, cudaStream_t stream);
+cudaError_t diag_abs_max(int n, const double* A, double* out, cudaStream_t stream);
+cudaError_t add_ridge(int n, const double* A0, double ridge, double* A, cudaStream_t stream);
+
 }  // namespace hsi::cuda::kernels

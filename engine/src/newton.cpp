@@ -166,6 +166,10 @@ std::unique_ptr<NewtonCore> make_cpu_newton_core(MatrixXcd D, std::vector<int> H
 
 NewtonResult newton_solve(NewtonCore& core, const MapSpace& space, const Certifier* certifier, const QuadraticTerm* quad,
                           const Eigen::VectorXd& x0, const NewtonOptions& opt) {
+  if (opt.device_loop) {
+    NewtonResult on_device;
+    if (core.solve(space, certifier, quad, x0, opt, &on_device)) return on_device;
+  }
   const auto t_start = Clock::now();
   const Eigen::SparseMatrix<double>& T = space.T();
   NewtonResult res;

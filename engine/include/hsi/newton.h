@@ -20,6 +20,10 @@
 
 namespace hsi {
 
+struct QuadraticTerm;
+struct NewtonOptions;
+struct NewtonResult;
+
 // Per-iteration sample work. Coefficients are the active real vector
 // v = (Re φ_a, Im φ_a, Re ψ_a, Im ψ_a) ∈ R^{4n} of MapSpace.
 class NewtonCore {
@@ -37,6 +41,15 @@ class NewtonCore {
   virtual void set_direction(const Eigen::VectorXd& dv) = 0;
   virtual double max_safe_step() = 0;              // first s > 0 with |a + s da| = |b + s db| at a sample
   virtual double energy_at(double s) = 0;          // energy at v + s dv
+
+  // A core that can run newton_solve's whole iteration on its own device (the CUDA
+  // core made from a ShapeSetup: factorisation, line search and certificate on the
+  // GPU) overrides this, fills *out with what newton_solve would return and says
+  // true. The default declines and newton_solve drives the core from the host.
+  virtual bool solve(const MapSpace& /*space*/, const Certifier* /*certifier*/, const QuadraticTerm* /*quad*/,
+                     const Eigen::VectorXd& /*x0*/, const NewtonOptions& /*options*/, NewtonResult* /*out*/) {
+    return false;
+  }
 };
 
 // D: the active basis rows D(w) at the samples G (|G| × n); H: indices into G.
@@ -59,6 +72,7 @@ struct NewtonOptions {
   double safe_fraction = 0.8;     // first trial step: min(1, 0.8 s_max)
   int max_backtracks = 60;
   bool certify = true;            // accept a step only if the certificate passes
+  bool device_loop = true;        // let a core run the whole iteration on its device (NewtonCore::solve)
 };
 
 struct NewtonIteration {

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <cublas_v2.h>
+#include <cusolverDn.h>
 #include <cuda_runtime.h>
 
 #include <cstddef>
@@ -22,6 +23,9 @@ inline void check_call(cudaError_t e, const char* call, const char* file, int li
 }
 inline void check_call(cublasStatus_t s, const char* call, const char* file, int line) {
   if (s != CUBLAS_STATUS_SUCCESS) fail_call(call, std::string(cublasGetStatusName(s)) + ": " + cublasGetStatusString(s), file, line);
+}
+inline void check_call(cusolverStatus_t s, const char* call, const char* file, int line) {
+  if (s != CUSOLVER_STATUS_SUCCESS) fail_call(call, "cuSOLVER status " + std::to_string(static_cast<int>(s)), file, line);
 }
 
 }  // namespace hsi::cuda
@@ -69,6 +73,12 @@ class PinnedArray {
   }
   ~PinnedArray() {
     if (p_) cudaFreeHost(p_);
+  }
+  PinnedArray(PinnedArray&& o) noexcept : p_(std::exchange(o.p_, nullptr)), count_(std::exchange(o.count_, 0)) {}
+  PinnedArray& operator=(PinnedArray&& o) noexcept {
+    std::swap(p_, o.p_);
+    std::swap(count_, o.count_);
+    return *this;
   }
   PinnedArray(const PinnedArray&) = delete;
   PinnedArray& operator=(const PinnedArray&) = delete;
@@ -128,6 +138,25 @@ class BlasHandle {
 
  private:
   cublasHandle_t h_ = nullptr;
+};
+
+// A cuSOLVER dense handle bound to a stream.
+class SolverHandle {
+ public:
+  explicit SolverHandle(cudaStream_t stream) {
+    HSI_CUDA_CHECK(cusolverDnCreate(&h_));
+    if (const cusolverStatus_t st = cusolverDnSetStream(h_, stream); st != CUSOLVER_STATUS_SUCCESS) {
+      cusolverDnDestroy(h_);
+      HSI_CUDA_CHECK(st);
+    }
+  }
+  ~SolverHandle() { cusolverDnDestroy(h_); }
+  SolverHandle(const SolverHandle&) = delete;
+  SolverHandle& operator=(const SolverHandle&) = delete;
+  operator cusolverDnHandle_t() const { return h_; }
+
+ private:
+  cusolverDnHandle_t h_ = nullptr;
 };
 
 }  // namespace hsi::cuda

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "hsi/newton.h"
+#include "hsi/shape_setup.h"
 
 namespace hsi::cuda {
 
@@ -27,5 +28,11 @@ bool device_available(std::string* why = nullptr);
 // InputError on inconsistent input. The core lives on the CUDA device current when it
 // is made and, like the CPU core, is not thread-safe.
 std::unique_ptr<NewtonCore> make_newton_core(const MatrixXcd& D, std::vector<int> H);
+
+// The same core for a shape's setup (which must outlive it), able to run newton_solve's
+// whole certified iteration on the device (NewtonCore::solve) for the setup's two
+// spaces and its certifier: Cholesky by cuSOLVER, the safe step, Armijo backtracking
+// and the certificate on the GPU, a few scalars back to the host per iteration.
+std::unique_ptr<NewtonCore> make_newton_core(const ShapeSetup& setup);
 
 }  // namespace hsi::cuda

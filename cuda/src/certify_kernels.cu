@@ -1,0 +1,306 @@
+// The certificate's kernels (see certify_kernels.h), line for line the arithmetic of
+// engine/src/certificate.cpp so that both backends reach the same verdicts.
+#include "certify_kernels.h"
+
+#include <cfloat>
+
+namespace hsi::cuda::kernels {
+namespace {
+
+constexpr int kThreads = 128;      // segment kernel: long-running threads, small blocks
+constexpr int kReduceThreads = 512;  // 9 × 512 doubles of shared memory, under 48 KiB
+
+__device__ __forceinline__ double inf() { return __longlong_as_double(0x7ff0000000000000LL); }
+
+// Complex arithmetic on double2 (x = real, y = imaginary).
+__device__ __forceinline__ double2 operator+(double2 a, double2 b) { return make_double2(a.x + b.x, a.y + b.y); }
+__device__ __forceinline__ double2 operator-(double2 a, double2 b) { return make_double2(a.x - b.x, a.y - b.y); }
+__device__ __forceinline__ double2 operator*(double2 a, double2 b) {
+  return make_double2(a.x * b.x - a.y * b.y, a.x * b.y + a.y * b.x);
+}
+__device__ __forceinline__ double2 scale(double2 a, double s) { return make_double2(a.x * s, a.y * s); }
+__device__ __forceinline__ double cabs(double2 a) { return hypot(a.x, a.y); }
+// Smith's algorithm: no overflow for large operands.
+__device__ __forceinline__ double2 cdiv(double2 a, double2 b) {
+  if (fabs(b.x) >= fabs(b.y)) {
+    const double r = b.y / b.x, d = b.x + b.y * r;
+    return make_double2((a.x + a.y * r) / d, (a.y - a.x * r) / d);
+  }
+  const double r = b.x / b.y, d = b.y + b.x * r;
+  return make_double2((a.x * r + a.y) / d, (a.y * r - a.x) / d);
+}
+__device__ __forceinline__ double2 clog(double2 a) { return make_double2(log(cabs(a)), atan2(a.y, a.x)); }
+__device__ __forceinline__ double carg(double2 a) { return atan2(a.y, a.x); }
+
+__device__ double segment_distance(double2 p, double2 a, double2 b) {
+  const double2 ab = b - a;
+  const double len2 = ab.x * ab.x + ab.y * ab.y;
+  double t = len2 > 0 ? ((p.x - a.x) * ab.x + (p.y - a.y) * ab.y) / len2 : 0.0;
+  t = fmin(fmax(t, 0.0), 1.0);
+  return cabs(p - (a + scale(ab, t)));
+}
+
+struct Values {
+  double2 a, b, a1, b1;  // f_z, conj f_zbar and their z-derivatives
+};
+
+// f_z, conj f_zbar and their derivatives at w straight from the cage (math.md §2).
+__device__ Values values_at(const CageView& cage, const double2* __restrict__ coef, int M, double2 w) {
+  const double2 inv2pii = make_double2(0, -1.0 / (2.0 * 3.14159265358979323846));  // 1 / (2πi)
+  Values v{};
+  for (int l = 0; l < cage.loops; ++l) {
+    const int begin = cage.loop_begin[l], k = cage.loop_begin[l + 1] - begin;
+    const double2* z = cage.z + begin;
+    double2 Bm = z[k - 1] - w, B0 = z[0] - w;
+    double2 Lm = clog(cdiv(B0, Bm));
+    for (int j = 0; j < k; ++j) {
+      const int jp = j + 1 == k ? 0 : j + 1, jm = j == 0 ? k - 1 : j - 1;
+      const double2 Bp = z[jp] - w;
+      const double2 L0 = clog(cdiv(Bp, B0));
+      const double2 A0 = z[j] - z[jm], A1 = z[jp] - z[j];
+      const double2 D = inv2pii * (cdiv(Lm, A0) - cdiv(L0, A1));
+      const double2 E = inv2pii * cdiv(Bp - Bm, Bm * B0 * Bp);
+      const double2 phi = coef[begin + j], psi = coef[M + begin + j];
+      v.a = v.a + D * phi;
+      v.b = v.b + D * psi;
+      v.a1 = v.a1 + E * phi;
+      v.b1 = v.b1 + E * psi;
+      Bm = B0;
+      B0 = Bp;
+      Lm = L0;
+    }
+  }
+  for (int h = 0; h < cage.N; ++h) {
+    const double2 d = w - cage.holes[h];
+    const double2 phi = coef[cage.m + h], psi = coef[M + cage.m + h];
+    v.a = v.a + cdiv(phi, d);
+    v.b = v.b + cdiv(psi, d);
+    const double2 d2 = d * d;
+    v.a1 = v.a1 - cdiv(phi, d2);
+    v.b1 = v.b1 - cdiv(psi, d2);
+  }
+  return v;
+}
+
+__global__ void jumps_kernel(CageView cage, const double2* __restrict__ coef, double* __restrict__ jumps) {
+  const int M = cage.m + cage.N;
+  const double inv2pi = 1 / (2 * 3.14159265358979323846);
+  for (int i = static_cast<int>(blockIdx.x * blockDim.x + threadIdx.x); i < M; i += static_cast<int>(gridDim.x * blockDim.x)) {
+    if (i >= cage.m) {  // the log terms: 2 |φ_log| and 2 |ψ_log| (equal in the map space)
+      jumps[i] = 2 * cabs(coef[i]);
+      jumps[M + i] = 2 * cabs(coef[M + i]);
+      continue;
+    }
+    int l = 0;
+    while (cage.loop_begin[l + 1] <= i) ++l;
+    const int begin = cage.loop_begin[l], k = cage.loop_begin[l + 1] - begin, j = i - begin;
+    const double2* z = cage.z + begin;
+    for (int c = 0; c < 2; ++c) {
+      const double2* cc = coef + c * M + begin;
+      // δ_j: the slope on the edge ending at vertex j.
+      auto delta = [&](int jj) {
+        const int jm = jj == 0 ? k - 1 : jj - 1;
+        return cdiv(cc[jj] - cc[jm], z[jj] - z[jm]);
+      };
+      jumps[c * M + i] = inv2pi * cabs(delta(j + 1 == k ? 0 : j + 1) - delta(j));
+    }
+  }
+}
+
+__global__ void weights_kernel(CageView cage, SegmentsView seg, double* __restrict__ WWh) {
+  const int M = cage.m + cage.N;
+  const long long total = static_cast<long long>(seg.S) * M;
+  for (long long t = blockIdx.x * static_cast<long long>(blockDim.x) + threadIdx.x; t < total;
+       t += static_cast<long long>(gridDim.x) * blockDim.x) {
+    const int i = static_cast<int>(t % seg.S), j = static_cast<int>(t / seg.S);
+    const double2 p = seg.points[i], q = seg.points[seg.next[i]];
+    if (j < cage.m) {
+      const double d = segment_distance(cage.z[j], p, q);
+      WWh[t] = 1 / (d * d);
+    } else {
+      const double d = segment_distance(cage.holes[j - cage.m], p, q);
+      WWh[t] = 1 / (d * d * d);
+    }
+  }
+}
+
+struct Piece {
+  double2 q;
+  Values vq;
+  int depth;
+};
+
+__global__ void __launch_bounds__(kThreads) segments_kernel(CageView cage, SegmentsView seg, const double2* __restrict__ coef,
+                                                            const double2* __restrict__ values, const double* __restrict__ lip,
+                                                            int max_depth, long long max_pieces, int* stop,
+                                                            SegmentOutcome* __restrict__ out) {
+  const int i = static_cast<int>(blockIdx.x * blockDim.x + threadIdx.x);
+  if (i >= seg.S) return;
+  const int S = seg.S, M = cage.m + cage.N;
+  SegmentOutcome o;
+  o.ok = 1;
+  o.arg = 0;
+  o.margin = inf();
+  o.sigma1 = 0;
+  o.sigma2 = inf();
+  o.k = 0;
+  o.pieces = 0;
+  o.fail_point = make_double2(0, 0);
+  if (stop && *reinterpret_cast<volatile int*>(stop)) {  // another segment failed already
+    out[i] = o;
+    return;
+  }
+  const int u = i, v = seg.next[i];
+  double2 p = seg.points[u], q = seg.points[v];
+  Values vp{values[u], values[2 * S + u], values[S + u], values[3 * S + u]};
+  Values vq{values[v], values[2 * S + v], values[S + v], values[3 * S + v]};
+  const double lipA = lip[i], lipB = lip[S + i];
+  Piece stack[kMaxCertifyDepth];
+  int top = 0, depth = 0;
+  for (;;) {
+    const double len = cabs(q - p);
+    const double fzz_max = (cabs(vp.a1) + cabs(vq.a1)) / 2 + lipA * len / 2;
+    const double bz_max = (cabs(vp.b1) + cabs(vq.b1)) / 2 + lipB * len / 2;
+    const double a_lo = (cabs(vp.a) + cabs(vq.a)) / 2 - fzz_max * len / 2;
+    const double a_hi = (cabs(vp.a) + cabs(vq.a)) / 2 + fzz_max * len / 2;
+    const double b_hi = (cabs(vp.b) + cabs(vq.b)) / 2 + bz_max * len / 2;
+    const bool arg_ok = fzz_max * len < cabs(vp.a);
+    const bool folds_here = cabs(vp.b) >= cabs(vp.a) || cabs(vq.b) >= cabs(vq.a);
+    if (a_lo > b_hi && arg_ok) {
+      o.pieces++;
+      o.arg += carg(cdiv(vq.a, vp.a));
+      o.margin = fmin(o.margin, a_lo - b_hi);
+      o.sigma1 = fmax(o.sigma1, a_hi + b_hi);
+      o.sigma2 = fmin(o.sigma2, a_lo - b_hi);
+      o.k = fmax(o.k, b_hi / a_lo);
+      if (top == 0) break;
+      // The next piece starts where this one ended.
+      p = q;
+      vp = vq;
+      --top;
+      q = stack[top].q;
+      vq = stack[top].vq;
+      depth = stack[top].depth;
+      continue;
+    }
+    const bool stopped = stop && *reinterpret_cast<volatile int*>(stop);
+    if (folds_here || depth >= max_depth || o.pieces >= max_pieces || stopped) {
+      o.ok = 0;
+      o.pieces++;
+      o.margin = fmin(o.margin, a_lo - b_hi);
+      o.fail_point = scale(p + q, 0.5);
+      if (stop) atomicExch(stop, 1);
+      break;
+    }
+    const double2 mid = scale(p + q, 0.5);
+    const Values vm = values_at(cage, coef, M, mid);
+    stack[top].q = q;
+    stack[top].vq = vq;
+    stack[top].depth = depth + 1;
+    ++top;
+    q = mid;
+    vq = vm;
+    ++depth;
+  }
+  out[i] = o;
+}
+
+__global__ void __launch_bounds__(kReduceThreads) reduce_kernel(int S, const SegmentOutcome* __restrict__ outcomes,
+                                                                const double2* __restrict__ values, CertifySummary* out) {
+  // Each thread folds a strided subset, then a fixed tree over the block: deterministic.
+  double arg = 0, margin = inf(), s1 = 0, s2 = inf(), k = 0, os1 = 0, os2 = inf(), ok_ = 0, oiso = 0;
+  long long subdivisions = 0;
+  int first = S;
+  for (int i = static_cast<int>(threadIdx.x); i < S; i += static_cast<int>(blockDim.x)) {
+    const SegmentOutcome& o = outcomes[i];
+    subdivisions += o.pieces > 1 ? o.pieces - 1 : 0;
+    if (!o.ok && i < first) first = i;
+    arg += o.arg;
+    margin = fmin(margin, o.margin);
+    s1 = fmax(s1, o.sigma1);
+    s2 = fmin(s2, o.sigma2);
+    k = fmax(k, o.k);
+    const double aa = cabs(values[i]), bb = cabs(values[2 * S + i]);
+    os1 = fmax(os1, aa + bb);
+    os2 = fmin(os2, aa - bb);
+    ok_ = fmax(ok_, bb / aa);
+    const double x1 = aa + bb, x2 = aa - bb;
+    oiso = fmax(oiso, 0.5 * (x1 * x1 + 1 / (x1 * x1) + x2 * x2 + 1 / (x2 * x2)));
+  }
+  __shared__ double sh[9][kReduceThreads];
+  __shared__ long long sh_sub[kReduceThreads];
+  __shared__ int sh_first[kReduceThreads];
+  const int t = static_cast<int>(threadIdx.x);
+  sh[0][t] = arg, sh[1][t] = margin, sh[2][t] = s1, sh[3][t] = s2, sh[4][t] = k;
+  sh[5][t] = os1, sh[6][t] = os2, sh[7][t] = ok_, sh[8][t] = oiso;
+  sh_sub[t] = subdivisions;
+  sh_first[t] = first;
+  __syncthreads();
+  for (int w = static_cast<int>(blockDim.x) / 2; w > 0; w /= 2) {
+    if (t < w) {
+      const int u = t + w;
+      sh[0][t] += sh[0][u];
+      sh[1][t] = fmin(sh[1][t], sh[1][u]);
+      sh[2][t] = fmax(sh[2][t], sh[2][u]);
+      sh[3][t] = fmin(sh[3][t], sh[3][u]);
+      sh[4][t] = fmax(sh[4][t], sh[4][u]);
+      sh[5][t] = fmax(sh[5][t], sh[5][u]);
+      sh[6][t] = fmin(sh[6][t], sh[6][u]);
+      sh[7][t] = fmax(sh[7][t], sh[7][u]);
+      sh[8][t] = fmax(sh[8][t], sh[8][u]);
+      sh_sub[t] += sh_sub[u];
+      sh_first[t] = min(sh_first[t], sh_first[u]);
+    }
+    __syncthreads();
+  }
+  if (t == 0) {
+    CertifySummary r;
+    r.arg_total = sh[0][0];
+    r.min_margin = sh[1][0];
+    r.sigma1_max = sh[2][0];
+    r.sigma2_min = sh[3][0];
+    r.k_max = sh[4][0];
+    r.observed_sigma1_max = sh[5][0];
+    r.observed_sigma2_min = sh[6][0];
+    r.observed_k_max = sh[7][0];
+    r.observed_isometric_max = sh[8][0];
+    r.segments = S;
+    r.subdivisions = sh_sub[0];
+    r.first_fail = sh_first[0];
+    r.fail_point = r.first_fail < S ? outcomes[r.first_fail].fail_point : make_double2(0, 0);
+    *out = r;
+  }
+}
+
+unsigned blocks(long long count, int threads) {
+  const long long b = (count + threads - 1) / threads;
+  return static_cast<unsigned>(b < 1 ? 1 : (b > 65535LL * 32 ? 65535LL * 32 : b));
+}
+
+}  // namespace
+
+cudaError_t lipschitz_jumps(CageView cage, const double2* coef, double* jumps, cudaStream_t stream) {
+  jumps_kernel<<<blocks(cage.m + cage.N, 128), 128, 0, stream>>>(cage, coef, jumps);
+  return cudaGetLastError();
+}
+
+cudaError_t lipschitz_weights(CageView cage, SegmentsView seg, double* WWh, cudaStream_t stream) {
+  weights_kernel<<<blocks(static_cast<long long>(seg.S) * (cage.m + cage.N), 256), 256, 0, stream>>>(cage, seg, WWh);
+  return cudaGetLastError();
+}
+
+cudaError_t certify_segments(CageView cage, SegmentsView seg, const double2* coef, const double2* values, const double* lip,
+                             int max_depth, long long max_pieces, int* stop, SegmentOutcome* out, cudaStream_t stream) {
+  if (max_depth > kMaxCertifyDepth) return cudaErrorInvalidValue;
+  segments_kernel<<<blocks(seg.S, kThreads), kThreads, 0, stream>>>(cage, seg, coef, values, lip, max_depth, max_pieces, stop,
+                                                                   out);
+  return cudaGetLastError();
+}
+
+cudaError_t reduce_certificate(int S, const SegmentOutcome* outcomes, const double2* values, CertifySummary* out,
+                               cudaStream_t stream) {
+  reduce_kernel<<<1, kReduceThreads, 0, stream>>>(S, outcomes, values, out);
+  return cudaGetLastError();
+}
+
+}  // namespace hsi::cuda::kernels

@@ -1,0 +1,70 @@
+// The certificate's kernels (the CUDA twin of engine/src/certificate.cpp, math.md §6):
+// one thread per boundary segment runs the Lipschitz test with adaptive subdivision
+// (an explicit stack instead of recursion, pieces in the CPU's depth-first order),
+// then one block reduces the outcomes to a verdict and the certified bounds without
+// the per-segment data leaving the device. Plain launch functions, no Eigen.
+#pragma once
+
+#include <cuda_runtime.h>
+
+namespace hsi::cuda::kernels {
+
+// Deepest subdivision the segment kernel supports (its stack lives in registers /
+// local memory); CertificateOptions::max_depth beyond this is refused by the host.
+constexpr int kMaxCertifyDepth = 24;
+
+// The cage, flattened: loop l has vertices z[loop_begin[l] .. loop_begin[l+1]); the
+// full coefficient index of cage vertex j is j, of hole point h is m + h.
+struct CageView {
+  const double2* z;
+  const int* loop_begin;  // loops + 1 entries
+  int loops, m;
+  const double2* holes;   // hole points ρ
+  int N;
+};
+
+// The segments: segment i joins points[i] to points[next[i]].
+struct SegmentsView {
+  const double2* points;
+  const int* next;
+  int S;
+};
+
+// Per segment, what the test found (SegmentCertificate of certificate.h).
+struct SegmentOutcome {
+  double arg, margin, sigma1, sigma2, k;
+  double2 fail_point;
+  long long pieces;
+  int ok;
+};
+
+// The reduction over all segments. first_fail = the lowest failing segment (S if none).
+struct CertifySummary {
+  double arg_total, min_margin, sigma1_max, sigma2_min, k_max;
+  double observed_sigma1_max, observed_sigma2_min, observed_k_max, observed_isometric_max;
+  double2 fail_point;
+  long long segments, subdivisions;
+  int first_fail;
+};
+
+// jumps (M × 2, column-major: [|S_j(φ)| ; |S_j(ψ)|] scaled, then the log terms):
+// rows 0..m−1: |S_j(c)| / 2π for c = φ (column 0) and ψ (column 1); rows m..m+N−1:
+// 2 |c_log,h|, so that [W | Wh] · jumps = (La, Lb) per segment (certificate.cpp).
+// coef: [φ | ψ] full, M × 2 complex, column-major.
+cudaError_t lipschitz_jumps(CageView cage, const double2* coef, double* jumps, cudaStream_t stream);
+
+// values (S × 4, column-major, as [D; E] · [φ | ψ] leaves them): f_z, f_zz, conj f_zbar,
+// (conj f_zbar)' at the breakpoints ([a | a1 | b | b1]); lip: S × 2 (La, Lb). stop: device flag, set by a
+// failing segment when stop_at_first_failure, read by all (may be null otherwise).
+cudaError_t certify_segments(CageView cage, SegmentsView seg, const double2* coef, const double2* values, const double* lip,
+                             int max_depth, long long max_pieces, int* stop, SegmentOutcome* out, cudaStream_t stream);
+
+// One block: the summary of all outcomes plus the observed values at the breakpoints.
+cudaError_t reduce_certificate(int S, const SegmentOutcome* outcomes, const double2* values, CertifySummary* out,
+                               cudaStream_t stream);
+
+// W (S × m) = 1/dist(z_j, σ_i)², Wh (S × N) = 1/dist(ρ_h, σ_i)³, as one S × (m+N)
+// column-major matrix [W | Wh] (built once per shape).
+cudaError_t lipschitz_weights(CageView cage, SegmentsView seg, double* WWh, cudaStream_t stream);
+
+}  // namespace hsi::cuda::kernels

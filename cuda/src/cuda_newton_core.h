@@ -1,0 +1,263 @@
+// CudaNewtonCore: the GPU twin of engine/src/newton.cpp's CpuNewtonCore (declared
+// here so that its parts live in two files: newton_core.cpp, the per-call NewtonCore
+// interface, and device_newton.cpp, the whole certified iteration on the device).
+// Sample data (D at G, the subset H, target metrics, a = Dφ, b = Dψ and the direction)
+// stay on the device; per-sample work is newton_kernels.cu (sample_math.cuh), the
+// products with D are cuBLAS, factorisation is cuSOLVER. Host code only (compiled by
+// the C++ compiler, Eigen on this side), one stream.
+#pragma once
+
+#include <algorithm>
+#include <map>
+#include <memory>
+#include <string>
+#include <utility>
+
+#include "device_certifier.h"
+#include "hsi/cuda/device.h"
+#include "hsi/cuda/newton_core.h"
+#include "hsi/domain.h"
+#include "hsi/shape_setup.h"
+#include "newton_kernels.h"
+
+namespace hsi::cuda {
+
+
+// Pinned staging for host → device copies, refilled only once the device has read its
+// previous contents (the event marks the end of the last copy out of it).
+template <class T>
+class Upload {
+ public:
+  explicit Upload(size_t count) : buf_(count) {}
+  T* begin_fill() {
+    if (pending_) HSI_CUDA_CHECK(cudaEventSynchronize(done_));
+    pending_ = false;
+    return buf_.get();
+  }
+  void send(T* dst, size_t count, cudaStream_t stream) {
+    if (count > buf_.size()) throw Error("hsi::cuda: upload larger than its staging buffer");
+    HSI_CUDA_CHECK(cudaMemcpyAsync(dst, buf_.get(), count * sizeof(T), cudaMemcpyHostToDevice, stream));
+    HSI_CUDA_CHECK(cudaEventRecord(done_, stream));
+    pending_ = true;
+  }
+
+ private:
+  PinnedArray<T> buf_;
+  Event done_;
+  bool pending_ = false;
+};
+
+inline sample::Projection to_device(HessianProjection p) {
+  switch (p) {
+    case HessianProjection::Delete: return sample::Projection::Delete;
+    case HessianProjection::FullProj: return sample::Projection::FullProj;
+    case HessianProjection::PartProj: return sample::Projection::PartProj;
+  }
+  throw InputError("hsi::cuda: unknown Hessian projection");
+}
+
+inline size_t sz(int v) { return static_cast<size_t>(v); }
+
+// The reduced space's matrices and the device loop's buffers (one per MapSpace the
+// core has solved in).
+struct DeviceSpace {
+  int dim = 0, n4 = 0, M4 = 0;
+  DeviceArray<double> T;    // 4n × dim, v layout (Re φ, Im φ, Re ψ, Im ψ): the Hessian's
+  DeviceArray<double> Tc;   // 4n × dim, rows in complex order: Tc x = [φ_a | ψ_a] as double2
+  DeviceArray<double> X;    // 4M × dim: the full coefficients [φ | ψ] (double2) per unit x
+  DeviceArray<double> X0;   // 4M: expand(0)
+  DeviceArray<double> x, xn, g, d, Hr, Hr0, Y, work, full, Q, c;
+  DeviceArray<int> info;
+  DeviceArray<double> sc;
+  PinnedArray<double> sc_down;
+  PinnedArray<double> d_down;
+  PinnedArray<int> info_down;
+  PinnedArray<double> x_up;
+  int lwork = 0;
+  const QuadraticTerm* quad_uploaded = nullptr;
+};
+
+class CudaNewtonCore final : public NewtonCore {
+ public:
+  // With a setup, the core can also run whole solves on the device (solve()) for that
+  // setup's spaces and certifier; the setup must outlive the core.
+  CudaNewtonCore(const MatrixXcd& D, const std::vector<int>& H, const ShapeSetup* setup = nullptr)
+      : G_(static_cast<int>(D.rows())),
+        n_(static_cast<int>(D.cols())),
+        h_(static_cast<int>(H.size())),
+        blas_(stream_),
+        D_(sz(G_) * sz(n_)),
+        DH_(sz(h_) * sz(n_)),
+        H_(sz(h_)),
+        g_(3 * sz(G_)),
+        ab_(2 * sz(G_)),
+        dab_(2 * sz(G_)),
+        gab_(2 * sz(G_)),
+        coef_(2 * sz(n_)),
+        W_(6 * sz(h_)),
+        Wt_(sz(h_) * 6 * sz(n_)),
+        R_(sz(n_) * 6 * sz(n_)),
+        Hv_(16 * sz(n_) * sz(n_)),
+        part_sum_(kernels::kMaxPartials),
+        part_bad_(kernels::kMaxPartials),
+        scalar_(1),
+        targets_up_(3 * sz(G_)),
+        coef_up_(2 * sz(n_)),
+        scalar_down_(1),
+        coef_down_(2 * sz(n_)) {
+    const cudaStream_t s = stream_;
+    static_assert(sizeof(cd) == sizeof(double2), "std::complex<double> and double2 share a layout");
+    HSI_CUDA_CHECK(cudaMemcpyAsync(D_.get(), D.data(), D_.bytes(), cudaMemcpyHostToDevice, s));
+    HSI_CUDA_CHECK(cudaMemcpyAsync(H_.get(), H.data(), H_.bytes(), cudaMemcpyHostToDevice, s));
+    HSI_CUDA_CHECK(kernels::gather_rows(G_, h_, n_, D_.get(), H_.get(), DH_.get(), s));
+    // Nothing is ever read uninitialised: a = b = 0 (every sample degenerate, E = +inf)
+    // and a zero direction until set; identity targets, as on the CPU.
+    HSI_CUDA_CHECK(cudaMemsetAsync(ab_.get(), 0, ab_.bytes(), s));
+    HSI_CUDA_CHECK(cudaMemsetAsync(dab_.get(), 0, dab_.bytes(), s));
+    double* g = targets_up_.begin_fill();
+    for (size_t i = 0; i < sz(G_); ++i) {
+      g[3 * i] = 1;
+      g[3 * i + 1] = 0;
+      g[3 * i + 2] = 1;
+    }
+    targets_up_.send(g_.get(), g_.size(), s);
+    // D and H are the caller's (pageable) memory: done with them before returning.
+    HSI_CUDA_CHECK(cudaStreamSynchronize(s));
+    if (setup) {
+      setup_ = setup;
+      certifier_ = std::make_unique<DeviceCertifier>(setup->shape, setup->cage, setup->G, stream_, blas_);
+    }
+  }
+
+  // Nothing may be in flight while the members free their memory.
+  ~CudaNewtonCore() override;  // device_newton.cpp (DeviceSpace is complete there)
+
+  int n() const override { return n_; }
+  const char* name() const override { return "cuda"; }
+
+  void set_targets(const std::vector<Metric>& g) override {
+    if (g.size() != sz(G_)) throw InputError("target metrics do not match the samples");
+    double* out = targets_up_.begin_fill();
+    for (size_t i = 0; i < g.size(); ++i) {
+      out[3 * i] = g[i](0);
+      out[3 * i + 1] = g[i](1);
+      out[3 * i + 2] = g[i](2);
+    }
+    targets_up_.send(g_.get(), g_.size(), stream_);
+  }
+
+  void set_coefficients(const Eigen::VectorXd& v) override { apply_D(v, ab_.get(), "coefficient"); }
+  void set_direction(const Eigen::VectorXd& dv) override { apply_D(dv, dab_.get(), "direction"); }
+
+  double energy() override { return mean_energy(0.0); }
+  double energy_at(double s) override { return mean_energy(s); }
+
+  Eigen::VectorXd gradient() override {
+    const cudaStream_t s = stream_;
+    HSI_CUDA_CHECK(kernels::gradient_samples(G_, g_.get(), ab_.get(), gab_.get(), s));
+    // (∂/∂Re φ + i ∂/∂Im φ) E = Σ conj(D) (∂E/∂Re a + i ∂E/∂Im a): [gφ | gψ] = Dᴴ [ga | gb].
+    HSI_CUDA_CHECK(cublasZgemm(blas_, CUBLAS_OP_C, CUBLAS_OP_N, n_, 2, G_, &kOne, D_.get(), G_, gab_.get(), G_, &kZero,
+                               coef_.get(), n_));
+    HSI_CUDA_CHECK(cudaMemcpyAsync(coef_down_.get(), coef_.get(), coef_.bytes(), cudaMemcpyDeviceToHost, s));
+    HSI_CUDA_CHECK(cudaStreamSynchronize(s));
+    const double count = static_cast<double>(G_);
+    const Eigen::Index n = n_;
+    Eigen::VectorXd out(4 * n);
+    for (Eigen::Index j = 0; j < n; ++j) {
+      const double2 gphi = coef_down_[static_cast<size_t>(j)], gpsi = coef_down_[static_cast<size_t>(n + j)];
+      out(j) = gphi.x / count;
+      out(n + j) = gphi.y / count;
+      out(2 * n + j) = gpsi.x / count;
+      out(3 * n + j) = gpsi.y / count;
+    }
+    return out;
+  }
+
+  Eigen::MatrixXd hessian(HessianProjection projection, bool exact) override {
+    // Σ_H B_sᵀ K_s B_s in complex form is one GEMM D_Hᴴ [α_aa∘D, β_aa∘D̄, α_ab∘D, β_ab∘D̄,
+    // α_bb∘D, β_bb∘D̄] (newton.cpp), then mapped to the real 4n × 4n matrix on the device.
+    const cudaStream_t s = stream_;
+    HSI_CUDA_CHECK(kernels::weighted_rows(G_, h_, n_, H_.get(), g_.get(), ab_.get(), to_device(projection), exact, DH_.get(),
+                                          W_.get(), Wt_.get(), s));
+    HSI_CUDA_CHECK(cublasZgemm(blas_, CUBLAS_OP_C, CUBLAS_OP_N, n_, 6 * n_, h_, &kOne, DH_.get(), h_, Wt_.get(), h_, &kZero,
+                               R_.get(), n_));
+    HSI_CUDA_CHECK(kernels::real_hessian(n_, R_.get(), static_cast<double>(h_), Hv_.get(), s));
+    const Eigen::Index N = 4 * static_cast<Eigen::Index>(n_);
+    Eigen::MatrixXd out(N, N);
+    HSI_CUDA_CHECK(cudaMemcpyAsync(out.data(), Hv_.get(), Hv_.bytes(), cudaMemcpyDeviceToHost, s));
+    HSI_CUDA_CHECK(cudaStreamSynchronize(s));
+    return out;
+  }
+
+  // The whole certified iteration on the device (device_newton.cpp).
+  bool solve(const MapSpace& space, const Certifier* certifier, const QuadraticTerm* quad, const Eigen::VectorXd& x0,
+             const NewtonOptions& options, NewtonResult* out) override;
+
+  double max_safe_step() override {
+    HSI_CUDA_CHECK(kernels::max_safe_step(G_, ab_.get(), dab_.get(), part_sum_.get(), scalar_.get(), stream_));
+    return download_scalar();
+  }
+
+ private:
+  static constexpr cuDoubleComplex kOne{1, 0}, kZero{0, 0};
+
+  // a = D φ, b = D ψ (or da, db) from v = (Re φ, Im φ, Re ψ, Im ψ): one GEMM D [φ | ψ].
+  void apply_D(const Eigen::VectorXd& v, double2* out, const char* what) {
+    const Eigen::Index n = n_;
+    if (v.size() != 4 * n)
+      throw InputError(std::string("hsi::cuda: the ") + what + " vector has " + std::to_string(v.size()) + " entries, expected " +
+                       std::to_string(4 * n));
+    double2* c = coef_up_.begin_fill();
+    for (Eigen::Index j = 0; j < n; ++j) {
+      c[j] = make_double2(v(j), v(n + j));
+      c[n + j] = make_double2(v(2 * n + j), v(3 * n + j));
+    }
+    coef_up_.send(coef_.get(), coef_.size(), stream_);
+    HSI_CUDA_CHECK(cublasZgemm(blas_, CUBLAS_OP_N, CUBLAS_OP_N, G_, 2, n_, &kOne, D_.get(), G_, coef_.get(), n_, &kZero, out, G_));
+  }
+
+  double mean_energy(double s) {
+    HSI_CUDA_CHECK(kernels::mean_energy(G_, g_.get(), ab_.get(), dab_.get(), s, part_sum_.get(), part_bad_.get(), scalar_.get(),
+                                        stream_));
+    return download_scalar();
+  }
+
+  double download_scalar() {
+    HSI_CUDA_CHECK(cudaMemcpyAsync(scalar_down_.get(), scalar_.get(), sizeof(double), cudaMemcpyDeviceToHost, stream_));
+    HSI_CUDA_CHECK(cudaStreamSynchronize(stream_));
+    return scalar_down_[0];
+  }
+
+  int G_, n_, h_;
+  Stream stream_;                 // first: everything below is used on it
+  BlasHandle blas_;
+  DeviceArray<double2> D_;        // G × n, column-major (as Eigen stores it)
+  DeviceArray<double2> DH_;       // the rows H of D, |H| × n
+  DeviceArray<int> H_;            // indices into G
+  DeviceArray<double> g_;         // target metric (g1, g2, g3) per sample of G
+  DeviceArray<double2> ab_;       // [a | b] = D [φ | ψ], G × 2
+  DeviceArray<double2> dab_;      // [da | db], G × 2
+  DeviceArray<double2> gab_;      // [∂E/∂a | ∂E/∂b] per sample, G × 2
+  DeviceArray<double2> coef_;     // [φ | ψ] in, [gφ | gψ] out: n × 2
+  DeviceArray<double2> W_;        // six Hessian weights per H-sample, 6 × |H|
+  DeviceArray<double2> Wt_;       // the weighted rows, |H| × 6n
+  DeviceArray<double2> R_;        // D_Hᴴ Wt, n × 6n
+  DeviceArray<double> Hv_;        // the real Hessian, 4n × 4n
+  DeviceArray<double> part_sum_;  // reduction partials (sums or minima)
+  DeviceArray<int> part_bad_;
+  DeviceArray<double> scalar_;
+  Upload<double> targets_up_;
+  Upload<double2> coef_up_;
+  PinnedArray<double> scalar_down_;
+  PinnedArray<double2> coef_down_;
+
+  // The device loop (solve()): what it needs beyond the per-call interface.
+  DeviceSpace& device_space(const MapSpace& space);
+  const ShapeSetup* setup_ = nullptr;
+  SolverHandle solver_{stream_};
+  std::unique_ptr<DeviceCertifier> certifier_;
+  std::map<const MapSpace*, std::unique_ptr<DeviceSpace>> spaces_;
+};
+
+
+}  // namespace hsi::cuda

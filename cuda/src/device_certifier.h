@@ -1,0 +1,54 @@
+// The certificate on the GPU (certify_kernels.cu behind a host class): the shape's
+// segments, the basis rows D and E at the breakpoints and the Lipschitz distance
+// weights live on the device; a certification reads the map's full coefficients from
+// device memory and returns one small summary. Host code, not thread-safe.
+#pragma once
+
+#include <vector>
+
+#include "certify_kernels.h"
+#include "hsi/certificate.h"
+#include "hsi/cuda/device.h"
+
+namespace hsi::cuda {
+
+class DeviceCertifier {
+ public:
+  DeviceCertifier(const Shape& shape, const Cage& cage, const BoundarySamples& samples, cudaStream_t stream,
+                  cublasHandle_t blas);
+
+  int coefficient_count() const { return M_; }  // M = m + N complex per φ and ψ
+  int segment_count() const { return S_; }
+
+  // Enqueues the certificate of the map whose full coefficients [φ | ψ] (M × 2 complex,
+  // column-major) are at `coef` on the device; fetch() waits and returns the verdict.
+  void enqueue(const double2* coef, const CertificateOptions& options);
+  CertificateResult fetch();
+
+  // Convenience for tests and benchmarks: upload the map, enqueue, fetch.
+  CertificateResult certify(const HarmonicMap& map, const CertificateOptions& options = {});
+
+ private:
+  int m_ = 0, N_ = 0, M_ = 0, S_ = 0;
+  cudaStream_t stream_;
+  cublasHandle_t blas_;
+  std::vector<int> loop_, edge_;  // per segment, to name a failure
+  DeviceArray<double2> z_, holes_, points_;
+  DeviceArray<int> loop_begin_, next_;
+  DeviceArray<double2> DE_;        // [D; E] at the breakpoints, 2S × M
+  DeviceArray<double> WWh_;        // [W | Wh], S × M
+  DeviceArray<double2> coef_;      // upload target of certify()
+  DeviceArray<double2> values_;    // [a | a1 | b | b1], S × 4 (= 2S × 2)
+  DeviceArray<double> jumps_;      // M × 2
+  DeviceArray<double> lip_;        // S × 2
+  DeviceArray<kernels::SegmentOutcome> outcomes_;
+  DeviceArray<kernels::CertifySummary> summary_;
+  DeviceArray<int> stop_;
+  PinnedArray<kernels::CertifySummary> summary_down_;
+  PinnedArray<double2> coef_up_;
+
+  kernels::CageView cage_view() const;
+  kernels::SegmentsView segments_view() const;
+};
+
+}  // namespace hsi::cuda
