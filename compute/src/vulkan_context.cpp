@@ -42,6 +42,15 @@ VkDebugUtilsMessengerCreateInfoEXT messenger_info(ValidationLog* log) {
   return info;
 }
 
+bool has_device_extension(VkPhysicalDevice d, const char* name) {
+  uint32_t n = 0;
+  if (vkEnumerateDeviceExtensionProperties(d, nullptr, &n, nullptr) != VK_SUCCESS) return false;
+  std::vector<VkExtensionProperties> props(n);
+  if (vkEnumerateDeviceExtensionProperties(d, nullptr, &n, props.data()) != VK_SUCCESS) return false;
+  return std::any_of(props.begin(), props.end(),
+                     [&](const VkExtensionProperties& e) { return std::strcmp(e.extensionName, name) == 0; });
+}
+
 int type_rank(VkPhysicalDeviceType t) {
   switch (t) {
     case VK_PHYSICAL_DEVICE_TYPE_DISCRETE_GPU: return 0;
@@ -166,10 +175,12 @@ void Context::destroy() noexcept {
     if (command_pool_) vkDestroyCommandPool(device_, command_pool_, nullptr);
     vkDestroyDevice(device_, nullptr);
   }
+  if (surface_) vkDestroySurfaceKHR(instance_, surface_, nullptr);
   if (messenger_) vkDestroyDebugUtilsMessengerEXT(instance_, messenger_, nullptr);
   if (instance_) vkDestroyInstance(instance_, nullptr);
   command_pool_ = VK_NULL_HANDLE;
   device_ = VK_NULL_HANDLE;
+  surface_ = VK_NULL_HANDLE;
   messenger_ = VK_NULL_HANDLE;
   instance_ = VK_NULL_HANDLE;
 }
@@ -195,6 +206,17 @@ void Context::create_instance(const ContextOptions& options) {
   for (const VkExtensionProperties& e : available)
     if (std::strcmp(e.extensionName, VK_KHR_PORTABILITY_ENUMERATION_EXTENSION_NAME) == 0) portability = true;
   if (portability) extensions.push_back(VK_KHR_PORTABILITY_ENUMERATION_EXTENSION_NAME);
+  for (const std::string& e : options.instance_extensions) {
+    const bool have = std::any_of(available.begin(), available.end(), [&](const VkExtensionProperties& a) {
+      return e == a.extensionName;
+    });
+    if (!have)
+      throw VulkanUnavailable("Vulkan is not available for a window: the instance extension " + e +
+                                  " is missing (no Vulkan driver for this display?)",
+                              VK_ERROR_EXTENSION_NOT_PRESENT);
+    if (std::none_of(extensions.begin(), extensions.end(), [&](const char* x) { return e == x; }))
+      extensions.push_back(e.c_str());
+  }
 
   if (options.validation) {
     check(vkEnumerateInstanceLayerProperties(&n, nullptr), "vkEnumerateInstanceLayerProperties");
@@ -258,6 +280,10 @@ void Context::create_instance(const ContextOptions& options) {
     debug.pNext = nullptr;
     check(vkCreateDebugUtilsMessengerEXT(instance_, &debug, nullptr, &messenger_), "vkCreateDebugUtilsMessengerEXT");
   }
+  if (options.make_surface) {
+    surface_ = options.make_surface(instance_);
+    if (!surface_) throw VulkanUnavailable("Vulkan: could not create a surface for the window", VK_ERROR_INITIALIZATION_FAILED);
+  }
 }
 
 void Context::pick_device(const ContextOptions& options) {
@@ -286,10 +312,20 @@ void Context::pick_device(const ContextOptions& options) {
     std::vector<VkQueueFamilyProperties> families(qn);
     vkGetPhysicalDeviceQueueFamilyProperties(d, &qn, families.data());
     // A compute queue; one that can also draw first (later passes render offscreen).
+    // With a surface: one that computes, draws and presents to it (and the device must
+    // have VK_KHR_swapchain).
+    auto presents = [&](uint32_t q) {
+      if (!surface_) return true;
+      VkBool32 ok = VK_FALSE;
+      return vkGetPhysicalDeviceSurfaceSupportKHR(d, q, surface_, &ok) == VK_SUCCESS && ok == VK_TRUE;
+    };
+    if (surface_ && !has_device_extension(d, VK_KHR_SWAPCHAIN_EXTENSION_NAME)) continue;
     int family = -1;
     for (VkQueueFlags want : {VkQueueFlags(VK_QUEUE_COMPUTE_BIT | VK_QUEUE_GRAPHICS_BIT), VkQueueFlags(VK_QUEUE_COMPUTE_BIT)})
       for (uint32_t q = 0; q < qn && family < 0; ++q)
-        if ((families[q].queueFlags & want) == want && families[q].queueCount > 0) family = static_cast<int>(q);
+        if ((families[q].queueFlags & want) == want && families[q].queueCount > 0 && (!surface_ || (want & VK_QUEUE_GRAPHICS_BIT)) &&
+            presents(q))
+          family = static_cast<int>(q);
     if (family < 0) continue;
     const int rank = type_rank(p.deviceType);
     if (rank < best_rank) {
@@ -299,7 +335,9 @@ void Context::pick_device(const ContextOptions& options) {
     }
   }
   if (!physical_) {
-    std::string msg = "Vulkan is not available: no device with Vulkan 1.2 and a compute queue";
+    std::string msg = surface_ ? "Vulkan is not available: no device with Vulkan 1.2, VK_KHR_swapchain and a queue that "
+                                 "computes, draws and presents to the window"
+                               : "Vulkan is not available: no device with Vulkan 1.2 and a compute queue";
     if (!wanted.empty()) msg += " whose name contains \"" + wanted + "\"";
     msg += seen.empty() ? " (the loader found no devices; on Debian install mesa-vulkan-drivers for lavapipe)"
                         : " among: " + seen;
@@ -342,6 +380,7 @@ void Context::create_device(const ContextOptions&) {
         "vkEnumerateDeviceExtensionProperties");
   for (const VkExtensionProperties& e : available)
     if (std::strcmp(e.extensionName, "VK_KHR_portability_subset") == 0) extensions.push_back("VK_KHR_portability_subset");
+  if (surface_) extensions.push_back(VK_KHR_SWAPCHAIN_EXTENSION_NAME);
 
   VkDeviceCreateInfo info{};
   info.sType = VK_STRUCTURE_TYPE_DEVICE_CREATE_INFO;

@@ -58,6 +58,13 @@ struct ContextOptions {
   // Enables shaderFloat64 when the device has it (DeviceInfo::float64 says whether).
   bool want_float64 = true;
   std::string application_name = "hsi";
+  // Presenting to a window (the viewer): extra instance extensions (e.g. VK_KHR_surface
+  // and the platform's, from glfwGetRequiredInstanceExtensions), and a function that
+  // makes the window's surface once the instance exists. With make_surface the context
+  // owns the surface (destroyed before the instance), picks a queue family that can
+  // also present to it, and enables VK_KHR_swapchain on the device.
+  std::vector<std::string> instance_extensions;
+  std::function<VkSurfaceKHR(VkInstance)> make_surface;
 };
 
 struct ValidationMessage {
@@ -109,6 +116,7 @@ class Context {
   VkDevice device() const { return device_; }
   VkQueue queue() const { return queue_; }
   uint32_t queue_family() const { return queue_family_; }
+  VkSurfaceKHR surface() const { return surface_; }  // VK_NULL_HANDLE without make_surface
   const DeviceInfo& info() const { return info_; }
   const VkPhysicalDeviceMemoryProperties& memory_properties() const { return memory_; }
 
@@ -133,6 +141,7 @@ class Context {
   std::shared_ptr<ValidationLog> log_ = std::make_shared<ValidationLog>();
   VkInstance instance_ = VK_NULL_HANDLE;
   VkDebugUtilsMessengerEXT messenger_ = VK_NULL_HANDLE;
+  VkSurfaceKHR surface_ = VK_NULL_HANDLE;
   VkPhysicalDevice physical_ = VK_NULL_HANDLE;
   VkDevice device_ = VK_NULL_HANDLE;
   VkQueue queue_ = VK_NULL_HANDLE;
