@@ -1,0 +1,58 @@
+// hsi-viewer SCENE: plays a scene's interpolation live and edits its keyframes.
+#include <CLI/CLI.hpp>
+
+#include <cstdio>
+#include <exception>
+
+#include "app.h"
+#include "hsi/compute/vulkan_context.h"
+#include "hsi/domain.h"
+
+int main(int argc, char** argv) {
+  hsi::viewer::Options o;
+  CLI::App app("hsi-viewer: real-time playback of a scene's harmonic shape interpolation, and keyframe editing "
+               "(press H in the window for the keys)");
+  app.add_option("scene", o.scene, "Scene file (.json)")->required()->check(CLI::ExistingFile);
+  app.add_option("-o,--output", o.output, "Where Ctrl+S saves the scene (default: the scene file itself)");
+  app.add_option("--width", o.width, "Window width (screen coordinates; scaled on high-DPI monitors)")->capture_default_str()
+      ->check(CLI::Range(320, 16384));
+  app.add_option("--height", o.height, "Window height")->capture_default_str()->check(CLI::Range(240, 16384));
+  app.add_option("--rate", o.rate, "Timeline frames per unit of scene time")->capture_default_str()->check(CLI::Range(1.0, 1000.0));
+  app.add_option("--speed", o.speed, "Playback speed")->capture_default_str()->check(CLI::Range(0.125, 8.0));
+  app.add_flag("!--no-loop", o.loop, "Stop at the end instead of looping");
+  app.add_flag("!--paused", o.play, "Start paused");
+  app.add_option("--backend", o.backend, "Newton core: auto (CUDA when a device is present), cpu or cuda")
+      ->capture_default_str()->check(CLI::IsMember({"auto", "cpu", "cuda"}));
+  app.add_option("--samples", o.samples, "Boundary samples |G| (default: the scene's)")->check(CLI::Range(100, 1000000));
+  app.add_option("--mesh-vertices", o.mesh_vertices, "Render mesh size")->capture_default_str()->check(CLI::Range(100, 2000000));
+  app.add_option("--overlays", o.overlays,
+                 "Overlays on at start, comma-separated: distortion, boundary, cage, handles, status, help, none")
+      ->capture_default_str();
+  app.add_flag("--validation", o.validation,
+               "Run under the Vulkan validation layer; any validation message makes the exit code 3");
+  app.add_flag("!--no-vsync", o.vsync, "Present as fast as possible (mailbox/immediate where available)");
+  app.add_option("--device", o.device, "Vulkan device whose name contains this (default: the best one)");
+  app.add_option("--script", o.script,
+                 "Run a script (one command per line: play, pause, frames N, seek F, key K, add-handle X Y, "
+                 "remove-handle H, drag H X Y, undo, redo, save PATH, screenshot PATH, expect-certified, exit)")
+      ->check(CLI::ExistingFile);
+  app.add_option("--screenshot-after", o.screenshot_after,
+                 "Play N timeline frames (each solved, one per drawn frame), then pause and take the --screenshot")
+      ->check(CLI::Range(0, 1000000));
+  app.add_option("--screenshot", o.screenshot, "Write the window to this PNG (and PATH.json: viewport, frame, certified)");
+  app.add_flag("--exit", o.exit_after, "Quit after the screenshot");
+  app.add_flag("--lockstep", o.lockstep, "Play one solved frame per drawn frame instead of in real time");
+  CLI11_PARSE(app, argc, argv);
+  try {
+    return hsi::viewer::run(o);
+  } catch (const hsi::vk::VulkanUnavailable& e) {
+    std::fprintf(stderr, "hsi-viewer: needs Vulkan for a window: %s\n", e.what());
+    return 1;
+  } catch (const hsi::InputError& e) {
+    std::fprintf(stderr, "hsi-viewer: %s\n", e.what());
+    return 2;
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "hsi-viewer: %s\n", e.what());
+    return 1;
+  }
+}
