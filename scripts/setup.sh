@@ -8,6 +8,7 @@ pkgs=(
   python3 python3-numpy
   libvulkan-dev libvulkan-volk-dev glslang-tools spirv-tools mesa-vulkan-drivers vulkan-validationlayers
   libtinygltf-dev
+  libglfw3-dev libimgui-dev xvfb xauth
 )
 missing=()
 for p in "${pkgs[@]}"; do

@@ -7,5 +7,7 @@ bash scripts/build.sh -DHSI_WARNINGS_AS_ERRORS=ON
 export HSI_REQUIRE_VULKAN=1
 # setup.sh installs the Khronos glTF validator: glTF exports must be validated, not skipped.
 export HSI_REQUIRE_GLTF_VALIDATOR=1
+# setup.sh installs Xvfb: the viewer test (hsi-viewer under xvfb-run) must run, not skip.
+export HSI_REQUIRE_VIEWER=1
 cd build
 ctest --output-on-failure -j"$(nproc)" --timeout 900
