@@ -166,7 +166,8 @@ bool CudaNewtonCore::solve(const MapSpace& space, const Certifier* certifier, co
     return finish();
   }
   if (certify) {
-    res.certificate = certify_device(S.x.get(), true);
+    res.certificate = opt.start_certificate && opt.start_certificate->certified ? *opt.start_certificate
+                                                                                : certify_device(S.x.get(), true);
     if (!res.certificate.certified) {
       res.message = "the starting map is not certified: " + res.certificate.reason;
       return finish();
@@ -347,7 +348,12 @@ bool CudaNewtonCore::solve(const MapSpace& space, const Certifier* certifier, co
     }
     res.certified = res.certificate.certified;
   }
-  // The device x is x0 + Σ s d like the host's; hand back the host copy (same sums).
+  // The certificate is of the device's x (its own x + s d sums): hand back that one.
+  if (res.iterations > 0) {
+    HSI_CUDA_CHECK(cudaMemcpyAsync(S.x_up.get(), S.x.get(), S.x.bytes(), cudaMemcpyDeviceToHost, st));
+    HSI_CUDA_CHECK(cudaStreamSynchronize(st));
+    std::copy(S.x_up.get(), S.x_up.get() + dim, res.x.data());
+  }
   return finish();
 }
 

@@ -16,7 +16,18 @@ Interpolator::Interpolator(const ShapeSetup& setup, std::vector<double> times, s
   for (size_t k = 1; k < times_.size(); ++k)
     if (!(times_[k] > times_[k - 1])) throw InputError("interpolation: keyframe times must increase");
   if (!core_) core_ = make_cpu_newton_core(setup_.D_G, setup_.H);
-  C_G_ = evaluate_basis(setup_.cage, setup_.G.points, kBasisC).C;
+  {
+    const MatrixXcd C = evaluate_basis(setup_.cage, setup_.G.points, kBasisC).C;
+    const double count = static_cast<double>(setup_.G.size());
+    cd cw = 0;
+    for (const cd& w : setup_.G.points) cw += w;
+    cw /= count;
+    VectorXcd u(static_cast<Eigen::Index>(setup_.G.size()));
+    for (Eigen::Index i = 0; i < u.size(); ++i) u(i) = setup_.G.points[static_cast<size_t>(i)] - cw;
+    c_mean_ = C.colwise().sum() / count;
+    c_rot_ = u.conjugate().transpose() * C;  // Σ conj(u_i) C_ij
+    c_rot_bar_ = u.transpose() * C;          // Σ u_i C_ij
+  }
   const BasisRows D = evaluate_basis(setup_.cage, setup_.G.points, kBasisD);
   for (size_t k = 0; k < keys_.size(); ++k) {
     const CertificateResult c = setup_.certifier.certify(keys_[k]);
@@ -55,13 +66,9 @@ std::vector<Metric> Interpolator::blended_metric(double t) const {
 }
 
 Pose Interpolator::pose_of(const HarmonicMap& map) const {
-  const VectorXcd f = C_G_ * map.phi + (C_G_ * map.psi).conjugate();
-  const cd cf = f.mean();
-  cd cw = 0;
-  for (const cd& w : setup_.G.points) cw += w;
-  cw /= static_cast<double>(setup_.G.size());
-  cd s = 0;
-  for (size_t i = 0; i < setup_.G.size(); ++i) s += (f(static_cast<Eigen::Index>(i)) - cf) * std::conj(setup_.G.points[i] - cw);
+  // f_i = (C φ)_i + conj((C ψ)_i); Σ conj(u_i) = 0, so Σ (f_i − f̄) conj(u_i) = Σ f_i conj(u_i).
+  const cd cf = (c_mean_ * map.phi).value() + std::conj((c_mean_ * map.psi).value());
+  const cd s = (c_rot_ * map.phi).value() + std::conj((c_rot_bar_ * map.psi).value());
   return {cf, std::arg(s)};
 }
 
@@ -82,7 +89,7 @@ Distortion Interpolator::measure(const CertificateResult& c) const {
   return d;
 }
 
-FrameResult Interpolator::frame(double t, const Eigen::VectorXd& warm_start) {
+FrameResult Interpolator::frame(double t, const Eigen::VectorXd& warm_start, const CertificateResult* warm_certificate) {
   const auto t0 = std::chrono::steady_clock::now();
   FrameResult r;
   r.t = t;
@@ -111,6 +118,7 @@ FrameResult Interpolator::frame(double t, const Eigen::VectorXd& warm_start) {
   no.max_iterations = options_.max_iterations;
   no.projection = options_.projection;
   const Eigen::VectorXd& x0 = warm_start.size() ? warm_start : key_x_[static_cast<size_t>(k)];
+  if (warm_start.size() && warm_certificate && warm_certificate->certified) no.start_certificate = warm_certificate;
   const NewtonResult n = newton_solve(*core_, setup_.metric_space, &setup_.certifier, nullptr, x0, no);
   r.x = n.x;
   r.iterations = n.iterations;
@@ -139,11 +147,17 @@ std::vector<FrameResult> Interpolator::sequence(int frames, const std::function<
   std::vector<FrameResult> out;
   out.reserve(static_cast<size_t>(frames));
   Eigen::VectorXd warm;
+  CertificateResult warm_certificate;
   for (int i = 0; i < frames; ++i) {
     const double t = i == frames - 1 ? t_end() : t_begin() + (t_end() - t_begin()) * i / (frames - 1);
     // Crossing into a new keyframe segment keeps the warm start: frames are continuous.
-    out.push_back(frame(t, warm));
-    if (out.back().certified) warm = out.back().x;
+    // A solved frame's certificate is of its canonical map expand(x): reusable as the
+    // next solve's start (a keyframe's is of the posed map, so it is certified again).
+    out.push_back(frame(t, warm, out.empty() || out.back().keyframe ? nullptr : &warm_certificate));
+    if (out.back().certified) {
+      warm = out.back().x;
+      warm_certificate = out.back().certificate;
+    }
     if (progress) progress(out.back(), i, frames);
   }
   return out;

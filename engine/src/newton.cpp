@@ -209,7 +209,10 @@ NewtonResult newton_solve(NewtonCore& core, const MapSpace& space, const Certifi
     res.energy = E;
     return res;
   }
-  if (opt.certify && certifier && !certified(res.x, &res.certificate)) {
+  if (opt.certify && certifier && opt.start_certificate && opt.start_certificate->certified) {
+    res.certificate = last_pass = *opt.start_certificate;
+    last_pass_x = res.x;
+  } else if (opt.certify && certifier && !certified(res.x, &res.certificate)) {
     res.message = "the starting map is not certified: " + res.certificate.reason;
     res.energy = E;
     return res;

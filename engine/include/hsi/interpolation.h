@@ -64,7 +64,9 @@ class Interpolator {
   double t_end() const { return times_.back(); }
 
   // One frame from a warm start (reduced x; empty = the nearest earlier keyframe).
-  FrameResult frame(double t, const Eigen::VectorXd& warm_start = {});
+  // warm_certificate: the certificate of warm_start's map when already known (the
+  // previous frame's), so the solve does not certify its start again.
+  FrameResult frame(double t, const Eigen::VectorXd& warm_start = {}, const CertificateResult* warm_certificate = nullptr);
   // F frames uniform over [t_begin, t_end], each warm-started from the previous one.
   std::vector<FrameResult> sequence(int frames, const std::function<void(const FrameResult&, int, int)>& progress = {});
 
@@ -88,7 +90,10 @@ class Interpolator {
   std::vector<Distortion> key_distortion_;
   InterpolationOptions options_;
   std::unique_ptr<NewtonCore> core_;
-  MatrixXcd C_G_;  // full basis rows C at G, for poses
+  // Poses are linear in the coefficients: centroid = c_mean·φ + conj(c_mean·ψ) and the
+  // Procrustes sum Σ f_i conj(w_i − w̄) = c_rot·φ + conj(c_rot_bar·ψ), with these rows
+  // (sums over G of the basis rows C), so a pose costs O(m), not O(|G| m).
+  Eigen::RowVectorXcd c_mean_, c_rot_, c_rot_bar_;
 };
 
 }  // namespace hsi

@@ -73,6 +73,9 @@ struct NewtonOptions {
   int max_backtracks = 60;
   bool certify = true;            // accept a step only if the certificate passes
   bool device_loop = true;        // let a core run the whole iteration on its device (NewtonCore::solve)
+  // The certificate of x0's map when the caller has it already (a warm start from the
+  // previous frame's solution): not computed again. Must be of space.expand(x0) exactly.
+  const CertificateResult* start_certificate = nullptr;
 };
 
 struct NewtonIteration {
