@@ -8,6 +8,7 @@
 
 #include "hsi/basis.h"
 #include "hsi/harmonic_map.h"
+#include "hsi/png_import.h"
 #include "hsi/triangulate.h"
 
 #include <tiny_gltf.h>  // declarations only: the implementation is Debian's libtinygltf.so
@@ -151,8 +152,10 @@ std::string encode_glb(const Scene& scene, const FrameFile& frames, const GltfOp
   bool textured = false;
   if (!scene.texture.empty()) {
     const std::string png = read_bytes(scene.texture_path());
-    if (png.size() < 8 || std::memcmp(png.data(), "\x89PNG\r\n\x1a\n", 8) != 0)
-      throw InputError(scene.texture_path().string() + ": the texture is not a PNG file");
+    // Decoded once here, so that a corrupt or truncated texture is refused rather
+    // than embedded in a file that viewers then fail to load.
+    check_png_texture(std::span(reinterpret_cast<const unsigned char*>(png.data()), png.size()),
+                      scene.texture_path().string());
     tinygltf::Image img;
     img.name = scene.texture.filename().string();
     img.mimeType = "image/png";

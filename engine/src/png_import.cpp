@@ -56,7 +56,7 @@ std::string describe_format(png_uint_32 format) {
   return (format & PNG_FORMAT_FLAG_COLOR) ? "RGB" : "greyscale";
 }
 
-AlphaImage read_alpha(const std::filesystem::path& path, const std::string& name) {
+std::vector<unsigned char> read_file(const std::filesystem::path& path, const std::string& name) {
   std::error_code ec;
   if (!std::filesystem::exists(path, ec)) throw InputError(name + ": no such file");
   if (std::filesystem::is_directory(path, ec)) throw InputError(name + ": is a directory, not a PNG file");
@@ -64,6 +64,10 @@ AlphaImage read_alpha(const std::filesystem::path& path, const std::string& name
   if (!in) throw InputError(name + ": cannot open the file for reading");
   std::vector<unsigned char> data((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
   if (in.bad()) throw InputError(name + ": read error");
+  return data;
+}
+
+AlphaImage read_alpha(std::span<const unsigned char> data, const std::string& name) {
   static constexpr unsigned char kSignature[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
   if (data.size() < 8 || !std::equal(std::begin(kSignature), std::end(kSignature), data.begin()))
     throw InputError(name + ": not a PNG file (" +
@@ -297,8 +301,8 @@ BoxD box_of(const Loop& l) {
 
 }  // namespace
 
-PngShape import_png_alpha(const std::filesystem::path& png, const PngImportOptions& options) {
-  const std::string name = png.string();
+namespace {
+void check_options(const PngImportOptions& options, const std::string& name) {
   const double t = options.alpha_threshold;
   if (!(t > 0 && t < 1))
     throw InputError(name + ": bad option: the alpha threshold must be in (0, 1), got " + fmt(t));
@@ -307,8 +311,40 @@ PngShape import_png_alpha(const std::filesystem::path& png, const PngImportOptio
                      fmt(options.tolerance));
   if (!(options.pixel_size > 0) || !std::isfinite(options.pixel_size))
     throw InputError(name + ": bad option: the pixel size must be > 0, got " + fmt(options.pixel_size));
+}
+}  // namespace
 
-  const AlphaImage img = read_alpha(png, name);
+std::array<int, 2> check_png_texture(std::span<const unsigned char> data, const std::string& name) {
+  static constexpr unsigned char kSignature[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
+  if (data.size() < 8 || !std::equal(std::begin(kSignature), std::end(kSignature), data.begin()))
+    throw InputError(name + ": the texture is not a PNG file (" +
+                     (data.empty() ? std::string("the file is empty") : std::string("bad signature")) + ")");
+  png_image image{};
+  image.version = PNG_IMAGE_VERSION;
+  PngImageGuard guard{&image};
+  if (!png_image_begin_read_from_memory(&image, data.data(), data.size()))
+    throw InputError(name + ": the texture is corrupt or truncated PNG data (libpng: " + image.message + ")");
+  if (image.width == 0 || image.height == 0 || image.width > static_cast<png_uint_32>(kPngMaxSide) ||
+      image.height > static_cast<png_uint_32>(kPngMaxSide))
+    throw InputError(name + ": the texture's size " + std::to_string(image.width) + "x" + std::to_string(image.height) +
+                     " px is outside 1.." + std::to_string(kPngMaxSide) + " px on a side");
+  image.format = PNG_FORMAT_RGBA;
+  std::vector<unsigned char> pixels(PNG_IMAGE_SIZE(image));
+  if (!png_image_finish_read(&image, nullptr, pixels.data(), 0, nullptr))
+    throw InputError(name + ": the texture is corrupt or truncated PNG data (libpng: " + image.message + ")");
+  return {static_cast<int>(image.width), static_cast<int>(image.height)};
+}
+
+PngShape import_png_alpha(const std::filesystem::path& png, const PngImportOptions& options) {
+  const std::string name = png.string();
+  check_options(options, name);
+  return import_png_alpha(read_file(png, name), name, options);
+}
+
+PngShape import_png_alpha(std::span<const unsigned char> png_bytes, const std::string& name, const PngImportOptions& options) {
+  check_options(options, name);
+  const double t = options.alpha_threshold;
+  const AlphaImage img = read_alpha(png_bytes, name);
   PngShape result;
   result.width = img.width;
   result.height = img.height;

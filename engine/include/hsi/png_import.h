@@ -21,6 +21,7 @@
 
 #include <array>
 #include <filesystem>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -49,5 +50,13 @@ inline constexpr int kPngMaxSide = 16384;
 // not a PNG, corrupt or truncated data, no alpha channel, no opaque pixels, image
 // too large, bad options, or a shape that fails validate().
 PngShape import_png_alpha(const std::filesystem::path& png, const PngImportOptions& options = {});
+// The same from the file's bytes in memory; `name` is used in messages.
+PngShape import_png_alpha(std::span<const unsigned char> png_bytes, const std::string& name,
+                          const PngImportOptions& options = {});
+
+// Decodes a whole PNG (any colour type and depth) to check that it is a usable
+// texture, and returns its {width, height}. Throws InputError naming `name` and the
+// problem: not a PNG, corrupt or truncated data, an empty or too large image.
+std::array<int, 2> check_png_texture(std::span<const unsigned char> png_bytes, const std::string& name);
 
 }  // namespace hsi
