@@ -174,7 +174,8 @@ void validate(const Shape& shape) {
       const cd p = loop[static_cast<size_t>(i)], q = loop[static_cast<size_t>((i + 1) % n)];
       if (std::abs(q - p) <= 1e-12 * size)
         throw InputError(loop_name(l) + " has a zero-length " + edge_name(l, i, n) + ": vertices " +
-                         std::to_string(i) + " and " + std::to_string((i + 1) % n) + " coincide at " + fmt_point(p));
+                         std::to_string(i) + " and " + std::to_string((i + 1) % n) + " coincide at " + fmt_point(p) +
+                         (i + 1 == n ? " (a loop closes by itself: do not repeat its first vertex at the end)" : ""));
     }
   }
   std::vector<const Loop*> all;

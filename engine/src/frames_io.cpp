@@ -99,14 +99,24 @@ FrameFile decode_frames(const std::string& bytes, const std::string& source) {
   if (L < 1 || L > 100000) r.fail("impossible cage loop count " + std::to_string(L));
   for (uint32_t l = 0; l < L; ++l) {
     const uint32_t n = r.u32("a cage loop size");
-    if (n < 3 || n > r.remaining() / 16) r.fail("impossible cage loop size " + std::to_string(n));
+    if (n < 3) r.fail("impossible cage loop size " + std::to_string(n));
+    if (n > r.remaining() / 16)
+      r.fail("truncated: cage loop " + std::to_string(l) + " announces " + std::to_string(n) + " vertices, only " +
+             std::to_string(r.remaining()) + " bytes remain");
     Loop loop(n);
-    for (cd& p : loop) p = r.point("a cage vertex");
+    for (cd& p : loop) {
+      p = r.point("a cage vertex");
+      if (!std::isfinite(p.real()) || !std::isfinite(p.imag())) r.fail("non-finite cage vertex in loop " + std::to_string(l));
+    }
     f.cage.loops.push_back(std::move(loop));
   }
   const uint32_t N = r.u32("the hole count");
   if (N != L - 1) r.fail("hole point count " + std::to_string(N) + " does not match " + std::to_string(L - 1) + " hole loops");
-  for (uint32_t h = 0; h < N; ++h) f.cage.hole_points.push_back(r.point("a hole point"));
+  for (uint32_t h = 0; h < N; ++h) {
+    f.cage.hole_points.push_back(r.point("a hole point"));
+    if (!std::isfinite(f.cage.hole_points.back().real()) || !std::isfinite(f.cage.hole_points.back().imag()))
+      r.fail("non-finite hole point " + std::to_string(h + 1));
+  }
   const uint32_t K = r.u32("the coefficient count");
   if (K != static_cast<uint32_t>(basis_size(f.cage)))
     r.fail("coefficient count " + std::to_string(K) + " does not match the cage (" + std::to_string(basis_size(f.cage)) + ")");

@@ -89,14 +89,19 @@ Scene parse_scene(const std::string& text, const std::filesystem::path& base_dir
     std::string msg = e.what();
     if (auto p = msg.find("]: "); p != std::string::npos) msg = msg.substr(p + 3);
     c.fail("", "invalid JSON at " + line_col(text, e.byte > 0 ? e.byte - 1 : 0) + ": " + msg);
+  } catch (const json::exception& e) {
+    // E.g. a number too large for a double (1e400): nlohmann reports it as out_of_range.
+    std::string msg = e.what();
+    if (auto p = msg.find("] "); p != std::string::npos) msg = msg.substr(p + 2);
+    c.fail("", "invalid JSON: " + msg);
   }
   if (!j.is_object()) c.fail("", "expected a JSON object at the top level, got " + type_name(j));
   const json* version = field(j, "hsi_scene");
   if (!version) c.fail("", "missing \"hsi_scene\" (the format version); is this an hsi scene file?");
   if (!version->is_number_integer()) c.fail("hsi_scene", "expected an integer version, got " + type_name(*version));
-  if (version->get<int>() != kSceneVersion)
-    c.fail("hsi_scene", "unsupported version " + std::to_string(version->get<int>()) + " (this hsi reads version " +
-                            std::to_string(kSceneVersion) + ")");
+  // Compared as written (not narrowed to int, which would read 4294967297 as 1).
+  if (version->dump() != std::to_string(kSceneVersion))
+    c.fail("hsi_scene", "unsupported version " + version->dump() + " (this hsi reads version " + std::to_string(kSceneVersion) + ")");
   Scene s;
   s.base_dir = base_dir;
   if (const json* n = field(j, "name")) {
@@ -134,9 +139,14 @@ Scene parse_scene(const std::string& text, const std::filesystem::path& base_dir
   }
   if (const json* cg = field(j, "cage")) {
     if (!cg->is_object()) c.fail("cage", "expected an object");
-    if (const json* v = field(*cg, "clearance")) s.cage_options.clearance = number(c, *v, "cage.clearance");
+    if (const json* v = field(*cg, "clearance")) {
+      s.cage_options.clearance = number(c, *v, "cage.clearance");
+      if (!(s.cage_options.clearance > 0 && s.cage_options.clearance <= 1))
+        c.fail("cage.clearance", "must lie in (0, 1] (the cage's offset as a fraction of the shape's size)");
+    }
     if (const json* v = field(*cg, "max_vertices_per_loop")) {
-      if (!v->is_number_integer() || v->get<int>() < 4) c.fail("cage.max_vertices_per_loop", "expected an integer ≥ 4");
+      if (!v->is_number_integer() || v->get<long long>() < 4 || v->get<long long>() > 100000)
+        c.fail("cage.max_vertices_per_loop", "expected an integer between 4 and 100,000");
       s.cage_options.max_vertices_per_loop = v->get<int>();
     }
     const json* loops = field(*cg, "loops");
@@ -171,8 +181,12 @@ Scene parse_scene(const std::string& text, const std::filesystem::path& base_dir
   }
   if (const json* v = field(j, "handles")) s.handles = points(c, *v, "handles");
   for (size_t i = 0; i < s.handles.size(); ++i)
-    if (!point_in_shape(s.shape, s.handles[i]) && boundary_distance(s.shape, s.handles[i]) > 1e-9 * bounding_box(s.shape).diagonal())
-      c.fail("handles[" + std::to_string(i) + "]", "lies outside the shape");
+    if (!point_in_shape(s.shape, s.handles[i]) && boundary_distance(s.shape, s.handles[i]) > 1e-9 * bounding_box(s.shape).diagonal()) {
+      std::string where = "lies outside the shape";
+      for (size_t h = 0; h < s.shape.holes.size(); ++h)
+        if (point_in_loop(s.shape.holes[h], s.handles[i])) where = "lies outside the shape, in " + loop_name(static_cast<int>(h) + 1);
+      c.fail("handles[" + std::to_string(i) + "]", where);
+    }
   if (const json* kfs = field(j, "keyframes")) {
     if (!kfs->is_array()) c.fail("keyframes", "expected an array");
     const int full = s.cage ? basis_size(*s.cage) : -1;
