@@ -66,7 +66,9 @@ endif()
 
 # 3. A scene that does not load is refused with a message, before any window work.
 file(WRITE ${HSI_WORK_DIR}/bad.json "{\"hsi_scene\": 1, \"shape\": {\"outer\": [[0, 0], [1, 0]]}}")
-execute_process(COMMAND ${xvfb} ${HSI_VIEWER} ${HSI_WORK_DIR}/bad.json --validation RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+# No display at all (and no xvfb-run, whose own cleanup can mask the exit code):
+# the refusal must come before GLFW is touched.
+execute_process(COMMAND ${CMAKE_COMMAND} -E env --unset=DISPLAY --unset=WAYLAND_DISPLAY ${HSI_VIEWER} ${HSI_WORK_DIR}/bad.json --validation RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
 if(NOT rc EQUAL 2 OR NOT "${out}${err}" MATCHES "bad.json")
   message(FATAL_ERROR "a bad scene gave exit code ${rc} and: ${out}${err}")
 endif()

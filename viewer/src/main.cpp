@@ -7,6 +7,7 @@
 #include "app.h"
 #include "hsi/compute/vulkan_context.h"
 #include "hsi/domain.h"
+#include "hsi/scene_io.h"
 
 int main(int argc, char** argv) {
   hsi::viewer::Options o;
@@ -44,6 +45,9 @@ int main(int argc, char** argv) {
   app.add_flag("--lockstep", o.lockstep, "Play one solved frame per drawn frame instead of in real time");
   CLI11_PARSE(app, argc, argv);
   try {
+    // A scene that does not load is refused before any window or GPU work, so the
+    // message is the scene's problem, not a missing display's.
+    (void)hsi::load_scene(o.scene);
     return hsi::viewer::run(o);
   } catch (const hsi::vk::VulkanUnavailable& e) {
     std::fprintf(stderr, "hsi-viewer: needs Vulkan for a window: %s\n", e.what());
