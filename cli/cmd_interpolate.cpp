@@ -4,13 +4,12 @@
 
 #include <chrono>
 #include <cstdio>
-#include <fstream>
-#include <nlohmann/json.hpp>
 
 #include "commands.h"
 #include "hsi/frames_io.h"
 #include "hsi/interpolation.h"
 #include "hsi/keyframes.h"
+#include "hsi/scene_sequence.h"
 #include "plot.h"
 #ifdef HSI_WITH_CUDA
 #include "hsi/cuda/newton_core.h"
@@ -49,8 +48,7 @@ void register_interpolate(CLI::App& app) {
     using Clock = std::chrono::steady_clock;
     Scene scene = load_scene(o->scene);
     if (scene.keyframes.size() < 2) throw InputError(o->scene + ": interpolation needs at least two keyframes");
-    if (!scene.cage) scene.cage = build_cage(scene.shape, scene.cage_options);
-    const auto setup = make_shape_setup(scene, o->samples, o->ratio);
+    const std::shared_ptr<const ShapeSetup> setup = scene_setup(scene, o->samples, o->ratio);
     std::printf("scene %s: %d loops, cage %d vertices, n = %d, |G| = %zu, |H| = %zu\n", scene.name.c_str(),
                 scene.shape.loop_count(), setup->cage.vertex_count(), setup->map_space.n(), setup->G.size(), setup->H.size());
     solve_scene_keyframes(scene, *setup, {}, false, [&](const SceneKeyframe& k) {
@@ -85,9 +83,7 @@ void register_interpolate(CLI::App& app) {
     std::filesystem::create_directories(out);
     const bool tty = isatty(fileno(stderr));
     const auto t0 = Clock::now();
-    int uncertified = 0;
-    const auto frames = interp.sequence(o->frames, [&](const FrameResult& f, int i, int n) {
-      uncertified += !f.certified;
+    auto progress = [&](const FrameResult& f, int i, int n) {
       const double el = std::chrono::duration<double>(Clock::now() - t0).count();
       const double eta = el / (i + 1) * (n - i - 1);
       if (tty)
@@ -97,42 +93,21 @@ void register_interpolate(CLI::App& app) {
         std::fprintf(stderr, "[interpolate] frame %d/%d (%.0f%%), %.1f s elapsed, ETA %.0f s\n", i + 1, n, 100.0 * (i + 1) / n, el, eta);
       if (!f.certified) std::fprintf(stderr, "%s[interpolate] frame %d (t = %.6f) NOT CERTIFIED: %s\n", tty ? "\n" : "", i, f.t,
                                      f.certificate.reason.c_str());
-    });
-    if (tty) std::fprintf(stderr, "\n");
-    const double total_s = std::chrono::duration<double>(Clock::now() - t0).count();
+      if (tty && i + 1 == n) std::fprintf(stderr, "\n");
+    };
 
-    // Frames file.
-    FrameFile ff;
-    ff.cage = setup->cage;
-    for (const FrameResult& f : frames)
-      ff.frames.push_back({f.t, f.certified, f.keyframe, f.converged, static_cast<uint32_t>(f.iterations), f.energy, f.map});
-    write_frames(out / "frames.hsif", ff);
+    SceneSequence seq{setup, interp.sequence(o->frames, progress), 0.0, io};
+    seq.total_s = std::chrono::duration<double>(Clock::now() - t0).count();
+    const std::vector<FrameResult>& frames = seq.frames;
+    write_frames(out / "frames.hsif", seq.frame_file());
+    write_file_atomic(out / "report.json", report_json(scene, seq, o->scene));
 
-    // Report.
-    nlohmann::json rep;
-    rep["scene"] = o->scene;
-    rep["name"] = scene.name;
-    rep["samples"] = setup->G.size();
-    rep["hessian_samples"] = setup->H.size();
-    rep["n"] = setup->map_space.n();
-    rep["projection"] = o->projection;
-    rep["tolerance"] = o->tolerance;
-    std::vector<double> ts, energy, iters, kappa, kappa_b, s1, s1b, s2, s2b, ms, flagged;
-    double sum_it = 0, sum_ms = 0, max_ms = 0, max_excess = 0;
-    int solved = 0, bounded = 0;
-    nlohmann::json fr = nlohmann::json::array();
+    // The table and the plots' series.
+    std::vector<double> ts, energy, iters, kappa, kappa_b, s1, s1b, s2, s2b, flagged;
     std::string table =
         "frame        t  keyframe  certified  iters     energy      ms   sigma1_max  sigma2_min  conformal_max  bound_excess\n";
     for (size_t i = 0; i < frames.size(); ++i) {
       const FrameResult& f = frames[i];
-      if (!f.keyframe) {
-        ++solved;
-        sum_it += f.iterations;
-        sum_ms += f.ms;
-        max_ms = std::max(max_ms, f.ms);
-      }
-      bounded += f.bound_excess <= 1e-9;
-      max_excess = std::max(max_excess, f.bound_excess);
       ts.push_back(f.t);
       energy.push_back(f.energy);
       iters.push_back(f.iterations);
@@ -142,50 +117,21 @@ void register_interpolate(CLI::App& app) {
       s1b.push_back(f.bound.sigma1_max);
       s2.push_back(f.distortion.sigma2_min);
       s2b.push_back(f.bound.sigma2_min);
-      ms.push_back(f.ms);
       if (!f.certified) flagged.push_back(f.t);
-      fr.push_back({{"frame", i},
-                    {"t", f.t},
-                    {"keyframe", f.keyframe},
-                    {"certified", f.certified},
-                    {"converged", f.converged},
-                    {"iterations", f.iterations},
-                    {"energy", f.energy},
-                    {"ms", f.ms},
-                    {"sigma1_max", f.distortion.sigma1_max},
-                    {"sigma2_min", f.distortion.sigma2_min},
-                    {"conformal_max", f.distortion.conformal_max},
-                    {"isometric_max", f.distortion.isometric_max},
-                    {"bound", {{"sigma1_max", f.bound.sigma1_max}, {"sigma2_min", f.bound.sigma2_min},
-                               {"conformal_max", f.bound.conformal_max}, {"isometric_max", f.bound.isometric_max}}},
-                    {"bound_excess", f.bound_excess},
-                    {"certificate", {{"sigma1_max", f.certificate.sigma1_max}, {"sigma2_min", f.certificate.sigma2_min},
-                                     {"k_max", f.certificate.k_max}, {"reason", f.certificate.reason}}},
-                    {"message", f.message}});
       char line[256];
       std::snprintf(line, sizeof line, "%5zu %8.5f  %8s  %9s  %5d  %9.6f  %6.1f  %11.5f %11.5f  %13.5f  %12.3e\n", i, f.t,
                     f.keyframe ? "yes" : "", f.certified ? "yes" : "NO", f.iterations, f.energy, f.ms,
                     f.distortion.sigma1_max, f.distortion.sigma2_min, f.distortion.conformal_max, f.bound_excess);
       table += line;
     }
-    rep["summary"] = {{"frames", frames.size()},
-                      {"certified", static_cast<int>(frames.size()) - uncertified},
-                      {"uncertified", uncertified},
-                      {"mean_iterations", solved ? sum_it / solved : 0.0},
-                      {"mean_ms", solved ? sum_ms / solved : 0.0},
-                      {"max_ms", max_ms},
-                      {"total_s", total_s},
-                      {"frames_within_keyframe_bounds", bounded},
-                      {"max_bound_excess", max_excess}};
-    rep["frames"] = fr;
-    write_file_atomic(out / "report.json", rep.dump(1) + "\n");
+    const SequenceSummary sum = summarize(frames, seq.total_s);
     char head[512];
     std::snprintf(head, sizeof head,
                   "hsi interpolate %s: %zu frames, %d certified, %d NOT certified\n"
                   "mean %.2f Newton iterations and %.1f ms per solved frame (max %.1f ms), %.1f s in all\n"
                   "%d frames within the keyframes' distortion bounds, largest excess %.3g (relative)\n\n",
-                  o->scene.c_str(), frames.size(), static_cast<int>(frames.size()) - uncertified, uncertified,
-                  solved ? sum_it / solved : 0.0, solved ? sum_ms / solved : 0.0, max_ms, total_s, bounded, max_excess);
+                  o->scene.c_str(), frames.size(), sum.certified, sum.uncertified, sum.mean_iterations, sum.mean_ms, sum.max_ms,
+                  sum.total_s, sum.within_bounds, sum.max_bound_excess);
     write_file_atomic(out / "report.txt", std::string(head) + table);
 
     plot_series(out / "energy.png", scene.name + ": energy per frame (2 = metric reproduced exactly)", "t", ts,
@@ -220,7 +166,7 @@ void register_interpolate(CLI::App& app) {
     std::printf("%s", head);
     std::printf("wrote %s/{frames.hsif, report.json, report.txt, energy.png, iterations.png, distortion.png%s}\n",
                 out.string().c_str(), o->png_count > 0 ? ", frames/" : "");
-    if (uncertified > 0) throw std::runtime_error(std::to_string(uncertified) + " frame(s) could not be certified (see the report)");
+    if (sum.uncertified > 0) throw std::runtime_error(std::to_string(sum.uncertified) + " frame(s) could not be certified (see the report)");
   });
 }
 

@@ -48,6 +48,7 @@ SceneSequence interpolate_scene(Scene& scene, const SceneSequenceOptions& option
   SceneSequence seq;
   seq.setup = setup;
   const auto t0 = std::chrono::steady_clock::now();
+  seq.options = options.interpolation;
   seq.frames = interp.sequence(options.frames, progress);
   seq.total_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return seq;
@@ -83,6 +84,8 @@ std::string report_json(const Scene& scene, const SceneSequence& seq, const std:
   rep["samples"] = seq.setup->G.size();
   rep["hessian_samples"] = seq.setup->H.size();
   rep["n"] = seq.setup->map_space.n();
+  rep["projection"] = to_string(seq.options.projection);
+  rep["tolerance"] = seq.options.tolerance;
   nlohmann::json fr = nlohmann::json::array();
   for (size_t i = 0; i < seq.frames.size(); ++i) {
     const FrameResult& f = seq.frames[i];

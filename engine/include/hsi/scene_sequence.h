@@ -24,6 +24,7 @@ struct SceneSequence {
   std::shared_ptr<const ShapeSetup> setup;
   std::vector<FrameResult> frames;
   double total_s = 0;  // wall-clock time of the sequence
+  InterpolationOptions options;  // what the frames were solved with (recorded in the report)
 
   int uncertified() const;
   FrameFile frame_file() const;  // cage + posed maps, as hsi interpolate writes them
@@ -48,8 +49,8 @@ struct SequenceSummary {
 SequenceSummary summarize(const std::vector<FrameResult>& frames, double total_s);
 
 // The per-frame report (the fields of hsi interpolate's report.json: time, keyframe,
-// certified, iterations, energy, ms, distortion and its bound, certificate) plus a
-// summary. `scene_path` is only recorded.
+// certified, iterations, energy, ms, distortion and its bound, certificate), the
+// solver options, plus a summary. `scene_path` is only recorded.
 std::string report_json(const Scene& scene, const SceneSequence& sequence, const std::string& scene_path = "");
 // One line per frame, a header line first; RFC 4180, '.' decimals.
 std::string report_csv(const SceneSequence& sequence);
