@@ -22,44 +22,25 @@
 #include "hsi/harmonic_map.h"
 #include "hsi/interpolation.h"
 #include "test_shapes.h"
+#include "vulkan_test.h"
 
 using namespace hsi;
 
 namespace {
 
-bool vulkan_required() {
-  const char* env = std::getenv("HSI_REQUIRE_VULKAN");
-  return env && *env && std::string(env) != "0";
-}
-
-// Runs body(context) with validation on, then destroys the context (so teardown
-// messages are caught too) and fails on any validation message.
+// test::with_vulkan, for a device that can run the dense certificate (shaderFloat64);
+// on one without, the certifier must refuse with VulkanError, and the test is skipped.
 template <class Body>
 void with_vulkan(Body&& body) {
-  vk::ContextOptions options;
-  options.validation = true;
-  std::shared_ptr<vk::ValidationLog> log;
-  {
-    std::unique_ptr<vk::Context> ctx;
-    try {
-      ctx = std::make_unique<vk::Context>(options);
-    } catch (const vk::VulkanUnavailable& e) {
-      if (vulkan_required()) FAIL("HSI_REQUIRE_VULKAN is set but: " << e.what());
-      WARN("skipping Vulkan test: " << e.what());
-      return;
-    }
-    log = ctx->validation_log();
-    if (!ctx->info().float64) {
-      // The dense certificate needs shaderFloat64 and says so.
-      CHECK_THROWS_AS(vk::DenseCertifier(*ctx, test::disc(), build_cage(test::disc()), sample_boundary(test::disc(), 64)),
+  test::with_vulkan([&](vk::Context& ctx) {
+    if (!ctx.info().float64) {
+      CHECK_THROWS_AS(vk::DenseCertifier(ctx, test::disc(), build_cage(test::disc()), sample_boundary(test::disc(), 64)),
                       vk::VulkanError);
-      WARN("skipping: " << ctx->info().name << " has no shaderFloat64");
+      WARN("skipping: " << ctx.info().name << " has no shaderFloat64");
       return;
     }
-    body(*ctx);
-  }
-  INFO(log->summary(10));
-  CHECK(log->count() == 0);
+    body(ctx);
+  });
 }
 
 constexpr double kBoundTol = 1e-9;  // the stated tolerance of the bounds (relative to σ1 max)

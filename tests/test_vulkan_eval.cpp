@@ -14,37 +14,13 @@
 #include "hsi/compute/vulkan_context.h"
 #include "hsi/harmonic_map.h"
 #include "test_shapes.h"
+#include "vulkan_test.h"
 
 using namespace hsi;
 
 namespace {
 
-bool vulkan_required() {
-  const char* env = std::getenv("HSI_REQUIRE_VULKAN");
-  return env && *env && std::string(env) != "0";
-}
-
-// Runs body(context) with validation on, then destroys the context (so teardown
-// messages, e.g. leaked objects, are caught too) and fails on any message.
-template <class Body>
-void with_vulkan(Body&& body, vk::ContextOptions options = {}) {
-  options.validation = true;
-  std::shared_ptr<vk::ValidationLog> log;
-  {
-    std::unique_ptr<vk::Context> ctx;
-    try {
-      ctx = std::make_unique<vk::Context>(options);
-    } catch (const vk::VulkanUnavailable& e) {
-      if (vulkan_required()) FAIL("HSI_REQUIRE_VULKAN is set but: " << e.what());
-      WARN("skipping Vulkan test: " << e.what());
-      return;
-    }
-    log = ctx->validation_log();
-    body(*ctx);
-  }
-  INFO(log->summary(10));
-  CHECK(log->count() == 0);
-}
+using test::with_vulkan;
 
 struct SceneMaps {
   std::string name;
@@ -115,7 +91,7 @@ TEST_CASE("Vulkan context: device, validation layer live, clear errors", "[vulka
     try {
       ctx = std::make_unique<vk::Context>(o);
     } catch (const vk::VulkanUnavailable& e) {
-      if (vulkan_required()) FAIL(e.what());
+      if (test::env_set("HSI_REQUIRE_VULKAN")) FAIL(e.what());
       WARN("skipping: " << e.what());
       return;
     }
@@ -143,7 +119,7 @@ TEST_CASE("Vulkan context: device, validation layer live, clear errors", "[vulka
     try {
       const vk::Context probe;
     } catch (const vk::VulkanUnavailable& e) {
-      if (vulkan_required()) FAIL(e.what());
+      if (test::env_set("HSI_REQUIRE_VULKAN")) FAIL(e.what());
       WARN("skipping: " << e.what());
       return;
     }

@@ -21,39 +21,15 @@
 #include "hsi/shape_setup.h"
 #include "hsi/triangulate.h"
 #include "test_shapes.h"
+#include "vulkan_test.h"
 
 using namespace hsi;
 using Catch::Matchers::Contains;
 
 namespace {
 
-bool env_set(const char* name) {
-  const char* env = std::getenv(name);
-  return env && *env && std::string(env) != "0";
-}
-
-// Runs body(context) with validation on, then destroys the context (so teardown
-// messages are caught too) and fails on any message.
-template <class Body>
-void with_vulkan(Body&& body) {
-  vk::ContextOptions options;
-  options.validation = true;
-  std::shared_ptr<vk::ValidationLog> log;
-  {
-    std::unique_ptr<vk::Context> ctx;
-    try {
-      ctx = std::make_unique<vk::Context>(options);
-    } catch (const vk::VulkanUnavailable& e) {
-      if (env_set("HSI_REQUIRE_VULKAN")) FAIL("HSI_REQUIRE_VULKAN is set but: " << e.what());
-      WARN("skipping Vulkan test: " << e.what());
-      return;
-    }
-    log = ctx->validation_log();
-    body(*ctx);
-  }
-  INFO(log->summary(10));
-  CHECK(log->count() == 0);
-}
+using test::env_set;
+using test::with_vulkan;
 
 // A 2 × 1.5 rectangle with a rectangular hole right of centre.
 Shape framed_shape() {
