@@ -67,8 +67,16 @@ std::vector<Metric> Interpolator::blended_metric(double t) const {
 
 Pose Interpolator::pose_of(const HarmonicMap& map) const {
   // f_i = (C φ)_i + conj((C ψ)_i); Σ conj(u_i) = 0, so Σ (f_i − f̄) conj(u_i) = Σ f_i conj(u_i).
-  const cd cf = (c_mean_ * map.phi).value() + std::conj((c_mean_ * map.psi).value());
-  const cd s = (c_rot_ * map.phi).value() + std::conj((c_rot_bar_ * map.psi).value());
+  // A translation c of the image adds c to the outer loop's φ_j (the outer Cauchy
+  // coordinates sum to 1): take it out exactly before the sums, whose rows reproduce
+  // constants only to rounding, or a shape far from the origin (|c| ~ 1e6) gets a
+  // pose off by ~1e-4 of its size.
+  const Eigen::Index outer = static_cast<Eigen::Index>(setup_.cage.loops.front().size());
+  const cd ref = map.phi.head(outer).mean();
+  VectorXcd phi = map.phi;
+  phi.head(outer).array() -= ref;
+  const cd cf = ref + (c_mean_ * phi).value() + std::conj((c_mean_ * map.psi).value());
+  const cd s = (c_rot_ * phi).value() + std::conj((c_rot_bar_ * map.psi).value());
   return {cf, std::arg(s)};
 }
 
