@@ -17,7 +17,7 @@ FrameFile frames_from(const std::string& from, Scene& scene) {
   std::filesystem::path p(from);
   if (std::filesystem::is_directory(p)) p /= "frames.hsif";
   FrameFile ff = read_frames(p);
-  const Cage cage = scene.cage ? *scene.cage : build_cage(scene.shape, scene.cage_options);
+  const Cage cage = scene_cage(scene);
   if (ff.cage.loops != cage.loops || ff.cage.hole_points != cage.hole_points)
     throw InputError(p.string() + ": its cage is not the scene's (were these frames computed for another scene?)");
   return ff;

@@ -4,6 +4,7 @@
 
 #include "commands.h"
 #include "hsi/keyframes.h"
+#include "hsi/scene_sequence.h"
 #include "plot.h"
 
 namespace hsi::cli {
@@ -30,8 +31,7 @@ void register_keyframes(CLI::App& app) {
     Scene scene = load_scene(o->scene);
     if (scene.keyframes.empty()) throw InputError(o->scene + ": the scene has no keyframes");
     // Coefficients are stored over a cage: keep the one they were solved with.
-    if (!scene.cage) scene.cage = build_cage(scene.shape, scene.cage_options);
-    const auto setup = make_shape_setup(scene);
+    const auto setup = scene_setup(scene);
     KeyframeOptions ko;
     ko.lambda = o->lambda;
     ko.stages = o->stages;

@@ -98,7 +98,7 @@ const std::vector<Case> kLoadCases = {
     {"nan_literal.json", {"invalid JSON at line 1", "invalid literal"}},
     {"infinity_literal.json", {"invalid JSON at line 1", "invalid literal"}},
     {"number_overflow.json", {"invalid JSON", "number overflow", "1e400"}},
-    {"bad_utf8.json", {"invalid JSON at line 1", "UTF-8"}},
+    {"bad_utf8.json", {"invalid JSON at line 1, column 27: syntax error while parsing value - invalid string: ill-formed UTF-8 byte; last read: '\"\\xFF'"}},
     {"two_documents.json", {"invalid JSON at line 1", "expected end of input"}},
     {"deep_nesting.json", {"shape.outer[0]: expected a point [x, y], got an array of 1"}},
     // structure, types, versions
@@ -215,7 +215,9 @@ TEST_CASE("bad-input corpus: every malformed scene is refused with a message nam
     DYNAMIC_SECTION(c.file) {
       const fs::path p = kCorpus / c.file;
       REQUIRE_NOTHROW(load_scene(p));  // well-formed: refused only when the keyframes are certified
-      check_message(input_error([&] { make_frames(p); }), c.expect);
+      std::vector<std::string> parts = c.expect;
+      parts.push_back(p.string() + ": ");  // the file is named even though it loaded
+      check_message(input_error([&] { make_frames(p); }), parts);
     }
   }
 }
@@ -318,6 +320,10 @@ std::vector<PngCase> png_cases() {
       {"bad_deflate.png", bad_zlib, {"corrupt or truncated PNG data"}},
       {"zero_width.png", kSig + ihdr(0, 16, 8, 6) + chunk("IEND", ""), {"corrupt or truncated PNG data"}},
       {"huge.png", kSig + ihdr(100000, 100000, 8, 6) + chunk("IDAT", "\x78\x01") + chunk("IEND", ""), {"image too large (100000x100000 px", "at most 16384"}},
+      // Within the size limit, but 2 bytes of data cannot hold 16384² pixels: refused
+      // before the gigabyte of pixels is allocated.
+      {"claims_16k.png", kSig + ihdr(16384, 16384, 16, 6) + chunk("IDAT", "\x78\x01") + chunk("IEND", ""),
+       {"truncated or corrupt PNG: its header claims 16384x16384 px", "holds only 2 bytes of image data"}},
       {"no_alpha.png", png(8, 8, 2, disc), {"the image has no alpha channel (RGB)"}},
       {"transparent.png", png(16, 16, 6, [](int, int) { return 0; }), {"no opaque pixels above alpha threshold 0.5", "16x16"}},
       {"faint.png", png(16, 16, 6, [](int, int) { return 100; }), {"no opaque pixels above alpha threshold 0.5"}},
@@ -361,6 +367,8 @@ TEST_CASE("bad-input corpus: missing, corrupt, huge or empty textures are refuse
   check_message(input_error([&] { check("GIF89a......"); }), {"tex.png: the texture is not a PNG file (bad signature)"});
   check_message(input_error([&] { check(good.substr(0, good.size() / 2)); }), {"tex.png: the texture is corrupt or truncated PNG data"});
   check_message(input_error([&] { check(kSig + ihdr(100000, 20, 8, 6) + chunk("IDAT", "\x78\x01") + chunk("IEND", "")); }), {"tex.png: the texture"});
+  const std::string claims_16k = kSig + ihdr(16384, 16384, 8, 6) + chunk("IDAT", "\x78\x01") + chunk("IEND", "");
+  check_message(input_error([&] { check(claims_16k); }), {"tex.png (texture): truncated or corrupt PNG", "16384x16384"});
 
   // glTF export reads the scene's texture: every broken one is named, no file is written.
   Scene scene = load_scene(fs::path(HSI_TESTS_DIR) / "fuzz" / "corpus_fuzz_scene" / "square_hole.json");
@@ -389,6 +397,8 @@ TEST_CASE("bad-input corpus: missing, corrupt, huge or empty textures are refuse
     check_message(input_error([&] { (void)vk::read_png(dir / name); }), {(dir / name).string()});
   write_bytes(dir / "huge.png", kSig + ihdr(100000, 100000, 8, 6) + chunk("IDAT", "\x78\x01") + chunk("IEND", ""));
   check_message(input_error([&] { (void)vk::read_png(dir / "huge.png"); }), {"huge.png", "100000 x 100000"});
+  write_bytes(dir / "claims_16k.png", claims_16k);
+  check_message(input_error([&] { (void)vk::read_png(dir / "claims_16k.png"); }), {"claims_16k.png: truncated or corrupt PNG"});
 #endif
 }
 

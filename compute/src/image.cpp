@@ -10,6 +10,7 @@
 #include <string>
 
 #include "hsi/domain.h"
+#include "hsi/png_import.h"
 
 namespace hsi::vk {
 
@@ -36,6 +37,12 @@ RgbaImage read_png(const std::filesystem::path& path) {
     png_image_free(&img);
     throw InputError(path.string() + ": image size " + std::to_string(img.width) + " x " +
                      std::to_string(img.height) + " is outside 1.." + std::to_string(kMaxSide));
+  }
+  try {
+    check_png_payload({reinterpret_cast<const unsigned char*>(bytes.data()), bytes.size()}, path.string());
+  } catch (const InputError&) {
+    png_image_free(&img);
+    throw;
   }
   img.format = PNG_FORMAT_RGBA;
   RgbaImage out(static_cast<int>(img.width), static_cast<int>(img.height));

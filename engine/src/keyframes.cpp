@@ -114,6 +114,7 @@ std::vector<SceneKeyframe> solve_scene_keyframes(Scene& scene, const ShapeSetup&
                                                  bool force, const std::function<void(const SceneKeyframe&)>& on_keyframe) {
   std::vector<SceneKeyframe> out;
   HarmonicMap previous = identity_map(setup.cage);
+  try {
   for (size_t k = 0; k < scene.keyframes.size(); ++k) {
     Keyframe& key = scene.keyframes[k];
     const std::string label = "keyframe " + std::to_string(k);
@@ -131,6 +132,9 @@ std::vector<SceneKeyframe> solve_scene_keyframes(Scene& scene, const ShapeSetup&
     previous = *key.coefficients;
     if (on_keyframe) on_keyframe(rep);
     out.push_back(std::move(rep));
+  }
+  } catch (const InputError& e) {
+    rethrow_in_scene(scene, e);
   }
   return out;
 }

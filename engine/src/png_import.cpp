@@ -8,6 +8,7 @@
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
+#include <cstring>
 #include <fstream>
 #include <iterator>
 #include <sstream>
@@ -83,6 +84,7 @@ AlphaImage read_alpha(std::span<const unsigned char> data, const std::string& na
   if (image.width > static_cast<png_uint_32>(kPngMaxSide) || image.height > static_cast<png_uint_32>(kPngMaxSide))
     throw InputError(name + ": image too large (" + std::to_string(image.width) + "x" + std::to_string(image.height) +
                      " px; at most " + std::to_string(kPngMaxSide) + " px on a side)");
+  check_png_payload(data, name);
   if (!(image.format & PNG_FORMAT_FLAG_ALPHA))
     throw InputError(name + ": the image has no alpha channel (" + describe_format(image.format) +
                      "); import-png traces the alpha channel, so it needs RGBA, grey+alpha, or a palette or "
@@ -314,6 +316,32 @@ void check_options(const PngImportOptions& options, const std::string& name) {
 }
 }  // namespace
 
+void check_png_payload(std::span<const unsigned char> data, const std::string& name) {
+  const auto be32 = [&](size_t at) {
+    return (uint32_t{data[at]} << 24) | (uint32_t{data[at + 1]} << 16) | (uint32_t{data[at + 2]} << 8) | uint32_t{data[at + 3]};
+  };
+  // IHDR comes first: 8-byte signature, then length, "IHDR", width, height, depth, colour type.
+  if (data.size() < 33 || std::memcmp(&data[12], "IHDR", 4) != 0) return;  // libpng reports these itself
+  const uint64_t width = be32(16), height = be32(20);
+  const unsigned depth = data[24], colour = data[25];
+  const unsigned channels = colour == 0 ? 1 : colour == 2 ? 3 : colour == 3 ? 1 : colour == 4 ? 2 : colour == 6 ? 4 : 0;
+  if (channels == 0 || depth == 0 || depth > 16) return;  // invalid header: libpng's message names it
+  // Sum the IDAT chunks' lengths (as far as the file goes).
+  uint64_t compressed = 0;
+  for (size_t at = 8; at + 8 <= data.size();) {
+    const uint64_t length = be32(at);
+    if (std::memcmp(&data[at + 4], "IDAT", 4) == 0) compressed += std::min<uint64_t>(length, data.size() - (at + 8));
+    at += static_cast<size_t>(std::min<uint64_t>(12 + length, data.size()));
+  }
+  // The filtered rows the zlib stream must expand to (non-interlaced; interlacing adds more).
+  const uint64_t raw = height * (1 + (width * channels * depth + 7) / 8);
+  constexpr uint64_t kDeflateMaxRatio = 1032;
+  if (raw > kDeflateMaxRatio * compressed + 1024)
+    throw InputError(name + ": truncated or corrupt PNG: its header claims " + std::to_string(width) + "x" +
+                     std::to_string(height) + " px (" + std::to_string(raw) + " bytes of rows) but it holds only " +
+                     std::to_string(compressed) + " bytes of image data, which cannot expand to that");
+}
+
 std::array<int, 2> check_png_texture(std::span<const unsigned char> data, const std::string& name) {
   static constexpr unsigned char kSignature[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
   if (data.size() < 8 || !std::equal(std::begin(kSignature), std::end(kSignature), data.begin()))
@@ -328,6 +356,7 @@ std::array<int, 2> check_png_texture(std::span<const unsigned char> data, const 
       image.height > static_cast<png_uint_32>(kPngMaxSide))
     throw InputError(name + ": the texture's size " + std::to_string(image.width) + "x" + std::to_string(image.height) +
                      " px is outside 1.." + std::to_string(kPngMaxSide) + " px on a side");
+  check_png_payload(data, name + " (texture)");
   image.format = PNG_FORMAT_RGBA;
   std::vector<unsigned char> pixels(PNG_IMAGE_SIZE(image));
   if (!png_image_finish_read(&image, nullptr, pixels.data(), 0, nullptr))

@@ -2,6 +2,7 @@
 #include "hsi/scene_io.h"
 
 #include <cmath>
+#include <cstdio>
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <sstream>
@@ -86,9 +87,25 @@ Scene parse_scene(const std::string& text, const std::filesystem::path& base_dir
   try {
     j = json::parse(text);
   } catch (const json::parse_error& e) {
+    // nlohmann's text is "[json.exception.parse_error.101] parse error at line L, column C: why";
+    // keep only "why" (the location is ours, from the byte offset), with bytes that
+    // are not printable ASCII (a bad UTF-8 byte it quotes) written as \xNN.
     std::string msg = e.what();
-    if (auto p = msg.find("]: "); p != std::string::npos) msg = msg.substr(p + 3);
-    c.fail("", "invalid JSON at " + line_col(text, e.byte > 0 ? e.byte - 1 : 0) + ": " + msg);
+    if (auto p = msg.find("] "); p != std::string::npos) msg = msg.substr(p + 2);
+    if (msg.rfind("parse error", 0) == 0)
+      if (auto p = msg.find(": "); p != std::string::npos) msg = msg.substr(p + 2);
+    std::string clean;
+    for (const char ch : msg) {
+      const auto u = static_cast<unsigned char>(ch);
+      if (u >= 0x20 && u < 0x7f) {
+        clean += ch;
+      } else {
+        char hex[8];
+        std::snprintf(hex, sizeof hex, "\\x%02X", u);
+        clean += hex;
+      }
+    }
+    c.fail("", "invalid JSON at " + line_col(text, e.byte > 0 ? e.byte - 1 : 0) + ": " + clean);
   } catch (const json::exception& e) {
     // E.g. a number too large for a double (1e400): nlohmann reports it as out_of_range.
     std::string msg = e.what();
@@ -104,6 +121,7 @@ Scene parse_scene(const std::string& text, const std::filesystem::path& base_dir
     c.fail("hsi_scene", "unsupported version " + version->dump() + " (this hsi reads version " + std::to_string(kSceneVersion) + ")");
   Scene s;
   s.base_dir = base_dir;
+  s.source = source;
   if (const json* n = field(j, "name")) {
     if (!n->is_string()) c.fail("name", "expected a string");
     s.name = n->get<std::string>();
@@ -226,6 +244,12 @@ Scene parse_scene(const std::string& text, const std::filesystem::path& base_dir
   return s;
 }
 
+void rethrow_in_scene(const Scene& scene, const InputError& error) {
+  const std::string what = error.what();
+  if (scene.source.empty() || what.rfind(scene.source + ": ", 0) == 0) throw error;
+  throw InputError(scene.source + ": " + what);
+}
+
 Scene load_scene(const std::filesystem::path& path) {
   std::ifstream in(path, std::ios::binary);
   if (!in) throw InputError(path.string() + ": cannot open the scene file");
@@ -272,6 +296,13 @@ std::string scene_to_json(const Scene& s) {
 
 void save_scene(const Scene& scene, const std::filesystem::path& path) { write_file_atomic(path, scene_to_json(scene)); }
 
-Cage scene_cage(const Scene& scene) { return scene.cage ? *scene.cage : build_cage(scene.shape, scene.cage_options); }
+Cage scene_cage(const Scene& scene) {
+  if (scene.cage) return *scene.cage;
+  try {
+    return build_cage(scene.shape, scene.cage_options);
+  } catch (const InputError& e) {
+    rethrow_in_scene(scene, e);
+  }
+}
 
 }  // namespace hsi

@@ -24,15 +24,19 @@ FrameFile SceneSequence::frame_file() const {
 }
 
 std::shared_ptr<const ShapeSetup> scene_setup(Scene& scene, int samples, double hessian_ratio) {
-  if (!scene.cage) scene.cage = build_cage(scene.shape, scene.cage_options);
-  return make_shape_setup(scene, samples, hessian_ratio);
+  try {
+    if (!scene.cage) scene.cage = scene_cage(scene);
+    return make_shape_setup(scene, samples, hessian_ratio);
+  } catch (const InputError& e) {
+    rethrow_in_scene(scene, e);
+  }
 }
 
 SceneSequence interpolate_scene(Scene& scene, const SceneSequenceOptions& options,
                                 const std::function<void(const FrameResult&, int, int)>& progress,
                                 std::unique_ptr<NewtonCore> core, std::shared_ptr<const ShapeSetup> setup) {
   if (scene.keyframes.size() < 2)
-    throw InputError("scene '" + scene.name + "': interpolation needs at least two keyframes (it has " +
+    throw InputError((scene.source.empty() ? "scene '" + scene.name + "'" : scene.source) + ": interpolation needs at least two keyframes (it has " +
                      std::to_string(scene.keyframes.size()) + ")");
   if (options.frames < 2) throw InputError("a sequence needs at least 2 frames (got " + std::to_string(options.frames) + ")");
   if (!setup) setup = scene_setup(scene, options.samples, options.hessian_ratio);

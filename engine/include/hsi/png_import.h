@@ -59,4 +59,11 @@ PngShape import_png_alpha(std::span<const unsigned char> png_bytes, const std::s
 // problem: not a PNG, corrupt or truncated data, an empty or too large image.
 std::array<int, 2> check_png_texture(std::span<const unsigned char> png_bytes, const std::string& name);
 
+// Refuses, before anything is allocated for the pixels, a PNG whose header claims
+// more pixels than its compressed data could hold (deflate expands at most ~1032:1):
+// a truncated or corrupt file that would otherwise cost up to gigabytes of memory
+// before libpng finds the data missing. Throws InputError naming `name`, the size
+// claimed and the data present. Call after the signature is known to be PNG's.
+void check_png_payload(std::span<const unsigned char> png_bytes, const std::string& name);
+
 }  // namespace hsi

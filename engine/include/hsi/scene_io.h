@@ -55,9 +55,16 @@ struct Scene {
   std::vector<cd> handles;
   std::vector<Keyframe> keyframes;
   std::filesystem::path base_dir;       // directory of the scene file
+  std::string source;                   // where it was read from (the path), for messages; may be empty
 
   std::filesystem::path texture_path() const;  // resolved against base_dir
 };
+
+// An InputError raised while working on `scene` after it was loaded (its cage, its
+// keyframes), re-thrown with the scene's source in front so a message names the file:
+// "walk.json: keyframe 1 is not locally injective: …". Used as
+//   try { … } catch (const InputError& e) { rethrow_in_scene(scene, e); }
+[[noreturn]] void rethrow_in_scene(const Scene& scene, const InputError& error);
 
 // Parses and validates (shape, cage if given, keyframe sizes). Throws InputError.
 Scene parse_scene(const std::string& json_text, const std::filesystem::path& base_dir,
