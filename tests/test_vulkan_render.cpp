@@ -18,6 +18,7 @@
 #include "hsi/compute/renderer.h"
 #include "hsi/compute/vulkan_context.h"
 #include "hsi/interpolation.h"
+#include "hsi/keyframes.h"
 #include "hsi/shape_setup.h"
 #include "hsi/triangulate.h"
 #include "test_shapes.h"
@@ -453,5 +454,105 @@ TEST_CASE("render goldens: keyframes and interpolated frames of bundled scenes",
       const HarmonicMap& k = keys.back();
       check_golden(r.render(b.cage, k, frame_view(b.scene.shape, b.cage, k, 192, 192, 6), style), "pretzel_last_key");
     }
+  });
+}
+
+TEST_CASE("render: given positions equal to f(vertices) draw the image of the map path", "[vulkan][render]") {
+  with_vulkan([](vk::Context& ctx) {
+    // A bundled keyframe (a real harmonic map, not affine), every overlay on.
+    const Bundled b("two_holes");
+    const HarmonicMap key = b.keyframes().back();
+    const int W = 256, H = 192;
+    vk::Renderer r(ctx, W, H);
+    r.set_mesh(b.mesh, b.scene.handles);
+    r.set_texture(b.texture, b.rect);
+    const vk::View view = frame_view(b.scene.shape, b.cage, key, W, H, 8);
+    const MapValues v = evaluate_map(b.cage, key, b.mesh.vertices);
+    std::vector<cd> pos(b.mesh.vertices.size());
+    std::vector<double> kappa(pos.size());
+    double kappa_max = 1;
+    for (size_t i = 0; i < pos.size(); ++i) {
+      const auto k = static_cast<Eigen::Index>(i);
+      pos[i] = v.f(k);
+      const double a = std::abs(v.f_z(k)), c = std::abs(v.fzbar_conj(k));
+      kappa[i] = (a + c) / (a - c);
+      kappa_max = std::max(kappa_max, kappa[i]);
+    }
+    REQUIRE(kappa_max > 1.05);  // the overlay shows something
+    const std::vector<cd> handles = map_points(b.cage, key, b.scene.handles);
+    vk::RenderStyle style;
+    style.overlays = vk::kOverlayDistortion | vk::kOverlayBoundary | vk::kOverlayHandles;
+    style.distortion_lo = 1;
+    style.distortion_hi = kappa_max;
+    style.distortion_opacity = 0.6f;
+    const vk::RgbaImage from_map = r.render(b.cage, key, view, style);
+    const vk::RgbaImage given = r.render(pos, kappa, view, style, handles);
+    const Difference d = compare(given, from_map);
+    int worst = 0;
+    for (int y = 0; y < H; ++y)
+      for (int x = 0; x < W; ++x) worst = std::max(worst, max_channel_diff(given.at(x, y), from_map.at(x, y)));
+    INFO("mean abs diff " << d.mean_abs << "/255, worst pixel " << worst);
+    CHECK(d.mean_abs < 0.05);
+    CHECK(worst <= 3);
+
+    // The test can fail: moved positions, other distortion values, or no handles differ.
+    std::vector<cd> moved = pos;
+    for (cd& p : moved) p += cd(4 / view.pixels_per_unit, 0);
+    CHECK(compare(r.render(moved, kappa, view, style, handles), from_map).mean_abs > 1);
+    std::vector<double> flat(kappa.size(), 1.0);
+    CHECK(compare(r.render(pos, flat, view, style, handles), from_map).mean_abs > 1);
+    CHECK(compare(r.render(pos, kappa, view, style), from_map).outlier_fraction > 1e-3);
+
+    // Refusals: sizes, non-finite positions, a handle count that is neither 0 nor all.
+    CHECK_THROWS_WITH(r.render(std::span(pos).first(pos.size() - 1), kappa, view, style), Contains("one position"));
+    std::vector<cd> nan_pos = pos;
+    nan_pos[7] = cd(std::nan(""), 0);
+    CHECK_THROWS_WITH(r.render(nan_pos, kappa, view, style), Contains("position 7 is not finite"));
+    CHECK_THROWS_WITH(r.render(pos, kappa, view, style, std::span(handles).first(1)), Contains("handle positions"));
+  });
+}
+
+TEST_CASE("render: an unwelded mesh shows per-triangle distortion flat", "[vulkan][render]") {
+  const Setup s(0.25);
+  const vk::UnweldedMesh u = vk::unweld(s.mesh);
+  REQUIRE(u.mesh.vertex_count() == 3 * s.mesh.triangle_count());
+  REQUIRE(u.mesh.triangle_count() == s.mesh.triangle_count());
+  REQUIRE(u.mesh.boundary_edges.size() == s.mesh.boundary_edges.size());
+  for (size_t e = 0; e < s.mesh.boundary_edges.size(); ++e)
+    for (size_t k = 0; k < 2; ++k)
+      CHECK(u.mesh.vertices[static_cast<size_t>(u.mesh.boundary_edges[e][k])] ==
+            s.mesh.vertices[static_cast<size_t>(s.mesh.boundary_edges[e][k])]);
+  for (size_t v = 0; v < u.source.size(); ++v) CHECK(u.mesh.vertices[v] == s.mesh.vertices[static_cast<size_t>(u.source[v])]);
+  with_vulkan([&](vk::Context& ctx) {
+    const int W = 200, H = 150;
+    vk::Renderer r(ctx, W, H);
+    r.set_mesh(u.mesh);
+    const vk::View view = vk::View::fit({{-1, -0.75}, {1, 0.75}}, W, H);
+    // Triangle t gets κ = 1 + (t mod 5) / 4 over the range [1, 2]: five colours.
+    std::vector<double> kappa(u.mesh.vertices.size());
+    for (size_t v = 0; v < kappa.size(); ++v) kappa[v] = 1 + static_cast<double>((v / 3) % 5) / 4;
+    vk::RenderStyle style;
+    style.overlays = vk::kOverlayDistortion;
+    style.distortion_opacity = 1;
+    const vk::RgbaImage img = r.render(u.mesh.vertices, kappa, view, style);
+    int checked = 0, bad = 0;
+    for (size_t t = 0; t < u.mesh.triangles.size(); ++t) {
+      const auto& tri = u.mesh.triangles[t];
+      const cd a = u.mesh.vertices[static_cast<size_t>(tri[0])], b = u.mesh.vertices[static_cast<size_t>(tri[1])],
+               c = u.mesh.vertices[static_cast<size_t>(tri[2])];
+      const cd q = view.to_pixel((a + b + c) / 3.0);
+      // Only where the pixel lies well inside the triangle (≥ 2 px from its edges).
+      auto dist = [&](cd p0, cd p1) {
+        const cd e = view.to_pixel(p1) - view.to_pixel(p0);
+        return std::abs((std::conj(e) * (q - view.to_pixel(p0))).imag()) / std::abs(e);
+      };
+      if (std::min({dist(a, b), dist(b, c), dist(c, a)}) < 2.5) continue;
+      ++checked;
+      const auto cm = vk::colormap(static_cast<double>(t % 5) / 4);
+      const uint8_t* p = img.at(static_cast<int>(q.real()), static_cast<int>(q.imag()));
+      for (size_t ch = 0; ch < 3; ++ch) bad += std::abs(p[ch] - cm[ch] * 255) > 2.5;
+    }
+    CHECK(checked > 20);
+    CHECK(bad == 0);
   });
 }

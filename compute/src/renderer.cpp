@@ -12,6 +12,7 @@
 #include <cstring>
 #include <limits>
 #include <string>
+#include <unordered_map>
 
 #include "hsi/compute/spirv/render_disc_frag.h"
 #include "hsi/compute/spirv/render_disc_vert_f32.h"
@@ -293,6 +294,10 @@ struct Renderer::Impl {
   DeviceHandle<VkPipeline> mesh, line, disc;
   Buffer uv, index, segments;
   Buffer readback;
+  // Given geometry (render(positions, kappa, ...)): the layouts of the evaluation's
+  // f and fields outputs, host-written.
+  Buffer given_f, given_fields;
+  size_t given_capacity = 0;  // points they hold
 };
 
 Renderer::~Renderer() = default;
@@ -609,8 +614,110 @@ void Renderer::upload_uv() {
   uv_dirty_ = false;
 }
 
+UnweldedMesh unweld(const TriMesh& mesh) {
+  UnweldedMesh u;
+  const size_t nt = mesh.triangles.size();
+  u.mesh.vertices.reserve(3 * nt);
+  u.mesh.triangles.reserve(nt);
+  u.source.reserve(3 * nt);
+  u.mesh.boundary_loop.reserve(3 * nt);
+  // Each boundary edge (a, b) has the shape on its left: it is the edge a -> b of
+  // exactly one counter-clockwise triangle.
+  std::unordered_map<uint64_t, std::array<int, 2>> directed;
+  directed.reserve(3 * nt);
+  const auto key = [](int a, int b) { return (static_cast<uint64_t>(static_cast<uint32_t>(a)) << 32) | static_cast<uint32_t>(b); };
+  for (size_t t = 0; t < nt; ++t) {
+    std::array<int, 3> tri{};
+    for (int k = 0; k < 3; ++k) {
+      const int v = mesh.triangles[t][static_cast<size_t>(k)];
+      tri[static_cast<size_t>(k)] = static_cast<int>(u.mesh.vertices.size());
+      u.mesh.vertices.push_back(mesh.vertices[static_cast<size_t>(v)]);
+      u.mesh.boundary_loop.push_back(mesh.boundary_loop.empty() ? -1 : mesh.boundary_loop[static_cast<size_t>(v)]);
+      u.source.push_back(v);
+    }
+    for (int k = 0; k < 3; ++k)
+      directed[key(mesh.triangles[t][static_cast<size_t>(k)], mesh.triangles[t][static_cast<size_t>((k + 1) % 3)])] = {
+          tri[static_cast<size_t>(k)], tri[static_cast<size_t>((k + 1) % 3)]};
+    u.mesh.triangles.push_back(tri);
+  }
+  u.mesh.boundary_edges.reserve(mesh.boundary_edges.size());
+  for (const auto& [a, b] : mesh.boundary_edges) {
+    const auto it = directed.find(key(a, b));
+    if (it == directed.end())
+      throw InputError("unweld: boundary edge (" + std::to_string(a) + ", " + std::to_string(b) +
+                       ") is not an edge of a counter-clockwise triangle");
+    u.mesh.boundary_edges.push_back(it->second);
+  }
+  return u;
+}
+
 RgbaImage Renderer::render(const Cage& cage, const HarmonicMap& map, const View& view, const RenderStyle& style) {
-  frame(cage, map, view, style, true);
+  frame(&cage, &map, handle_count_, view, style, true);
+  return read_image();
+}
+
+RgbaImage Renderer::render(std::span<const cd> positions, std::span<const double> kappa, const View& view,
+                           const RenderStyle& style, std::span<const cd> handle_positions) {
+  const size_t handles = upload_given(positions, kappa, handle_positions);
+  frame(nullptr, nullptr, handles, view, style, true);
+  return read_image();
+}
+
+void Renderer::draw(std::span<const cd> positions, std::span<const double> kappa, const View& view,
+                    const RenderStyle& style, std::span<const cd> handle_positions) {
+  const size_t handles = upload_given(positions, kappa, handle_positions);
+  frame(nullptr, nullptr, handles, view, style, false);
+}
+
+size_t Renderer::upload_given(std::span<const cd> positions, std::span<const double> kappa,
+                              std::span<const cd> handle_positions) {
+  if (points_.empty()) throw InputError("renderer: no mesh (call set_mesh first)");
+  if (positions.size() != vertex_count_ || kappa.size() != vertex_count_)
+    throw InputError("renderer: given geometry needs one position and one distortion per mesh vertex (the mesh has " +
+                     std::to_string(vertex_count_) + " vertices; got " + std::to_string(positions.size()) +
+                     " positions, " + std::to_string(kappa.size()) + " distortion values)");
+  if (!handle_positions.empty() && handle_positions.size() != handle_count_)
+    throw InputError("renderer: " + std::to_string(handle_positions.size()) + " handle positions for " +
+                     std::to_string(handle_count_) + " handles (give one per handle, or none)");
+  for (size_t i = 0; i < positions.size(); ++i)
+    if (!std::isfinite(positions[i].real()) || !std::isfinite(positions[i].imag()))
+      throw InputError("renderer: given position " + std::to_string(i) + " is not finite");
+  for (size_t i = 0; i < handle_positions.size(); ++i)
+    if (!std::isfinite(handle_positions[i].real()) || !std::isfinite(handle_positions[i].imag()))
+      throw InputError("renderer: given handle position " + std::to_string(i) + " is not finite");
+  Impl& r = *impl_;
+  const size_t n = vertex_count_ + handle_count_;
+  const bool f64 = eval_.double_precision();
+  const size_t real = f64 ? sizeof(double) : sizeof(float);
+  if (r.given_capacity < n) {
+    r.given_f = Buffer(*context_, 2 * real * n, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, MemoryUse::kUpload);
+    r.given_fields = Buffer(*context_, 4 * real * n, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, MemoryUse::kUpload);
+    r.given_capacity = n;
+  }
+  // f[i] = (x, y); fields[i] = (σ1, σ2, κ, E_SD) as the evaluation writes them. Only κ
+  // is read by the shaders; σ1, σ2 and E_SD are NaN (not known here). Handles without
+  // given positions stay at their rest positions (their discs are not drawn).
+  std::vector<double> f(2 * n), fields(4 * n, std::numeric_limits<double>::quiet_NaN());
+  for (size_t i = 0; i < n; ++i) {
+    const cd p = i < vertex_count_ ? positions[i]
+                 : handle_positions.empty() ? points_[i]
+                                            : handle_positions[i - vertex_count_];
+    f[2 * i] = p.real();
+    f[2 * i + 1] = p.imag();
+    fields[4 * i + 2] = i < vertex_count_ ? kappa[i] : 1.0;
+  }
+  if (f64) {
+    r.given_f.write(f.data(), f.size() * sizeof(double));
+    r.given_fields.write(fields.data(), fields.size() * sizeof(double));
+  } else {
+    const std::vector<float> f32(f.begin(), f.end()), fields32(fields.begin(), fields.end());
+    r.given_f.write(f32.data(), f32.size() * sizeof(float));
+    r.given_fields.write(fields32.data(), fields32.size() * sizeof(float));
+  }
+  return handle_positions.size();
+}
+
+RgbaImage Renderer::read_image() {
   const auto t_read = Clock::now();
   RgbaImage out(width_, height_);
   impl_->readback.read(out.pixels.data(), out.pixels.size());
@@ -628,10 +735,11 @@ RgbaImage Renderer::render(const Cage& cage, const HarmonicMap& map, const View&
 }
 
 void Renderer::draw(const Cage& cage, const HarmonicMap& map, const View& view, const RenderStyle& style) {
-  frame(cage, map, view, style, false);
+  frame(&cage, &map, handle_count_, view, style, false);
 }
 
-void Renderer::frame(const Cage& cage, const HarmonicMap& map, const View& view, const RenderStyle& style, bool copy_out) {
+void Renderer::frame(const Cage* cage, const HarmonicMap* map, size_t handles, const View& view, const RenderStyle& style,
+                     bool copy_out) {
   if (points_.empty()) throw InputError("renderer: no mesh (call set_mesh first)");
   if (!(view.pixels_per_unit > 0) || !std::isfinite(view.pixels_per_unit))
     throw InputError("renderer: the view needs a finite positive scale");
@@ -661,22 +769,25 @@ void Renderer::frame(const Cage& cage, const HarmonicMap& map, const View& view,
   const uint32_t w = static_cast<uint32_t>(width_), h = static_cast<uint32_t>(height_);
 
   context_->submit_and_wait([&](VkCommandBuffer cmd) {
-    // The previous frame's vertex shaders read the evaluation's outputs; this frame rewrites them.
-    VkMemoryBarrier war{};
-    war.sType = VK_STRUCTURE_TYPE_MEMORY_BARRIER;
-    vkCmdPipelineBarrier(cmd, VK_PIPELINE_STAGE_VERTEX_SHADER_BIT, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, 0, 1, &war, 0,
-                         nullptr, 0, nullptr);
-    eval_.record_points(cmd, cage, map, points_);
-    VkMemoryBarrier raw{};
-    raw.sType = VK_STRUCTURE_TYPE_MEMORY_BARRIER;
-    raw.srcAccessMask = VK_ACCESS_SHADER_WRITE_BIT;
-    raw.dstAccessMask = VK_ACCESS_SHADER_READ_BIT;
-    vkCmdPipelineBarrier(cmd, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_PIPELINE_STAGE_VERTEX_SHADER_BIT, 0, 1, &raw, 0,
-                         nullptr, 0, nullptr);
+    if (cage) {
+      // The previous frame's vertex shaders read the evaluation's outputs; this frame rewrites them.
+      VkMemoryBarrier war{};
+      war.sType = VK_STRUCTURE_TYPE_MEMORY_BARRIER;
+      vkCmdPipelineBarrier(cmd, VK_PIPELINE_STAGE_VERTEX_SHADER_BIT, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, 0, 1, &war, 0,
+                           nullptr, 0, nullptr);
+      eval_.record_points(cmd, *cage, *map, points_);
+      VkMemoryBarrier raw{};
+      raw.sType = VK_STRUCTURE_TYPE_MEMORY_BARRIER;
+      raw.srcAccessMask = VK_ACCESS_SHADER_WRITE_BIT;
+      raw.dstAccessMask = VK_ACCESS_SHADER_READ_BIT;
+      vkCmdPipelineBarrier(cmd, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_PIPELINE_STAGE_VERTEX_SHADER_BIT, 0, 1, &raw, 0,
+                           nullptr, 0, nullptr);
+    }
+    // (Given geometry was written by the host before this submission, which makes it visible.)
 
     // The set is not bound in any pending command buffer: point it at this frame's buffers.
-    const Buffer& f = eval_.device_output(0);
-    const Buffer& fields = eval_.device_output(3);
+    const Buffer& f = cage ? eval_.device_output(0) : r.given_f;
+    const Buffer& fields = cage ? eval_.device_output(3) : r.given_fields;
     const VkDescriptorBufferInfo infos[3] = {{f.handle(), 0, VK_WHOLE_SIZE},
                                              {fields.handle(), 0, VK_WHOLE_SIZE},
                                              {r.segments.handle(), 0, VK_WHOLE_SIZE}};
@@ -744,7 +855,7 @@ void Renderer::frame(const Cage& cage, const HarmonicMap& map, const View& view,
       vkCmdPushConstants(cmd, r.layout.get(), kPushStages, 0, sizeof pc, &pc);
       vkCmdDraw(cmd, 6, static_cast<uint32_t>(segment_count_), 0, 0);
     }
-    if ((style.overlays & kOverlayHandles) && handle_count_ > 0 && style.handle_radius_px > 0) {
+    if ((style.overlays & kOverlayHandles) && handles > 0 && style.handle_radius_px > 0) {
       std::memcpy(pc.color, style.handle_color.data(), sizeof pc.color);
       std::memcpy(pc.color2, style.handle_outline.data(), sizeof pc.color2);
       pc.size_px = style.handle_radius_px;
@@ -752,7 +863,7 @@ void Renderer::frame(const Cage& cage, const HarmonicMap& map, const View& view,
       pc.first = static_cast<uint32_t>(vertex_count_);
       vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, r.disc.get());
       vkCmdPushConstants(cmd, r.layout.get(), kPushStages, 0, sizeof pc, &pc);
-      vkCmdDraw(cmd, 6, static_cast<uint32_t>(handle_count_), 0, 0);
+      vkCmdDraw(cmd, 6, static_cast<uint32_t>(handles), 0, 0);
     }
     vkCmdEndRenderPass(cmd);
     if (!copy_out) {

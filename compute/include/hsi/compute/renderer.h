@@ -9,8 +9,11 @@
 // One command buffer per frame: the dense evaluation (DenseEvaluator::record_points)
 // computes f and the distortion at the mesh vertices and handles on the GPU, and the
 // vertex shaders read them from its output buffer: nothing goes through the host
-// between evaluating and drawing. Text (legends, labels) is the caller's job (the
-// hsi tool composites it with cairo); colormap() gives the colours for a legend.
+// between evaluating and drawing. Geometry from elsewhere (a mesh-based method's
+// vertex positions, hsi compare's baselines) goes through the same pipelines: the
+// host writes positions and distortion into buffers of the evaluation's layout.
+// Text (legends, labels) is the caller's job (the hsi tool composites it with
+// cairo); colormap() gives the colours for a legend.
 #pragma once
 
 #include <array>
@@ -69,6 +72,18 @@ struct RenderStyle {
   float border_px = 0;
 };
 
+// The mesh with every triangle's corners made vertices of their own (3 per triangle,
+// in triangle order: vertex 3t + k is corner k of triangle t), boundary edges and
+// loops carried over: drawing it through Renderer::render(positions, kappa, ...)
+// with the same value at a triangle's three corners shows per-triangle quantities
+// flat (a mesh-based method's per-triangle distortion) instead of smeared across
+// neighbours. `source[v]` is the original vertex of vertex v.
+struct UnweldedMesh {
+  TriMesh mesh;
+  std::vector<int> source;
+};
+UnweldedMesh unweld(const TriMesh& mesh);
+
 struct RendererOptions {
   int msaa_samples = 4;  // 1, 2, 4 or 8; lowered to what the device supports
   DenseEvalOptions evaluation;  // precision of the positions (double where the device has it)
@@ -108,12 +123,30 @@ class Renderer {
   // The same frame left on the device (in the resolved image), nothing copied out:
   // what a consumer that keeps frames on the GPU pays (and what the benchmark times).
   void draw(const Cage& cage, const HarmonicMap& map, const View& view, const RenderStyle& style);
+
+  // One frame from given geometry instead of a map: vertex i of the mesh (set_mesh)
+  // at positions[i], its conformal distortion σ1/σ2 (for the overlay; ≤ 0, infinite
+  // or NaN marks a fold and saturates the colour map) kappa[i], both one per mesh
+  // vertex (else InputError; positions must be finite). Handles are drawn at
+  // handle_positions, one per handle of set_mesh, or not at all when it is empty.
+  // Same texture, overlays, MSAA, view and style as the map path: the values are
+  // written to buffers of the dense evaluation's layout that the same shaders read.
+  RgbaImage render(std::span<const cd> positions, std::span<const double> kappa, const View& view,
+                   const RenderStyle& style, std::span<const cd> handle_positions = {});
+  void draw(std::span<const cd> positions, std::span<const double> kappa, const View& view, const RenderStyle& style,
+            std::span<const cd> handle_positions = {});
   const RenderStats& last_stats() const { return stats_; }
 
  private:
   struct Impl;
   void upload_uv();
-  void frame(const Cage& cage, const HarmonicMap& map, const View& view, const RenderStyle& style, bool copy_out);
+  // Writes positions and distortion into the given-geometry buffers; returns how many
+  // handles to draw.
+  size_t upload_given(std::span<const cd> positions, std::span<const double> kappa, std::span<const cd> handle_positions);
+  // cage == nullptr: draw the given-geometry buffers (upload_given) with `handles` discs.
+  void frame(const Cage* cage, const HarmonicMap* map, size_t handles, const View& view, const RenderStyle& style,
+             bool copy_out);
+  RgbaImage read_image();
 
   const Context* context_;
   int width_, height_, samples_ = 1;
