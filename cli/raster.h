@@ -1,0 +1,48 @@
+// Compositing rendered frames with cairo (hsi render, hsi compare): cairo surfaces
+// from the renderer's RGBA images, PNG output, text with a halo, the distortion
+// colour bar, and the checkerboard used when a scene has no texture. Kept in the CLI
+// so that compute/ stays free of text.
+#pragma once
+
+#include <cairo.h>
+
+#include <array>
+#include <filesystem>
+#include <memory>
+#include <string>
+
+#include "hsi/compute/image.h"
+#include "hsi/domain.h"
+
+namespace hsi::cli {
+
+// A checkerboard over the rest shape's bounding box (square checks), for --no-texture
+// or a scene without a texture: it still shows how the map deforms the shape. Sets
+// `rect` to the world rectangle it covers.
+vk::RgbaImage checker_texture(const BoundingBox& box, std::array<double, 4>& rect);
+
+// A cairo image surface (premultiplied ARGB32) with its drawing context.
+struct Surface {
+  std::unique_ptr<cairo_surface_t, decltype(&cairo_surface_destroy)> surf{nullptr, cairo_surface_destroy};
+  std::unique_ptr<cairo_t, decltype(&cairo_destroy)> ctx{nullptr, cairo_destroy};
+  cairo_t* cr() const { return ctx.get(); }
+};
+Surface make_surface(int w, int h);             // transparent; throws if cairo cannot allocate it
+Surface surface_from(const vk::RgbaImage& img);  // straight-alpha RGBA in
+// PNG, written atomically (a failed write leaves nothing behind).
+void write_surface(const Surface& s, const std::filesystem::path& png);
+
+// Text at baseline (x, y) in DejaVu Sans; halo: a white outline that keeps it legible over any image.
+void text(cairo_t* cr, double x, double y, const std::string& s, double size, bool bold, double r, double g, double b,
+          bool halo = true);
+double text_width(cairo_t* cr, const std::string& s, double size, bool bold);
+std::string fmt(const char* f, double v);  // snprintf of one number
+
+// The legend's upper end: 1 + 4 steps of a round size (1, 2, 2.5 or 5 × 10^k) that
+// reach hi, so that its five ticks read as round numbers.
+double nice_upper(double hi);
+// The colour bar of the distortion overlay over [lo, hi] with its caption, centred in
+// the band of height `area` at the bottom of a W × H image.
+void draw_legend(cairo_t* cr, int W, int H, double area, double lo, double hi, double font);
+
+}  // namespace hsi::cli
