@@ -216,104 +216,243 @@ namespace hsi::cli {
 void plot_series(const std::filesystem::path& png, const std::string& title, const std::string& xlabel,
                  const std::vector<double>& x, const std::vector<Series>& series, const std::vector<double>& flagged,
                  int W, int H) {
+  PlotSpec spec;
+  spec.title = title;
+  spec.xlabel = xlabel;
+  spec.x = x;
+  spec.series = series;
+  spec.flagged = flagged;
+  spec.width_px = W;
+  spec.height_px = H;
+  plot_series(png, spec);
+}
+
+namespace {
+// Tick values of a linear axis over [lo, hi]: multiples of 1, 2 or 5 × 10^k, about `target` of them.
+std::vector<double> linear_ticks(double lo, double hi, int target) {
+  const double raw = (hi - lo) / std::max(1, target);
+  const double base = std::pow(10.0, std::floor(std::log10(raw)));
+  double step = base;
+  for (double m : {1.0, 2.0, 2.5, 5.0, 10.0})
+    if (m * base >= raw) {
+      step = m * base;
+      break;
+    }
+  std::vector<double> t;
+  for (double v = std::ceil(lo / step - 1e-9) * step; v <= hi + 1e-9 * step; v += step) t.push_back(std::abs(v) < 1e-12 * step ? 0 : v);
+  return t;
+}
+// A log axis over [lo, hi] (lo > 0): decades, with 2 and 5 between them when there are few decades.
+std::vector<double> log_ticks(double lo, double hi) {
+  std::vector<double> t;
+  const int d0 = static_cast<int>(std::floor(std::log10(lo))), d1 = static_cast<int>(std::ceil(std::log10(hi)));
+  const bool fine = d1 - d0 <= 3;
+  for (int d = d0; d <= d1; ++d)
+    for (double m : {1.0, 2.0, 5.0}) {
+      if (m != 1 && !fine) continue;
+      const double v = m * std::pow(10.0, d);
+      if (v >= lo * (1 - 1e-12) && v <= hi * (1 + 1e-12)) t.push_back(v);
+    }
+  if (t.size() < 2) return {lo, hi};
+  return t;
+}
+}  // namespace
+
+void plot_series(const std::filesystem::path& png, const PlotSpec& spec) {
+  const int W = spec.width_px, H = spec.height_px;
+  const std::vector<double>& x = spec.x;
   const Canvas canvas(W, H);
   cairo_t* cr = canvas.cr();
-  const double L = 70, R = 20, T = 54, B = 48;  // title on the first line, legend on the second
+  cairo_select_font_face(cr, "sans-serif", CAIRO_FONT_SLANT_NORMAL, CAIRO_FONT_WEIGHT_NORMAL);
+
+  // Legend rows: as many entries per row as fit between the margins.
+  cairo_set_font_size(cr, 11);
+  const double L = spec.ylabel.empty() ? 70 : 86, R = 20, B = 48;
+  std::vector<std::vector<size_t>> rows(1);
+  double row_w = 0;
+  std::vector<double> entry_w(spec.series.size());
+  for (size_t k = 0; k < spec.series.size(); ++k) {
+    cairo_text_extents_t ext;
+    cairo_text_extents(cr, spec.series[k].name.c_str(), &ext);
+    entry_w[k] = ext.x_advance + 40;
+    if (!rows.back().empty() && row_w + entry_w[k] > W - L - R) {
+      rows.emplace_back();
+      row_w = 0;
+    }
+    rows.back().push_back(k);
+    row_w += entry_w[k];
+  }
+  const double legend_top = 34, row_h = 17;
+  const double note_h = spec.note.empty() ? 0 : 15;
+  const double T = legend_top + row_h * static_cast<double>(rows.size()) + note_h + 6;
+
   double x0 = x.empty() ? 0 : x.front(), x1 = x.empty() ? 1 : x.back();
   if (x1 <= x0) x1 = x0 + 1;
-  double y0 = std::numeric_limits<double>::infinity(), y1 = -y0;
-  for (const Series& s : series)
-    for (double v : s.y)
+  double y0 = std::numeric_limits<double>::infinity(), y1 = -y0, pos_lo = y0;
+  bool any_infinite = false;
+  for (const Series& s : spec.series)
+    for (double v : s.y) {
       if (std::isfinite(v)) {
         y0 = std::min(y0, v);
         y1 = std::max(y1, v);
+        if (v > 0) pos_lo = std::min(pos_lo, v);
+      } else if (v > 0) {
+        any_infinite = true;
       }
+    }
   if (!std::isfinite(y0)) y0 = 0, y1 = 1;
-  if (y1 - y0 < 1e-12 * std::max(1.0, std::abs(y1))) {
-    y0 -= 0.5 * std::max(1e-6, std::abs(y0) * 1e-3);
-    y1 += 0.5 * std::max(1e-6, std::abs(y1) * 1e-3);
+  bool log_y = spec.y_scale == AxisScale::kLog || (spec.y_scale == AxisScale::kAuto && y0 > 0 && y1 / y0 > 20);
+  if (log_y && !(y0 > 0)) log_y = false;  // nothing positive to draw on a log axis
+  std::vector<double> ticks;
+  if (log_y) {
+    y0 /= 1.15;
+    y1 *= 1.15;
+    ticks = log_ticks(y0, y1);
+  } else {
+    if (y1 - y0 < 1e-12 * std::max(1.0, std::abs(y1))) {
+      y0 -= 0.5 * std::max(1e-6, std::abs(y0) * 1e-3);
+      y1 += 0.5 * std::max(1e-6, std::abs(y1) * 1e-3);
+    }
+    const double pad = 0.05 * (y1 - y0);
+    y0 -= pad;
+    y1 += pad;
+    ticks = linear_ticks(y0, y1, 5);
   }
-  const double pad = 0.05 * (y1 - y0);
-  y0 -= pad;
-  y1 += pad;
+  const double top_band = any_infinite ? 12 : 0;  // markers for +inf sit in a band above the data
   auto px = [&](double xv) { return L + (xv - x0) / (x1 - x0) * (W - L - R); };
-  auto py = [&](double yv) { return H - B - (yv - y0) / (y1 - y0) * (H - T - B); };
-  cairo_select_font_face(cr, "sans-serif", CAIRO_FONT_SLANT_NORMAL, CAIRO_FONT_WEIGHT_NORMAL);
+  auto py = [&](double yv) {
+    const double u = log_y ? (std::log(yv) - std::log(y0)) / (std::log(y1) - std::log(y0)) : (yv - y0) / (y1 - y0);
+    return H - B - u * (H - T - B - top_band);
+  };
   cairo_set_font_size(cr, 11);
   cairo_set_line_width(cr, 1);
   char buf[64];
-  for (int i = 0; i <= 5; ++i) {  // grid and ticks
-    const double yv = y0 + (y1 - y0) * i / 5, xv = x0 + (x1 - x0) * i / 5;
+  for (double yv : ticks) {
     cairo_set_source_rgb(cr, 0.9, 0.9, 0.9);
     cairo_move_to(cr, L, py(yv));
     cairo_line_to(cr, W - R, py(yv));
+    cairo_stroke(cr);
+    cairo_set_source_rgb(cr, 0.2, 0.2, 0.2);
+    std::snprintf(buf, sizeof buf, "%.4g", yv);
+    cairo_text_extents_t ext;
+    cairo_text_extents(cr, buf, &ext);
+    cairo_move_to(cr, L - 6 - ext.x_advance, py(yv) + 4);
+    cairo_show_text(cr, buf);
+  }
+  for (double xv : linear_ticks(x0, x1, 6)) {
+    cairo_set_source_rgb(cr, 0.9, 0.9, 0.9);
     cairo_move_to(cr, px(xv), T);
     cairo_line_to(cr, px(xv), H - B);
     cairo_stroke(cr);
     cairo_set_source_rgb(cr, 0.2, 0.2, 0.2);
-    std::snprintf(buf, sizeof buf, "%.4g", yv);
-    cairo_move_to(cr, 6, py(yv) + 4);
-    cairo_show_text(cr, buf);
     std::snprintf(buf, sizeof buf, "%.3g", xv);
-    cairo_move_to(cr, px(xv) - 10, H - B + 16);
+    cairo_text_extents_t ext;
+    cairo_text_extents(cr, buf, &ext);
+    cairo_move_to(cr, px(xv) - ext.x_advance / 2, H - B + 16);
     cairo_show_text(cr, buf);
   }
   cairo_set_source_rgb(cr, 0.2, 0.2, 0.2);
   cairo_rectangle(cr, L, T, W - L - R, H - T - B);
   cairo_stroke(cr);
-  cairo_move_to(cr, W / 2.0 - 20, H - 10);
-  cairo_show_text(cr, xlabel.c_str());
+  {
+    cairo_text_extents_t ext;
+    cairo_text_extents(cr, spec.xlabel.c_str(), &ext);
+    cairo_move_to(cr, L + (W - L - R - ext.x_advance) / 2, H - 12);
+    cairo_show_text(cr, spec.xlabel.c_str());
+  }
+  if (!spec.ylabel.empty()) {
+    const std::string label = spec.ylabel + (log_y ? " (log scale)" : "");
+    cairo_text_extents_t ext;
+    cairo_text_extents(cr, label.c_str(), &ext);
+    cairo_save(cr);
+    cairo_move_to(cr, 16, T + (H - T - B + ext.x_advance) / 2);
+    cairo_rotate(cr, -M_PI / 2);
+    cairo_show_text(cr, label.c_str());
+    cairo_restore(cr);
+  }
   cairo_set_font_size(cr, 14);
   cairo_move_to(cr, L, 22);
-  cairo_show_text(cr, title.c_str());
+  cairo_show_text(cr, spec.title.c_str());
   cairo_set_font_size(cr, 11);
-  double legend_x = W - R - 10;
-  for (size_t k = series.size(); k-- > 0;) {
-    const Series& s = series[k];
-    cairo_text_extents_t ext;
-    cairo_text_extents(cr, s.name.c_str(), &ext);
-    legend_x -= ext.x_advance + 34;
-    cairo_set_source_rgb(cr, s.r, s.g, s.b);
-    const double d[] = {5.0, 3.0};
-    cairo_set_dash(cr, d, s.dashed ? 2 : 0, 0);
-    cairo_set_line_width(cr, 2);
-    cairo_move_to(cr, legend_x, 40 - 4);
-    cairo_line_to(cr, legend_x + 22, 40 - 4);
-    cairo_stroke(cr);
-    cairo_set_dash(cr, nullptr, 0, 0);
-    cairo_move_to(cr, legend_x + 26, 40);
-    cairo_set_source_rgb(cr, 0.2, 0.2, 0.2);
-    cairo_show_text(cr, s.name.c_str());
+  const double d[] = {5.0, 3.0};
+  for (size_t r = 0; r < rows.size(); ++r) {
+    double lx = L;
+    const double ly = legend_top + row_h * static_cast<double>(r) + 6;
+    for (size_t k : rows[r]) {
+      const Series& s = spec.series[k];
+      cairo_set_source_rgb(cr, s.r, s.g, s.b);
+      cairo_set_dash(cr, d, s.dashed ? 2 : 0, 0);
+      cairo_set_line_width(cr, std::max(2.0, s.width));
+      cairo_move_to(cr, lx, ly - 4);
+      cairo_line_to(cr, lx + 26, ly - 4);
+      cairo_stroke(cr);
+      cairo_set_dash(cr, nullptr, 0, 0);
+      cairo_move_to(cr, lx + 32, ly);
+      cairo_set_source_rgb(cr, 0.2, 0.2, 0.2);
+      cairo_show_text(cr, s.name.c_str());
+      lx += entry_w[k];
+    }
   }
+  if (!spec.note.empty()) {
+    cairo_set_font_size(cr, 10);
+    cairo_set_source_rgb(cr, 0.35, 0.35, 0.35);
+    cairo_move_to(cr, L, legend_top + row_h * static_cast<double>(rows.size()) + 4);
+    cairo_show_text(cr, spec.note.c_str());
+    cairo_set_font_size(cr, 11);
+  }
+  cairo_save(cr);
   cairo_rectangle(cr, L, T, W - L - R, H - T - B);
   cairo_clip(cr);
-  for (const Series& s : series) {
+  const double dot[] = {1.5, 3.0};
+  cairo_set_source_rgb(cr, 0.45, 0.45, 0.45);
+  cairo_set_line_width(cr, 1);
+  cairo_set_dash(cr, dot, 2, 0);
+  for (double m : spec.x_marks) {
+    cairo_move_to(cr, px(m), T);
+    cairo_line_to(cr, px(m), H - B);
+    cairo_stroke(cr);
+  }
+  cairo_set_dash(cr, nullptr, 0, 0);
+  for (const Series& s : spec.series) {
     cairo_set_source_rgb(cr, s.r, s.g, s.b);
-    const double d[] = {5.0, 3.0};
     cairo_set_dash(cr, d, s.dashed ? 2 : 0, 0);
-    cairo_set_line_width(cr, 1.6);
+    cairo_set_line_width(cr, s.width);
     bool pen = false;
-    for (size_t i = 0; i < x.size() && i < s.y.size(); ++i) {
-      if (!std::isfinite(s.y[i])) {
+    const size_t n = std::min(x.size(), s.y.size());
+    for (size_t i = 0; i < n; ++i) {
+      const double v = s.y[i];
+      if (!std::isfinite(v) || (log_y && v <= 0)) {
+        if (pen) cairo_stroke(cr);
         pen = false;
         continue;
       }
       if (!pen)
-        cairo_move_to(cr, px(x[i]), py(s.y[i]));
+        cairo_move_to(cr, px(x[i]), py(v));
       else
-        cairo_line_to(cr, px(x[i]), py(s.y[i]));
+        cairo_line_to(cr, px(x[i]), py(v));
+      if (s.steps && i + 1 < n) cairo_line_to(cr, px(x[i + 1]), py(v));
       pen = true;
     }
-    cairo_stroke(cr);
+    if (pen) cairo_stroke(cr);
     cairo_set_dash(cr, nullptr, 0, 0);
+    for (size_t i = 0; i < n; ++i)
+      if (std::isinf(s.y[i]) && s.y[i] > 0) {  // a triangle pointing up at the top of the plot
+        const double cx = px(x[i]), cy = T + 2;
+        cairo_move_to(cr, cx, cy);
+        cairo_line_to(cr, cx - 4, cy + 8);
+        cairo_line_to(cr, cx + 4, cy + 8);
+        cairo_close_path(cr);
+        cairo_fill(cr);
+      }
   }
   cairo_set_source_rgb(cr, 0.85, 0.05, 0.05);
   cairo_set_line_width(cr, 2);
-  for (double f : flagged) {
+  for (double f : spec.flagged) {
     cairo_move_to(cr, px(f), T);
     cairo_line_to(cr, px(f), H - B);
     cairo_stroke(cr);
   }
+  cairo_restore(cr);
   canvas.write(png);
 }
 

@@ -34,13 +34,30 @@ namespace hsi::cli {
 
 struct Series {
   std::string name;
-  std::vector<double> y;
+  std::vector<double> y;  // one per x; NaN: a gap; +inf: a marker on the top edge (e.g. a folded frame)
   double r = 0.1, g = 0.3, b = 0.7;
   bool dashed = false;
+  bool steps = false;  // piecewise constant: y[i] held from x[i] to x[i+1] (a bound that changes at keyframes)
+  double width = 1.6;
 };
 
-// A line plot of series over x, with axes, ticks, legend and red markers at
-// `flagged` x positions (e.g. frames that could not be certified).
+enum class AxisScale { kLinear, kLog, kAuto };  // kAuto: log when the positive data span more than 20×
+
+struct PlotSpec {
+  std::string title, xlabel, ylabel;
+  std::vector<double> x;
+  std::vector<Series> series;
+  std::vector<double> flagged;  // red vertical lines (e.g. frames that could not be certified)
+  std::vector<double> x_marks;  // thin dotted vertical lines (e.g. keyframe times)
+  std::string note;             // a line of small print under the legend
+  AxisScale y_scale = AxisScale::kLinear;
+  int width_px = 900, height_px = 420;
+};
+
+// A line plot: axes with ticks and labels, title, a legend that wraps onto more rows
+// when it does not fit on one, optional log y-axis.
+void plot_series(const std::filesystem::path& png, const PlotSpec& spec);
+// The same, linear y, no y label.
 void plot_series(const std::filesystem::path& png, const std::string& title, const std::string& xlabel,
                  const std::vector<double>& x, const std::vector<Series>& series, const std::vector<double>& flagged = {},
                  int width_px = 900, int height_px = 420);
