@@ -14,5 +14,6 @@ void register_interpolate(CLI::App& app);
 void register_bake(CLI::App& app);
 void register_export(CLI::App& app);
 void register_render(CLI::App& app);
+void register_compare(CLI::App& app);
 
 }  // namespace hsi::cli

@@ -20,6 +20,7 @@ int main(int argc, char** argv) {
   hsi::cli::register_bake(app);
   hsi::cli::register_export(app);
   hsi::cli::register_render(app);
+  hsi::cli::register_compare(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
