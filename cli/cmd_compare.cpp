@@ -852,7 +852,7 @@ void run_compare(const Opts& o) {
   line("At t = 0.25, 0.5, 0.75 between keyframes " + std::to_string(o.segment) + " and " + std::to_string(o.segment + 1) +
        ". Texture with the conformal distortion \xce\xba = \xcf\x83\xe2\x82\x81/\xcf\x83\xe2\x82\x82 over it, one colour range [1, " +
        fixed(range_hi, 2) + "] for every panel (up to the keyframes' bound, rounded up); larger values and folds saturate to the top colour. "
-       "Ours: \xce\xba of the map at the mesh's vertices (evaluated on the GPU). ARAP: \xce\xba per triangle, drawn flat. "
+       "Ours: \xce\xba of the map at the mesh's vertices (the dense evaluation on the Vulkan device). ARAP: \xce\xba per triangle, drawn flat. "
        "CCW16: \xce\xba from its blended f_z, f_zbar at the vertices, positions integrated along a spanning tree of the mesh.");
   line();
   for (const Snapshot& s : snaps) {
