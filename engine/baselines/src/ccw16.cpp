@@ -1,6 +1,8 @@
-// CCW16 (Chien, Chen & Weber 2016): pointwise blend of log f_z and ν, integrated along
-// paths (hsi/baselines/ccw16.h has the formulas). The shape-level checks and the branch of
-// λ_k are fixed once; a mesh's spanning tree, nodes and derivative values once per mesh.
+// CCW16 (Chien, Chen & Weber 2016): pointwise blend of log f_z and ν, or the boundary
+// metric blend with a least-squares Hilbert transform, integrated along paths
+// (hsi/baselines/ccw16.h has the formulas). The shape-level checks, the branch of λ_k and
+// the least-squares factorisations are fixed once; a mesh's spanning tree, nodes and
+// derivative values (or basis rows) once per mesh.
 #include "hsi/baselines/ccw16.h"
 
 #include <algorithm>
@@ -83,6 +85,9 @@ void add_nodes(cd p, cd q, double h, const std::vector<double>& gx, const std::v
   }
 }
 
+// Frobenius norm of the symmetric metric [[m1, m2], [m2, m3]] stored as (m1, m2, m3).
+double metric_norm(const Metric& m) { return std::sqrt(m(0) * m(0) + 2 * m(1) * m(1) + m(2) * m(2)); }
+
 struct Distortions {
   double kappa = 1, iso = 2, nu = 0;
   void add(cd a, cd b) {
@@ -99,6 +104,14 @@ struct Distortions {
 
 }  // namespace
 
+const char* to_string(Ccw16Variant v) {
+  switch (v) {
+    case Ccw16Variant::LogDerivatives: return "log-derivatives";
+    case Ccw16Variant::BoundaryMetric: return "boundary-metric";
+  }
+  return "unknown";
+}
+
 Ccw16Interpolation::Ccw16Interpolation(const Shape& shape, const Cage& cage, std::vector<Ccw16Keyframe> keyframes,
                                        const Ccw16Options& options)
     : shape_(normalize(shape)), cage_(cage), keys_(std::move(keyframes)), options_(options) {
@@ -114,6 +127,10 @@ Ccw16Interpolation::Ccw16Interpolation(const Shape& shape, const Cage& cage, std
   validate(shape_);
   check_cage(shape_, cage_);
   size_ = bounding_box(shape_).diagonal();
+  if (options_.variant == Ccw16Variant::BoundaryMetric && (cage_.hole_count() > 0 || !shape_.holes.empty()))
+    throw InputError("CCW16 boundary-metric variant: the shape has " + std::to_string(shape_.holes.size()) +
+                     " hole(s); CCW16's Hilbert transform (the harmonic conjugate of log|f_z| from the boundary) does "
+                     "not apply to multiply-connected domains (use the log-derivatives variant to see it tear)");
 
   const int full = basis_size(cage_), m = cage_.vertex_count();
   for (int k = 0; k < K; ++k) {
@@ -219,7 +236,103 @@ Ccw16Interpolation::Ccw16Interpolation(const Shape& shape, const Cage& cage, std
     const double mean = sum / b1;
     const double turn = -std::round(mean / (2 * kPi));
     lambda_anchor_.push_back(std::log(r0) + cd(0, 2 * kPi * turn));
+    lambda_mean_arg_.push_back(mean + 2 * kPi * turn);
   }
+  if (options_.variant == Ccw16Variant::BoundaryMetric) prepare_boundary_fit(G, a, b);
+}
+
+void Ccw16Interpolation::prepare_boundary_fit(const BoundarySamples& G, const Eigen::MatrixXcd& a, const Eigen::MatrixXcd& b) {
+  const int K = static_cast<int>(keys_.size());
+  const auto S = static_cast<Eigen::Index>(G.size());
+  // The keyframes' metrics at G (paper Eq. 5), and the mean of arg a_k along ∂Ω (unwrapped
+  // from the principal value at sample 0: a_k has no zero in Ω, so arg a_k is continuous on
+  // the outer loop, the only loop here).
+  key_metrics_.assign(static_cast<size_t>(K), std::vector<Metric>(static_cast<size_t>(S)));
+  key_mean_arg_.assign(static_cast<size_t>(K), 0.0);
+  for (int k = 0; k < K; ++k) {
+    double arg = std::arg(a(0, k)), sum = 0;
+    for (Eigen::Index i = 0; i < S; ++i) {
+      key_metrics_[static_cast<size_t>(k)][static_cast<size_t>(i)] = pullback_metric(a(i, k), b(i, k));
+      if (i > 0) arg += std::arg(a(i, k) / a(i - 1, k));
+      sum += arg;
+    }
+    key_mean_arg_[static_cast<size_t>(k)] = sum / static_cast<double>(S);
+  }
+
+  const BasisRows rows = evaluate_basis(cage_, G.points, kBasisC | kBasisD);
+  C_G_ = rows.C;
+  D_G_ = rows.D;
+  const Eigen::Index m = C_G_.cols();
+  // Re L at G is linear in (Re l, Im l): Re(C l) = Re C · Re l − Im C · Im l. Its one null
+  // direction is l = i·1 (an imaginary constant); the last row, mean_G Im(C l), weighted
+  // like the |G| rows together, pins it without touching the fit of Re L.
+  Eigen::MatrixXd X(S + 1, 2 * m);
+  X.topLeftCorner(S, m) = C_G_.real();
+  X.topRightCorner(S, m) = -C_G_.imag();
+  const double w = std::sqrt(static_cast<double>(S));
+  X.row(S).head(m) = w * C_G_.imag().colwise().mean();
+  X.row(S).tail(m) = w * C_G_.real().colwise().mean();
+  fit_L_.compute(X);
+  fit_b_.compute(D_G_.rightCols(m - 1));
+  if (fit_L_.rank() < 2 * m || fit_b_.rank() < m - 1)
+    throw InputError("CCW16 boundary-metric variant: the least-squares Hilbert transform is rank deficient (rank " +
+                     std::to_string(fit_L_.rank()) + " of " + std::to_string(2 * m) + ", " + std::to_string(fit_b_.rank()) +
+                     " of " + std::to_string(m - 1) + "); raise the sample count");
+}
+
+Ccw16Interpolation::BoundaryFit Ccw16Interpolation::fit_boundary(int k, double s) const {
+  const auto S = C_G_.rows(), m = C_G_.cols();
+  const auto& M0 = key_metrics_[static_cast<size_t>(k)];
+  const auto& M1 = key_metrics_[static_cast<size_t>(k) + 1];
+  std::vector<Metric> Mt(static_cast<size_t>(S));
+  std::vector<cd> A(static_cast<size_t>(S));
+  std::vector<double> mod_a(static_cast<size_t>(S)), mod_b(static_cast<size_t>(S));
+  Eigen::VectorXd rhs(S + 1);
+  for (Eigen::Index i = 0; i < S; ++i) {
+    const auto u = static_cast<size_t>(i);
+    const Metric M = (1 - s) * M0[u] + s * M1[u];  // M_g = (1 − t) M⁰ + t M¹ (paper §4.1), as Interpolator::blended_metric
+    // Eq. 5 inverted: S = |a|² + |b|², A = ab, eigenvalues σ1,2² = S ± 2|A|.
+    const double Sm = 0.5 * (M(0) + M(2));
+    const cd Ai(0.25 * (M(0) - M(2)), -0.5 * M(1));
+    const double r = std::abs(Ai);
+    const double s1 = std::sqrt(Sm + 2 * r), s2 = std::sqrt(std::max(0.0, Sm - 2 * r));
+    Mt[u] = M;
+    A[u] = Ai;
+    mod_a[u] = 0.5 * (s1 + s2);
+    mod_b[u] = 0.5 * (s1 - s2);
+    rhs(i) = std::log(mod_a[u]);
+  }
+  // The rotation: the mean of Im L over G as the log blend has it (ccw16.h, step 3).
+  rhs(S) = std::sqrt(static_cast<double>(S)) *
+           (key_mean_arg_[static_cast<size_t>(k)] + s * lambda_mean_arg_[static_cast<size_t>(k)]);
+  const Eigen::VectorXd x = fit_L_.solve(rhs);
+  BoundaryFit fit;
+  fit.l = x.head(m).cast<cd>() + cd(0, 1) * x.tail(m).cast<cd>();
+  const VectorXcd L = C_G_ * fit.l;
+
+  // Ψ' = A / f_z in phase, |b| from the metric in modulus; then holomorphic by least squares.
+  VectorXcd bG(S);
+  for (Eigen::Index i = 0; i < S; ++i) {
+    const auto u = static_cast<size_t>(i);
+    const double r = std::abs(A[u]);
+    bG(i) = r > 0 ? mod_b[u] * (A[u] / r) * std::polar(1.0, -L(i).imag()) : cd(0);
+  }
+  fit.beta = VectorXcd::Zero(m);
+  fit.beta.tail(m - 1) = fit_b_.solve(bG);
+  const VectorXcd bfit = D_G_ * fit.beta;
+
+  for (Eigen::Index i = 0; i < S; ++i) {
+    const auto u = static_cast<size_t>(i);
+    fit.log_modulus = std::max(fit.log_modulus, std::abs(L(i).real() - rhs(i)));
+    fit.fzbar = std::max(fit.fzbar, std::abs(bfit(i) - bG(i)) / mod_a[u]);
+    fit.metric = std::max(fit.metric, metric_norm(pullback_metric(std::exp(L(i)), bfit(i)) - Mt[u]) / metric_norm(Mt[u]));
+  }
+  return fit;
+}
+
+double Ccw16Interpolation::blend_parameter(int k, double t) const {
+  const double t0 = keys_[static_cast<size_t>(k)].time, t1 = keys_[static_cast<size_t>(k + 1)].time;
+  return std::clamp((t - t0) / (t1 - t0), 0.0, 1.0);
 }
 
 void Ccw16Interpolation::evaluate(std::span<const cd> points, Eigen::MatrixXcd& a, Eigen::MatrixXcd& b) const {
@@ -381,7 +494,24 @@ Ccw16Mesh Ccw16Interpolation::prepare(const TriMesh& mesh) const {
   std::vector<cd> pts = mesh.vertices;
   pts.insert(pts.end(), nodes.begin(), nodes.end());
   pts.push_back(anchor_);
-  evaluate(pts, M.a_, M.b_);
+  if (options_.variant == Ccw16Variant::BoundaryMetric) {
+    // The frame's a(t), b(t) come from fitted coefficients: keep the basis rows.
+    const auto np = static_cast<Eigen::Index>(pts.size()), m = static_cast<Eigen::Index>(phi_.rows());
+    M.C_.resize(np, m);
+    M.D_.resize(np, m);
+    constexpr Eigen::Index chunk = 4096;
+    for (Eigen::Index c0 = 0; c0 < np; c0 += chunk) {
+      const Eigen::Index n = std::min(chunk, np - c0);
+      const BasisRows rows =
+          evaluate_basis(cage_, std::span<const cd>(pts).subspan(static_cast<size_t>(c0), static_cast<size_t>(n)), kBasisC | kBasisD);
+      M.C_.middleRows(c0, n) = rows.C;
+      M.D_.middleRows(c0, n) = rows.D;
+    }
+    M.a_ = M.D_ * phi_;
+    M.b_ = M.D_ * psi_;
+  } else {
+    evaluate(pts, M.a_, M.b_);
+  }
   const int K = static_cast<int>(keys_.size());
   const auto P = static_cast<Eigen::Index>(pts.size());
   const Eigen::Index anchor_point = P - 1;
@@ -417,20 +547,36 @@ Ccw16Frame Ccw16Interpolation::frame(double t, const TriMesh& mesh) const { retu
 
 Ccw16Frame Ccw16Interpolation::frame(double t, const Ccw16Mesh& M) const {
   const int k = segment(t);
-  const double t0 = keys_[static_cast<size_t>(k)].time, t1 = keys_[static_cast<size_t>(k + 1)].time;
-  const double s = std::clamp((t - t0) / (t1 - t0), 0.0, 1.0);
+  const double s = blend_parameter(k, t);
   const int V = M.vertex_count(), N = cage_.hole_count();
   const auto P = M.a_.rows();
-  if (M.lambda_.cols() != static_cast<Eigen::Index>(keys_.size()) - 1 || P == 0)
+  const bool boundary_metric = options_.variant == Ccw16Variant::BoundaryMetric;
+  if (M.lambda_.cols() != static_cast<Eigen::Index>(keys_.size()) - 1 || P == 0 || M.a_.cols() != phi_.cols() ||
+      (boundary_metric && M.C_.rows() != P))
     throw InputError("CCW16: the mesh was prepared by another interpolation");
 
-  // a(t) = a_k exp(s λ_k), b(t) = ((1 − s) ν_k + s ν_{k+1}) a(t), pointwise.
+  Ccw16Frame F;
+  F.t = t;
   std::vector<cd> A(static_cast<size_t>(P)), B(static_cast<size_t>(P));
-  for (Eigen::Index p = 0; p < P; ++p) {
-    const cd a = M.a_(p, k) * std::exp(s * M.lambda_(p, k));
-    const cd nu = (1 - s) * (M.b_(p, k) / M.a_(p, k)) + s * (M.b_(p, k + 1) / M.a_(p, k + 1));
-    A[static_cast<size_t>(p)] = a;
-    B[static_cast<size_t>(p)] = nu * a;
+  if (boundary_metric) {
+    // a(t) = exp(Σ C_j l_j), b(t) = Σ D_j β_j, fitted to the blended boundary metric.
+    const BoundaryFit fit = fit_boundary(k, s);
+    const VectorXcd L = M.C_ * fit.l, b = M.D_ * fit.beta;
+    for (Eigen::Index p = 0; p < P; ++p) {
+      A[static_cast<size_t>(p)] = std::exp(L(p));
+      B[static_cast<size_t>(p)] = b(p);
+    }
+    F.fit_log_modulus = fit.log_modulus;
+    F.fit_fzbar = fit.fzbar;
+    F.fit_metric = fit.metric;
+  } else {
+    // a(t) = a_k exp(s λ_k), b(t) = ((1 − s) ν_k + s ν_{k+1}) a(t), pointwise.
+    for (Eigen::Index p = 0; p < P; ++p) {
+      const cd a = M.a_(p, k) * std::exp(s * M.lambda_(p, k));
+      const cd nu = (1 - s) * (M.b_(p, k) / M.a_(p, k)) + s * (M.b_(p, k + 1) / M.a_(p, k + 1));
+      A[static_cast<size_t>(p)] = a;
+      B[static_cast<size_t>(p)] = nu * a;
+    }
   }
   auto integral = [&](int n0, int n1) {
     cd ia = 0, ib = 0;
@@ -443,8 +589,6 @@ Ccw16Frame Ccw16Interpolation::frame(double t, const Ccw16Mesh& M) const {
   std::vector<cd> I(M.edges_.size());
   for (size_t e = 0; e < M.edges_.size(); ++e) I[e] = integral(M.edges_[e].node_begin, M.edges_[e].node_end);
 
-  Ccw16Frame F;
-  F.t = t;
   F.positions.assign(static_cast<size_t>(V), cd{});
   const cd f_anchor = (1 - s) * f_anchor_[static_cast<size_t>(k)] + s * f_anchor_[static_cast<size_t>(k + 1)];
   F.positions[static_cast<size_t>(M.base_)] = f_anchor + integral(M.anchor_begin_, M.anchor_end_);
@@ -496,8 +640,7 @@ Ccw16Frame Ccw16Interpolation::frame(double t, const Ccw16Mesh& M) const {
 
 Ccw16Frame Ccw16Interpolation::integrate_path(double t, std::span<const cd> path) const {
   const int k = segment(t);
-  const double t0 = keys_[static_cast<size_t>(k)].time, t1 = keys_[static_cast<size_t>(k + 1)].time;
-  const double s = std::clamp((t - t0) / (t1 - t0), 0.0, 1.0);
+  const double s = blend_parameter(k, t);
   for (size_t i = 0; i < path.size(); ++i)
     if (!std::isfinite(path[i].real()) || !std::isfinite(path[i].imag()))
       throw InputError("CCW16: path point " + std::to_string(i) + " is not finite");
@@ -515,20 +658,38 @@ Ccw16Frame Ccw16Interpolation::integrate_path(double t, std::span<const cd> path
     dz.push_back(0.0);
     prev = p;
   }
-  Eigen::MatrixXcd a, b;
-  evaluate(pts, a, b);
-
   Ccw16Frame F;
   F.t = t;
+  Eigen::MatrixXcd a, b;
+  VectorXcd L_fit, b_fit;
+  const bool boundary_metric = options_.variant == Ccw16Variant::BoundaryMetric;
+  if (boundary_metric) {
+    const BoundaryFit fit = fit_boundary(k, s);
+    const BasisRows rows = evaluate_basis(cage_, pts, kBasisC | kBasisD);
+    L_fit = rows.C * fit.l;
+    b_fit = rows.D * fit.beta;
+    F.fit_log_modulus = fit.log_modulus;
+    F.fit_fzbar = fit.fzbar;
+    F.fit_metric = fit.metric;
+  } else {
+    evaluate(pts, a, b);
+  }
+
   cd pos = (1 - s) * f_anchor_[static_cast<size_t>(k)] + s * f_anchor_[static_cast<size_t>(k + 1)];
   cd lam = lambda_anchor_[static_cast<size_t>(k)];
   Distortions d;
   size_t next = 0;
   for (size_t p = 0; p < pts.size(); ++p) {
     const auto i = static_cast<Eigen::Index>(p);
-    if (p > 0) lam += std::log((a(i, k + 1) / a(i, k)) / (a(i - 1, k + 1) / a(i - 1, k)));
-    const cd A = a(i, k) * std::exp(s * lam);
-    const cd B = ((1 - s) * (b(i, k) / a(i, k)) + s * (b(i, k + 1) / a(i, k + 1))) * A;
+    cd A, B;
+    if (boundary_metric) {
+      A = std::exp(L_fit(i));
+      B = b_fit(i);
+    } else {
+      if (p > 0) lam += std::log((a(i, k + 1) / a(i, k)) / (a(i - 1, k + 1) / a(i - 1, k)));
+      A = a(i, k) * std::exp(s * lam);
+      B = ((1 - s) * (b(i, k) / a(i, k)) + s * (b(i, k + 1) / a(i, k + 1))) * A;
+    }
     pos += A * dz[p] + std::conj(B * dz[p]);
     if (next < at.size() && at[next] == p) {
       F.positions.push_back(pos);
