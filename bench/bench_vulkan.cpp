@@ -14,6 +14,7 @@
 #include "hsi/compute/dense_certify.h"
 #include "hsi/compute/dense_eval.h"
 #include "hsi/scene_io.h"
+#include "bench_frame.h"
 #include "bench_render.h"
 
 using namespace hsi;
@@ -128,6 +129,10 @@ int main(int argc, char** argv) {
   int render_frames = 5;
   app.add_option("--render-frames", render_frames, "Frames per size for the render rows (0: no render table)")
       ->capture_default_str();
+  int frame_frames = 5;
+  app.add_option("--frame-frames", frame_frames,
+                 "Frames per size for the frame rows (evaluate + certify + draw, device timestamps; 0: none)")
+      ->capture_default_str();
   CLI11_PARSE(app, argc, argv);
 
   vk::ContextOptions co;
@@ -203,6 +208,7 @@ int main(int argc, char** argv) {
   else if (certify_frames > 0)
     certification_table(*ctx, scenes, certify_frames, certify_samples);
   if (render_frames > 0) bench::render_table(*ctx, scenes, sizes, render_frames, use_float);
+  if (frame_frames > 0) bench::frame_table(*ctx, scenes, sizes, frame_frames);
   std::printf("\nload average at the end: %s\n", load_average().c_str());
   if (validation && ctx->validation_log()->count()) {
     std::fprintf(stderr, "%s\n", ctx->validation_log()->summary().c_str());

@@ -126,6 +126,18 @@ DenseCertifier::DenseCertifier(const Context& context, const Shape& shape, const
 
 CertificateResult DenseCertifier::certify(const HarmonicMap& map, const CertificateOptions& options) {
   stats_ = {};
+  const Context& ctx = *context_;
+  const auto t_gpu = Clock::now();
+  ctx.submit_and_wait([&](VkCommandBuffer cmd) { record(cmd, map, options); });
+  const double upload_ms = stats_.upload_ms;
+  stats_.gpu_ms = ms_since(t_gpu) - upload_ms;
+  stats_.device_ms = pending_nonfinite_ ? 0.0 : ctx.last_device_ms();
+  return collect();
+}
+
+void DenseCertifier::record(VkCommandBuffer cmd, const HarmonicMap& map, const CertificateOptions& options) {
+  stats_.upload_ms = 0;
+  pending_nonfinite_ = false;
   const auto t_upload = Clock::now();
   const int m = cage_.vertex_count(), N = cage_.hole_count();
   const Eigen::Index cols = m + N;
@@ -137,9 +149,8 @@ CertificateResult DenseCertifier::certify(const HarmonicMap& map, const Certific
     throw InputError("dense certification: max_depth " + std::to_string(options.max_depth) +
                      " exceeds the GPU certifier's limit of " + std::to_string(kMaxDepth));
   if (!map.phi.allFinite() || !map.psi.allFinite()) {
-    CertificateResult r;
-    r.reason = "the map's coefficients are not finite";
-    return r;
+    pending_nonfinite_ = true;  // collect() says so; nothing to run
+    return;
   }
 
   // geom (complex entries): cage vertices, ρ, φ, ψ, then per column upper bounds of
@@ -187,9 +198,8 @@ CertificateResult DenseCertifier::certify(const HarmonicMap& map, const Certific
   pc.flags = options.stop_at_first_failure ? kStopAtFirstFailure : 0u;
   stats_.upload_ms = ms_since(t_upload);
 
-  const auto t_gpu = Clock::now();
   const auto [gx, gy] = split_dispatch(ctx, (S + kWorkgroupSize - 1) / kWorkgroupSize);
-  ctx.submit_and_wait([&](VkCommandBuffer cmd) {
+  {
     // Earlier submissions' shader writes and reads of these buffers come first.
     memory_barrier(cmd, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT | VK_PIPELINE_STAGE_TRANSFER_BIT,
                    VK_ACCESS_SHADER_WRITE_BIT | VK_ACCESS_TRANSFER_WRITE_BIT,
@@ -221,9 +231,17 @@ CertificateResult DenseCertifier::certify(const HarmonicMap& map, const Certific
       memory_barrier(cmd, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_WRITE_BIT, VK_PIPELINE_STAGE_HOST_BIT,
                      VK_ACCESS_HOST_READ_BIT);
     }
-  });
-  stats_.gpu_ms = ms_since(t_gpu);
+  }
+}
 
+CertificateResult DenseCertifier::collect() {
+  if (pending_nonfinite_) {
+    pending_nonfinite_ = false;
+    CertificateResult r;
+    r.reason = "the map's coefficients are not finite";
+    return r;
+  }
+  const uint32_t S = static_cast<uint32_t>(segments_.size());
   const auto t_read = Clock::now();
   std::vector<SegmentOut> raw(S);
   (readback_ ? readback_ : out_).read(raw.data(), raw.size() * sizeof(SegmentOut));

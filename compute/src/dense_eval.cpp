@@ -137,15 +137,29 @@ void DenseEvaluator::record_points(VkCommandBuffer cmd, const Cage& cage, const 
   run(job);
 }
 
-DenseField DenseEvaluator::evaluate_grid(const Cage& cage, const HarmonicMap& map, const Grid& grid,
-                                         const Shape* mask_shape) {
+namespace {
+void check_grid(const Grid& grid) {
   if (grid.width < 0 || grid.height < 0)
     throw InputError("dense evaluation: negative grid size " + std::to_string(grid.width) + " x " +
                      std::to_string(grid.height));
   if (!(std::isfinite(grid.origin.real()) && std::isfinite(grid.origin.imag()) && grid.spacing.real() > 0 &&
         grid.spacing.imag() > 0 && std::isfinite(grid.spacing.real()) && std::isfinite(grid.spacing.imag())))
     throw InputError("dense evaluation: the grid needs a finite origin and finite positive spacing");
+}
+}  // namespace
+
+DenseField DenseEvaluator::evaluate_grid(const Cage& cage, const HarmonicMap& map, const Grid& grid,
+                                         const Shape* mask_shape) {
+  check_grid(grid);
   return run(Job{cage, map, {}, &grid, mask_shape});
+}
+
+void DenseEvaluator::record_grid(VkCommandBuffer cmd, const Cage& cage, const HarmonicMap& map, const Grid& grid,
+                                 const Shape* mask_shape) {
+  check_grid(grid);
+  Job job{cage, map, {}, &grid, mask_shape};
+  job.record_into = cmd;
+  run(job);
 }
 
 void DenseEvaluator::ensure_capacity(uint32_t points) {
@@ -278,13 +292,15 @@ DenseField DenseEvaluator::run(const Job& job) {
     if (total > pass_max)
       throw InputError("dense evaluation: " + std::to_string(total) + " points do not fit one pass (at most " +
                        std::to_string(pass_max) + " on this device with these options)");
-    std::vector<double> all;
-    all.reserve(2 * total);
-    for (const cd& p : job.points) {
-      all.push_back(p.real());
-      all.push_back(p.imag());
+    if (!job.grid) {
+      std::vector<double> all;
+      all.reserve(2 * total);
+      for (const cd& p : job.points) {
+        all.push_back(p.real());
+        all.push_back(p.imag());
+      }
+      upload_reals(ctx, points_, all, double_);
     }
-    upload_reals(ctx, points_, all, double_);
     pc.base = 0;
     pc.count = static_cast<uint32_t>(total);
     record_dispatch(job.record_into, pc.count);
@@ -337,6 +353,8 @@ DenseField DenseEvaluator::run(const Job& job) {
       }
     });
     stats_.gpu_ms += ms_since(t_gpu);
+    const double device = ctx.last_device_ms();
+    stats_.device_ms = device < 0 || stats_.device_ms < 0 ? -1.0 : stats_.device_ms + device;
     ++stats_.passes;
 
     // --- read back ------------------------------------------------------------------

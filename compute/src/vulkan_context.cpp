@@ -172,12 +172,14 @@ Context::~Context() { destroy(); }
 void Context::destroy() noexcept {
   if (device_) {
     vkDeviceWaitIdle(device_);
+    if (timestamps_) vkDestroyQueryPool(device_, timestamps_, nullptr);
     if (command_pool_) vkDestroyCommandPool(device_, command_pool_, nullptr);
     vkDestroyDevice(device_, nullptr);
   }
   if (surface_) vkDestroySurfaceKHR(instance_, surface_, nullptr);
   if (messenger_) vkDestroyDebugUtilsMessengerEXT(instance_, messenger_, nullptr);
   if (instance_) vkDestroyInstance(instance_, nullptr);
+  timestamps_ = VK_NULL_HANDLE;
   command_pool_ = VK_NULL_HANDLE;
   device_ = VK_NULL_HANDLE;
   surface_ = VK_NULL_HANDLE;
@@ -332,6 +334,7 @@ void Context::pick_device(const ContextOptions& options) {
       best_rank = rank;
       physical_ = d;
       queue_family_ = static_cast<uint32_t>(family);
+      info_.timestamp_valid_bits = families[static_cast<size_t>(family)].timestampValidBits;
     }
   }
   if (!physical_) {
@@ -358,6 +361,8 @@ void Context::pick_device(const ContextOptions& options) {
   info_.max_workgroup_invocations = p.limits.maxComputeWorkGroupInvocations;
   info_.max_storage_buffer_range = p.limits.maxStorageBufferRange;
   info_.non_coherent_atom_size = std::max<VkDeviceSize>(1, p.limits.nonCoherentAtomSize);
+  info_.timestamp_period_ns = p.limits.timestampPeriod;
+  if (info_.timestamp_period_ns <= 0) info_.timestamp_valid_bits = 0;
   vkGetPhysicalDeviceMemoryProperties(physical_, &memory_);
 }
 
@@ -397,6 +402,14 @@ void Context::create_device(const ContextOptions&) {
   pool.flags = VK_COMMAND_POOL_CREATE_TRANSIENT_BIT | VK_COMMAND_POOL_CREATE_RESET_COMMAND_BUFFER_BIT;
   pool.queueFamilyIndex = queue_family_;
   check(vkCreateCommandPool(device_, &pool, nullptr, &command_pool_), "vkCreateCommandPool");
+
+  if (info_.timestamp_valid_bits > 0) {
+    VkQueryPoolCreateInfo q{};
+    q.sType = VK_STRUCTURE_TYPE_QUERY_POOL_CREATE_INFO;
+    q.queryType = VK_QUERY_TYPE_TIMESTAMP;
+    q.queryCount = 2;
+    check(vkCreateQueryPool(device_, &q, nullptr, &timestamps_), "vkCreateQueryPool");
+  }
 }
 
 uint32_t Context::memory_type(uint32_t type_bits, VkMemoryPropertyFlags required,
@@ -436,7 +449,12 @@ void Context::submit_and_wait(const std::function<void(VkCommandBuffer)>& record
   begin.sType = VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO;
   begin.flags = VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT;
   check(vkBeginCommandBuffer(cmd, &begin), "vkBeginCommandBuffer");
+  if (timestamps_) {
+    vkCmdResetQueryPool(cmd, timestamps_, 0, 2);
+    vkCmdWriteTimestamp(cmd, VK_PIPELINE_STAGE_TOP_OF_PIPE_BIT, timestamps_, 0);
+  }
   record(cmd);
+  if (timestamps_) vkCmdWriteTimestamp(cmd, VK_PIPELINE_STAGE_BOTTOM_OF_PIPE_BIT, timestamps_, 1);
   check(vkEndCommandBuffer(cmd), "vkEndCommandBuffer");
 
   VkFenceCreateInfo fence_info{};
@@ -451,6 +469,15 @@ void Context::submit_and_wait(const std::function<void(VkCommandBuffer)>& record
   submit.pCommandBuffers = &cmd;
   check(vkQueueSubmit(queue_, 1, &submit, fence.get()), "vkQueueSubmit");
   check(vkWaitForFences(device_, 1, &raw_fence, VK_TRUE, UINT64_MAX), "vkWaitForFences");
+  last_device_ms_ = -1;
+  if (timestamps_) {
+    uint64_t ticks[2] = {0, 0};
+    if (vkGetQueryPoolResults(device_, timestamps_, 0, 2, sizeof ticks, ticks, sizeof(uint64_t),
+                              VK_QUERY_RESULT_64_BIT | VK_QUERY_RESULT_WAIT_BIT) == VK_SUCCESS) {
+      const uint64_t mask = info_.timestamp_valid_bits >= 64 ? ~uint64_t{0} : (uint64_t{1} << info_.timestamp_valid_bits) - 1;
+      last_device_ms_ = static_cast<double>((ticks[1] - ticks[0]) & mask) * info_.timestamp_period_ns * 1e-6;
+    }
+  }
 }
 
 std::pair<uint32_t, uint32_t> split_dispatch(const Context& context, uint64_t groups) {

@@ -31,6 +31,7 @@ namespace hsi::vk {
 struct DenseCertifyStats {
   double upload_ms = 0;    // packing and writing the coefficients and jump bounds
   double gpu_ms = 0;       // submit to fence: both passes (breakpoint values, segments)
+  double device_ms = -1;   // GPU execution time of those passes (timestamps; < 0: not available)
   double readback_ms = 0;  // reading the segment outcomes and reducing them
 };
 
@@ -52,6 +53,14 @@ class DenseCertifier {
   // As Certifier::certify. The map must have m + N coefficients (else InputError);
   // options.max_depth must be in [0, kMaxDepth] (else InputError).
   CertificateResult certify(const HarmonicMap& map, const CertificateOptions& options = {});
+  // certify() in two halves, for a caller that puts the certificate in its own
+  // command buffer (e.g. one submission per frame with the evaluation and drawing):
+  // record() packs and uploads the map and records both passes and the barrier to
+  // host reads into `cmd`; after the caller has submitted `cmd` and waited for it,
+  // collect() reads the outcomes back and reduces them. One record() per collect();
+  // the map must stay unchanged in between only on the host side (it is copied).
+  void record(VkCommandBuffer cmd, const HarmonicMap& map, const CertificateOptions& options = {});
+  CertificateResult collect();
 
   static constexpr int kMaxDepth = 31;  // the shader's explicit stack holds 32 entries
 
@@ -73,6 +82,7 @@ class DenseCertifier {
   std::vector<SegmentCertificate> outcomes_;
   std::vector<SegmentStatus> status_;
   DenseCertifyStats stats_;
+  bool pending_nonfinite_ = false;  // record() saw a non-finite map: collect() reports it
 };
 
 }  // namespace hsi::vk

@@ -91,6 +91,7 @@ struct DenseField {
 struct DenseEvalStats {
   double upload_ms = 0;    // writing inputs to GPU-visible memory
   double gpu_ms = 0;       // submit to fence (dispatch + copies), summed over passes
+  double device_ms = 0;    // GPU execution time of the same (timestamps), summed; < 0: not available
   double readback_ms = 0;  // copying results out and converting to DenseField
   int passes = 0;
 };
@@ -119,6 +120,12 @@ class DenseEvaluator {
   // reads) after this, and calls no other evaluate_* / record_* before the
   // submission has finished. Throws InputError if the points need more than one pass.
   void record_points(VkCommandBuffer cmd, const Cage& cage, const HarmonicMap& map, std::span<const cd> points);
+  // The same for a grid (e.g. a frame's dense distortion field that a later pass
+  // consumes on the GPU): one dispatch into `cmd`, results left in device_output(k).
+  // Throws InputError if the grid needs more than one pass (raise
+  // DenseEvalOptions::max_points_per_pass for grids over 2^20 points).
+  void record_grid(VkCommandBuffer cmd, const Cage& cage, const HarmonicMap& map, const Grid& grid,
+                   const Shape* mask_shape = nullptr);
   const Buffer& device_output(int k) const { return out_[k]; }
 
  private:

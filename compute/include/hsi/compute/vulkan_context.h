@@ -100,6 +100,9 @@ struct DeviceInfo {
   uint32_t max_workgroup_invocations = 0;
   VkDeviceSize max_storage_buffer_range = 0;
   VkDeviceSize non_coherent_atom_size = 1;
+  // Timestamp queries on the chosen queue: nanoseconds per tick, valid bits (0: none).
+  double timestamp_period_ns = 0;
+  uint32_t timestamp_valid_bits = 0;
   bool is_cpu() const { return type == VK_PHYSICAL_DEVICE_TYPE_CPU; }
   std::string type_name() const;
 };
@@ -131,6 +134,10 @@ class Context {
   // Records commands into a fresh primary command buffer, submits it to the queue
   // and waits for it to finish.
   void submit_and_wait(const std::function<void(VkCommandBuffer)>& record) const;
+  // GPU execution time of the last submit_and_wait, by timestamps written at its
+  // command buffer's start and end (what the device spent, without the host's
+  // recording, submission and wake-up); negative where the queue has no timestamps.
+  double last_device_ms() const { return last_device_ms_; }
 
  private:
   void create_instance(const ContextOptions& options);
@@ -147,6 +154,8 @@ class Context {
   VkQueue queue_ = VK_NULL_HANDLE;
   uint32_t queue_family_ = 0;
   VkCommandPool command_pool_ = VK_NULL_HANDLE;
+  VkQueryPool timestamps_ = VK_NULL_HANDLE;  // 2 queries: start, end of a submit_and_wait
+  mutable double last_device_ms_ = -1;
   DeviceInfo info_;
   VkPhysicalDeviceMemoryProperties memory_{};
 };
