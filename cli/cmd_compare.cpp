@@ -1,12 +1,15 @@
 // hsi compare SCENE -o DIR/: the paper's claims reproduced on one scene against the
 // baselines (issue #11), measured in one run on this machine. Our method (certified
 // harmonic interpolation), ARAP [ACOL00] on the render mesh and CCW16 (derivative
-// blending + integration, which breaks on shapes with holes: the paper's Fig. 2) side
-// by side with the distortion colour map at t = 0.25, 0.5, 0.75 of a keyframe
-// interval; each method's largest conformal and isometric distortion over the whole
-// sequence against the keyframes' bounds (Figs 3–5); Tables 1–4 (Hessian projections,
-// the Hessian sample ratio r, time against the render mesh's resolution, per-frame
-// time against ARAP); CCW16's hole periods (Fig. 2) or its distance to ours (Fig. 8).
+// blending + integration) in its two variants: log derivatives (log f_z and ν blended
+// pointwise; breaks on shapes with holes: the paper's Fig. 2) and, on simply-connected
+// shapes only (paper §1), boundary metric (the metric blended on ∂Ω, f_z and f_zbar by a
+// least-squares Hilbert transform: the paper's Fig. 8). Side by side with the distortion
+// colour map at t = 0.25, 0.5, 0.75 of a keyframe interval; each method's largest
+// conformal and isometric distortion over the whole sequence against the keyframes'
+// bounds (Figs 3–5); Tables 1–4 (Hessian projections, the Hessian sample ratio r, time
+// against the render mesh's resolution, per-frame time against ARAP); CCW16's hole
+// periods (Fig. 2) or both variants' distance to ours (Fig. 8).
 // Writes PNGs, report.json with the raw numbers, and report.md last.
 #include <unistd.h>
 
@@ -14,6 +17,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdarg>
+#include <cstdint>
 #include <cstdio>
 #include <ctime>
 #include <filesystem>
@@ -21,7 +25,9 @@
 #include <limits>
 #include <memory>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <thread>
+#include <unordered_set>
 
 #include "commands.h"
 #include "hsi/interpolation.h"
@@ -58,6 +64,7 @@ double s_since(Clock::time_point t0) { return std::chrono::duration<double>(Cloc
 struct Opts {
   std::string scene, out;
   int frames = 100, table_frames = 40, mesh_vertices = 10000, samples = 0, timing_frames = 3, segment = 0;
+  double ccw16_memory_mb = 128;  // most the CCW16 boundary-metric variant may hold in basis rows
   std::string size = "420";
   std::vector<double> ratios = {1.0, 0.5, 0.2, 0.1, 0.05};
   std::vector<int> table3_vertices = {8000, 80000, 800000};
@@ -155,6 +162,25 @@ TriMesh mesh_with(const Shape& shape, int vertices) {
   return triangulate(shape, o);
 }
 
+// Bytes that CCW16's boundary-metric variant holds once prepare()d on a mesh: the C and D
+// basis rows (2 × 16 bytes × m columns) at every vertex and at every Gauss node of every
+// edge (`quadrature` nodes per piece of at most max_piece × size; ccw16.h), counted as it
+// places them. ~300 MB at 10,000 vertices for a 32-vertex cage: hsi compare caps it.
+double metric_rows_bytes(const TriMesh& mesh, int columns, const baselines::Ccw16Options& co, double size) {
+  std::unordered_set<std::uint64_t> edges;
+  const double h = co.max_piece * size;
+  double points = mesh.vertex_count() + 1.0 + co.quadrature;  // + the anchor and its piece to the base vertex
+  for (const auto& tri : mesh.triangles)
+    for (int c = 0; c < 3; ++c) {
+      const int u = tri[static_cast<size_t>(c)], v = tri[static_cast<size_t>((c + 1) % 3)];
+      const auto key = (static_cast<std::uint64_t>(std::min(u, v)) << 32) | static_cast<std::uint32_t>(std::max(u, v));
+      if (!edges.insert(key).second) continue;
+      const double len = std::abs(mesh.vertices[static_cast<size_t>(u)] - mesh.vertices[static_cast<size_t>(v)]);
+      points += co.quadrature * std::max(1.0, std::ceil(len / h));
+    }
+  return points * columns * 2.0 * sizeof(cd);
+}
+
 void grow(BoundingBox& b, cd p) {
   if (!std::isfinite(p.real()) || !std::isfinite(p.imag())) return;
   b.lo = {std::min(b.lo.real(), p.real()), std::min(b.lo.imag(), p.imag())};
@@ -184,6 +210,14 @@ Gap point_gap(std::span<const cd> a, std::span<const cd> b, double size) {
   g.rigid /= size;
   return g;
 }
+
+// Fig. 8: one CCW16 variant's distance to our frames (relative to the size): the largest over
+// the side-by-side times as is and after rigid alignment, and over the whole sequence.
+struct Fig8 {
+  double raw = 0, rigid = 0;
+  double sequence_rigid = std::numeric_limits<double>::quiet_NaN(), sequence_t = std::numeric_limits<double>::quiet_NaN();
+  double between_keyframes_rigid = std::numeric_limits<double>::quiet_NaN();  // the same without the keyframes' frames
+};
 
 // One of our sequences (a projection, a Hessian ratio) with what the tables report.
 struct OurRun {
@@ -218,7 +252,8 @@ class Outputs {
       throw InputError("-o " + dir_.string() + ": exists and is not a folder");
     created_ = std::filesystem::create_directories(dir_);
     // A report from an earlier run must not pass for this one's if this one fails.
-    for (const char* stale : {"report.md", "report.json"}) std::filesystem::remove(dir_ / stale);
+    // Nor may an earlier run's Fig. 8 plot stay next to a report of a shape with holes.
+    for (const char* stale : {"report.md", "report.json", "ccw16_distance.png"}) std::filesystem::remove(dir_ / stale);
   }
   std::filesystem::path add(const std::string& name) {
     written_.push_back(dir_ / name);
@@ -324,6 +359,16 @@ Surface compose(const std::string& title, const std::vector<Column>& cols, doubl
   }
   draw_legend(cr, total_w, total_h, legend_h, lo, hi, font);
   return s;
+}
+
+// CCW16's conformal distortion at the vertices from its f_z, f_zbar (≤ 0: a fold, drawn saturated).
+std::vector<double> vertex_kappa(const baselines::Ccw16Frame& f) {
+  std::vector<double> kappa(f.positions.size());
+  for (size_t v = 0; v < kappa.size(); ++v) {
+    const double a = std::abs(f.fz[v]), b = std::abs(f.fzbar[v]);
+    kappa[v] = a > b ? (a + b) / (a - b) : -1.0;
+  }
+  return kappa;
 }
 
 int parse_size(const std::string& s) {
@@ -444,8 +489,54 @@ void run_compare(const Opts& o) {
       baseline("CCW16", [&] { return baselines::Ccw16Interpolation(scene.shape, cage, ccw_keys); });
   const baselines::Ccw16Mesh ccw_mesh = ccw.prepare(mesh);
   const double ccw_setup_ms = ms_since(t0);
-  stage(t_start, "render mesh %d vertices, %d triangles; ARAP set up in %.0f ms, CCW16 in %.0f ms", mesh.vertex_count(),
-        mesh.triangle_count(), arap_setup_ms, ccw_setup_ms);
+  stage(t_start, "render mesh %d vertices, %d triangles; ARAP set up in %.0f ms, CCW16 (log derivatives) in %.0f ms",
+        mesh.vertex_count(), mesh.triangle_count(), arap_setup_ms, ccw_setup_ms);
+
+  // CCW16's boundary-metric variant (the one the paper's Fig. 8 compares with): the metric
+  // blended on the boundary, f_z and f_zbar rebuilt by a least-squares Hilbert transform.
+  // Only on a simply-connected shape (paper §1): with holes it is reported as not
+  // applicable, not skipped. Its prepared mesh holds basis rows at every vertex and Gauss
+  // node; above --ccw16-memory it runs on a coarser mesh of the shape, and says so.
+  struct MetricVariant {
+    bool applies = false;
+    std::string why_not;
+    const TriMesh* mesh = nullptr;  // the render mesh, or `coarse`
+    TriMesh coarse;
+    double render_mesh_mb = 0, mb = 0, setup_ms = 0;
+    std::optional<baselines::Ccw16Interpolation> interp;
+    std::optional<baselines::Ccw16Mesh> prepared;
+    bool own_mesh = false;  // true: on `coarse`
+  } bm;
+  if (holes > 0) {
+    bm.why_not = "CCW16 (boundary metric) does not apply to multiply-connected domains (paper \xc2\xa7" "1): its Hilbert "
+                 "transform recovers a single-valued log f_z from its real part only on a simply-connected domain, and this "
+                 "shape has " + std::to_string(holes) + (holes == 1 ? " hole" : " holes");
+    stage(t_start, "%s; only CCW16 (log derivatives) is compared", bm.why_not.c_str());
+  } else {
+    bm.applies = true;
+    baselines::Ccw16Options bco;
+    bco.variant = baselines::Ccw16Variant::BoundaryMetric;
+    const double budget = o.ccw16_memory_mb * 1024.0 * 1024.0;
+    double bytes = metric_rows_bytes(mesh, cage.vertex_count(), bco, size);
+    bm.render_mesh_mb = bytes / (1024.0 * 1024.0);
+    bm.mesh = &mesh;
+    // Coarser meshes until the rows fit (the mesher's vertex count is only roughly the one asked for).
+    int target = mesh.vertex_count();
+    for (int tries = 0; bytes > budget && tries < 8 && target > 100; ++tries) {
+      target = std::max(100, static_cast<int>(0.92 * target * budget / bytes));
+      bm.coarse = mesh_with(scene.shape, target);
+      bm.mesh = &bm.coarse;
+      bm.own_mesh = true;
+      bytes = metric_rows_bytes(bm.coarse, cage.vertex_count(), bco, size);
+    }
+    bm.mb = bytes / (1024.0 * 1024.0);
+    t0 = Clock::now();
+    bm.interp.emplace(baseline("CCW16 (boundary metric)", [&] { return baselines::Ccw16Interpolation(scene.shape, cage, ccw_keys, bco); }));
+    bm.prepared.emplace(bm.interp->prepare(*bm.mesh));
+    bm.setup_ms = ms_since(t0);
+    stage(t_start, "CCW16 (boundary metric) on %s%d-vertex mesh (%.0f MB of basis rows; %.0f MB on the render mesh, --ccw16-memory %.0f MB), set up in %.0f ms",
+          bm.own_mesh ? "a coarser " : "the ", bm.mesh->vertex_count(), bm.mb, bm.render_mesh_mb, o.ccw16_memory_mb, bm.setup_ms);
+  }
 
   // ARAP reproduces its keyframes (a check of the baseline as we run it).
   double arap_key_error = 0;
@@ -459,6 +550,10 @@ void run_compare(const Opts& o) {
   std::vector<double> ts(F), our_kappa(F), our_iso(F), bound_kappa(F), bound_iso(F), our_ms(F), our_iters(F);
   std::vector<double> arap_kappa(F), arap_iso(F), arap_ms(F), arap_flipped(F);
   std::vector<double> ccw_kappa(F), ccw_iso(F), ccw_ms(F), ccw_period(F);
+  // Simply connected: CCW16's boundary-metric variant per frame, and each variant's distance
+  // to our frame after the best rigid alignment (Fig. 8), at the vertices of its mesh.
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  std::vector<double> bm_kappa(F, nan), bm_iso(F, nan), bm_ms(F, nan), bm_fit(F, nan), ccw_dist(F, nan), bm_dist(F, nan);
   std::vector<double> uncertified_t;
   for (size_t i = 0; i < F; ++i) {
     const FrameResult& f = ours[i];
@@ -483,12 +578,26 @@ void run_compare(const Opts& o) {
     ccw_kappa[i] = c.max_kappa;
     ccw_iso[i] = c.max_isometric;
     ccw_period[i] = c.hole_period.empty() ? 0.0 : max_of(c.hole_period) / size;
+    if (bm.applies) {
+      t0 = Clock::now();
+      const baselines::Ccw16Frame b = bm.interp->frame(f.t, *bm.prepared);
+      bm_ms[i] = ms_since(t0);
+      bm_kappa[i] = b.max_kappa;
+      bm_iso[i] = b.max_isometric;
+      bm_fit[i] = b.fit_metric;
+      const std::vector<cd> ours_at = map_points_chunked(cage, f.map, mesh.vertices);
+      ccw_dist[i] = point_gap(c.positions, ours_at, size).rigid;
+      bm_dist[i] = point_gap(b.positions, bm.own_mesh ? map_points_chunked(cage, f.map, bm.mesh->vertices) : ours_at, size).rigid;
+    }
     if (tty) std::fprintf(stderr, "\r[compare] baselines: frame %zu/%zu   ", i + 1, F);
   }
   if (tty) std::fprintf(stderr, "\n");
-  stage(t_start, "baselines over the sequence: ARAP %.1f ms per frame (%d frames with folds), CCW16 %.1f ms per frame",
+  stage(t_start, "baselines over the sequence: ARAP %.1f ms per frame (%d frames with folds), CCW16 (log derivatives) %.1f ms per frame",
         mean_of(arap_ms), static_cast<int>(std::count_if(arap_flipped.begin(), arap_flipped.end(), [](double v) { return v > 0; })),
         mean_of(ccw_ms));
+  if (bm.applies)
+    stage(t_start, "CCW16 (boundary metric): %.1f ms per frame; after rigid alignment within %.2e of the size of ours (log derivatives: %.2e)",
+          mean_of(bm_ms), max_of(bm_dist), max_of(ccw_dist));
 
   // --- side by side at t = 0.25, 0.5, 0.75 of the segment -----------------------------------
   struct Snapshot {
@@ -496,8 +605,8 @@ void run_compare(const Opts& o) {
     FrameResult ours;
     std::vector<cd> ours_pos, arap_pos;
     baselines::MeshDistortion arap_d;
-    baselines::Ccw16Frame ccw;
-    Gap gap;  // ours vs CCW16
+    baselines::Ccw16Frame ccw, bm;  // CCW16: log derivatives; boundary metric (simply connected only)
+    Gap gap, bm_gap;                // ours vs each CCW16 variant
     std::string png;
     int width = 0, height = 0;  // of the figure
   };
@@ -519,11 +628,15 @@ void run_compare(const Opts& o) {
     s.arap_d = baselines::mesh_distortion(mesh, s.arap_pos);
     s.ccw = ccw.frame(s.t, ccw_mesh);
     s.gap = point_gap(s.ccw.positions, s.ours_pos, size);
-    for (const auto* v : {&s.ours_pos, &s.arap_pos, &s.ccw.positions})
+    if (bm.applies) {
+      s.bm = bm.interp->frame(s.t, *bm.prepared);
+      s.bm_gap = point_gap(s.bm.positions, bm.own_mesh ? map_points_chunked(cage, s.ours.map, bm.mesh->vertices) : s.ours_pos, size);
+    }
+    for (const auto* v : {&s.ours_pos, &s.arap_pos, &s.ccw.positions, &s.bm.positions})
       for (const cd& p : *v) grow(box, p);
     // The colour range: up to the largest κ any panel shows, but no further than the
     // keyframes' bound (beyond it, values saturate: the eye sees where a method leaves it).
-    for (double k : {s.ours.distortion.conformal_max, s.arap_d.max_kappa, s.ccw.max_kappa})
+    for (double k : {s.ours.distortion.conformal_max, s.arap_d.max_kappa, s.ccw.max_kappa, bm.applies ? s.bm.max_kappa : 1.0})
       if (std::isfinite(k)) range_hi = std::max(range_hi, std::min(k, s.ours.bound.conformal_max));
     snaps.push_back(std::move(s));
   }
@@ -547,6 +660,13 @@ void run_compare(const Opts& o) {
   const vk::UnweldedMesh unwelded = vk::unweld(mesh);
   flat.set_mesh(unwelded.mesh);
   flat.set_texture(texture, rect);
+  // CCW16 (boundary metric) on its own, coarser mesh when the render mesh's rows were too large.
+  std::unique_ptr<vk::Renderer> coarse;
+  if (bm.applies && bm.own_mesh) {
+    coarse = std::make_unique<vk::Renderer>(*ctx, pw, ph);
+    coarse->set_mesh(*bm.mesh);
+    coarse->set_texture(texture, rect);
+  }
   vk::RenderStyle style;
   style.overlays = vk::kOverlayDistortion | vk::kOverlayBoundary;  // no handles: the baselines have none
   style.distortion_lo = 1;
@@ -581,21 +701,22 @@ void run_compare(const Opts& o) {
       cols.push_back(std::move(c));
     }
     {
-      std::vector<double> kappa(s.ccw.positions.size());
-      for (size_t v = 0; v < kappa.size(); ++v) {
-        const double a = std::abs(s.ccw.fz[v]), b = std::abs(s.ccw.fzbar[v]);
-        kappa[v] = a > b ? (a + b) / (a - b) : -1.0;  // ≤ 0: a fold, saturated
-      }
       const double period = s.ccw.hole_period.empty() ? 0.0 : max_of(s.ccw.hole_period);
       // Any period above rounding makes the frame multivalued; above 0.1% of the size it shows.
-      Column c{"CCW16 [CCW16]", "", period > 1e-3 * size, welded.render(s.ccw.positions, kappa, view, style)};
+      Column c{"CCW16 (log derivatives)", "", period > 1e-3 * size, welded.render(s.ccw.positions, vertex_kappa(s.ccw), view, style)};
       if (holes && period > 1e-9 * size)
         c.stats = "NOT A MAP: hole period " + sci(period / size) + " \xc3\x97 size";
       else if (holes)
         c.stats = "hole period " + sci(period / size) + " \xc3\x97 size (integrable here)";
       else
-        c.stats = "max \xce\xba " + fixed(s.ccw.max_kappa, 3) + ",  max |f \xe2\x88\x92 ours| = " + sci(s.gap.raw) +
-                  " \xc3\x97 size";
+        c.stats = "max \xce\xba " + fixed(s.ccw.max_kappa, 3) + ", rigid gap to ours " + sci(s.gap.rigid) + " \xc3\x97 size";
+      cols.push_back(std::move(c));
+    }
+    if (bm.applies) {
+      vk::Renderer& r = coarse ? *coarse : welded;
+      Column c{"CCW16 (boundary metric)", "", false, r.render(s.bm.positions, vertex_kappa(s.bm), view, style)};
+      c.stats = "max \xce\xba " + fixed(s.bm.max_kappa, 3) + ", rigid gap to ours " + sci(s.bm_gap.rigid) + " \xc3\x97 size";
+      if (bm.own_mesh) c.stats += ", " + std::to_string(bm.mesh->vertex_count()) + "-vertex mesh";
       cols.push_back(std::move(c));
     }
     char title[256];
@@ -612,10 +733,14 @@ void run_compare(const Opts& o) {
   stage(t_start, "side by side: %zu figures at %d x %d per panel", snaps.size(), pw, ph);
 
   // --- plots -----------------------------------------------------------------------------------
-  const std::string ccw_name = holes ? "CCW16 at vertices, not a map (hole period \xe2\x89\xa0 0)" : "CCW16 at vertices";
+  const std::string ccw_name = holes ? "CCW16 (log derivatives) at vertices, not a map (hole period \xe2\x89\xa0 0)"
+                                     : "CCW16 (log derivatives) at vertices";
+  const std::string bm_mesh_note = bm.own_mesh ? " (" + std::to_string(bm.mesh->vertex_count()) + "-vertex mesh)" : std::string();
+  const std::string bm_name = "CCW16 (boundary metric) at vertices" + bm_mesh_note;
+  constexpr double kBmR = 0.6, kBmG = 0.25, kBmB = 0.7;  // the boundary-metric variant's colour in every plot
   auto distortion_plot = [&](const std::string& file, const std::string& what, const std::string& symbol,
                              const std::vector<double>& a, const std::vector<double>& b, const std::vector<double>& c,
-                             const std::vector<double>& bound) {
+                             const std::vector<double>& d, const std::vector<double>& bound) {
     PlotSpec p;
     p.title = scene.name + ": largest " + what + " per frame, each method vs the keyframes' bound";
     p.xlabel = "t (keyframes at the dotted lines)";
@@ -625,17 +750,21 @@ void run_compare(const Opts& o) {
                 {"ARAP (per triangle)", b, 0.9, 0.45, 0.05, false, false, 1.6},
                 {ccw_name, c, 0.15, 0.6, 0.25, false, false, 1.6},
                 {"keyframes' bound", bound, 0.1, 0.1, 0.1, true, true, 1.4}};
+    // Drawn first and wide, so that ours stays visible on top where the two coincide (Fig. 8).
+    if (bm.applies) p.series.insert(p.series.begin(), {bm_name, d, kBmR, kBmG, kBmB, false, false, 4.5});
     p.flagged = uncertified_t;
     p.x_marks = times;
     p.y_scale = AxisScale::kAuto;
     if (std::any_of(b.begin(), b.end(), [](double v) { return std::isinf(v); }))
       p.note = "\xe2\x96\xb2 at the top: ARAP frames with flipped triangles (distortion unbounded).  ";
+    if (bm.applies) p.note += "CCW16 (boundary metric) drawn wide under the others: it nearly coincides with ours.  ";
     if (!uncertified_t.empty()) p.note += "Red lines: frames of ours that could not be certified.";
     plot_series(out.add(file), p);
   };
   distortion_plot("kappa.png", "conformal distortion \xce\xba = \xcf\x83\xe2\x82\x81/\xcf\x83\xe2\x82\x82", "\xce\xba",
-                  our_kappa, arap_kappa, ccw_kappa, bound_kappa);
-  distortion_plot("isometric.png", "isometric distortion (symmetric Dirichlet)", "E_SD", our_iso, arap_iso, ccw_iso, bound_iso);
+                  our_kappa, arap_kappa, ccw_kappa, bm_kappa, bound_kappa);
+  distortion_plot("isometric.png", "isometric distortion (symmetric Dirichlet)", "E_SD", our_iso, arap_iso, ccw_iso, bm_iso,
+                  bound_iso);
   {
     PlotSpec p;
     p.title = scene.name + ": time per frame on this machine (" + std::to_string(mesh.vertex_count()) + "-vertex mesh for the baselines)";
@@ -644,10 +773,32 @@ void run_compare(const Opts& o) {
     p.x = ts;
     p.series = {{"ours: solve (" + core_name + ")", our_ms, 0.12, 0.35, 0.75, false, false, 2.0},
                 {"ARAP: one sparse solve", arap_ms, 0.9, 0.45, 0.05, false, false, 1.6},
-                {"CCW16: blend + integrate", ccw_ms, 0.15, 0.6, 0.25, false, false, 1.6}};
+                {"CCW16 (log derivatives): blend + integrate", ccw_ms, 0.15, 0.6, 0.25, false, false, 1.6}};
+    if (bm.applies)
+      p.series.push_back({"CCW16 (boundary metric): fit + integrate" + bm_mesh_note, bm_ms, kBmR, kBmG, kBmB, false, false, 1.6});
     p.x_marks = times;
     p.y_scale = AxisScale::kAuto;
     plot_series(out.add("frame_time.png"), p);
+  }
+  if (bm.applies) {
+    // Fig. 8: how far each CCW16 variant is from our frame over the sequence, up to a rigid motion.
+    PlotSpec p;
+    p.title = scene.name + ": CCW16 against ours after the best rigid alignment (Fig. 8)";
+    p.xlabel = "t (keyframes at the dotted lines)";
+    p.ylabel = "max |f \xe2\x88\x92 f_ours| / size";
+    p.x = ts;
+    // A keyframe reproduced exactly (distance at rounding level) has no place on a log axis.
+    auto shown = [](std::vector<double> v) {
+      for (double& x : v)
+        if (x < 1e-9) x = std::numeric_limits<double>::quiet_NaN();
+      return v;
+    };
+    p.series = {{"CCW16 (log derivatives)", shown(ccw_dist), 0.15, 0.6, 0.25, false, false, 1.8},
+                {"CCW16 (boundary metric)" + bm_mesh_note, shown(bm_dist), kBmR, kBmG, kBmB, false, false, 1.8}};
+    p.note = "Max over the mesh vertices; values below 1e-9 of the size (a keyframe reproduced exactly) are left out.";
+    p.x_marks = times;
+    p.y_scale = AxisScale::kLog;
+    plot_series(out.add("ccw16_distance.png"), p);
   }
 
   // --- Table 1: Hessian projections; Table 2: Hessian sample ratio ---------------------------
@@ -751,6 +902,7 @@ void run_compare(const Opts& o) {
                      {"hessian_ratio", scene.hessian_ratio},
                      {"segment", o.segment},
                      {"timing_frames", o.timing_frames},
+                     {"ccw16_memory_mb", o.ccw16_memory_mb},
                      {"newton_core", core_name},
                      {"panel_size", {pw, ph}}};
   json kf = json::array();
@@ -765,6 +917,38 @@ void run_compare(const Opts& o) {
                      {"arap", {{"kappa", nums(arap_kappa)}, {"isometric", nums(arap_iso)}, {"flipped", arap_flipped}, {"ms", nums(arap_ms)}}},
                      {"ccw16", {{"kappa", nums(ccw_kappa)}, {"isometric", nums(ccw_iso)}, {"ms", nums(ccw_ms)},
                                 {"max_hole_period_over_size", nums(ccw_period)}}}};
+  if (bm.applies) {
+    rep["sequence"]["ccw16"]["distance_to_ours_after_rigid_alignment_over_size"] = nums(ccw_dist);
+    rep["sequence"]["ccw16_boundary_metric"] = {{"kappa", nums(bm_kappa)},
+                                                {"isometric", nums(bm_iso)},
+                                                {"ms", nums(bm_ms)},
+                                                {"fit_metric", nums(bm_fit)},
+                                                {"distance_to_ours_after_rigid_alignment_over_size", nums(bm_dist)}};
+  }
+  // The two CCW16 variants: what each blends, where it ran, and why one may not apply.
+  const std::string log_blends =
+      "blends log f_z and the second dilatation \xce\xbd = conj(f_zbar)/f_z pointwise in the shape, then integrates them";
+  const std::string bm_blends =
+      "blends the pull-back metric on the boundary only (as ours does) and rebuilds f_z, f_zbar inside by a least-squares "
+      "Hilbert transform, then integrates them";
+  json bm_json = {{"name", "CCW16 (boundary metric)"}, {"variant", to_string(baselines::Ccw16Variant::BoundaryMetric)},
+                  {"blends", bm_blends}, {"applies", bm.applies}};
+  if (bm.applies) {
+    bm_json["mesh_vertices"] = bm.mesh->vertex_count();
+    bm_json["mesh_triangles"] = bm.mesh->triangle_count();
+    bm_json["coarser_than_render_mesh"] = bm.own_mesh;
+    bm_json["basis_rows_mb"] = bm.mb;
+    bm_json["render_mesh_basis_rows_mb"] = bm.render_mesh_mb;
+    bm_json["memory_budget_mb"] = o.ccw16_memory_mb;
+  } else {
+    bm_json["reason"] = bm.why_not;
+  }
+  rep["ccw16_variants"] = {{"log_derivatives", {{"name", "CCW16 (log derivatives)"},
+                                                {"variant", to_string(baselines::Ccw16Variant::LogDerivatives)},
+                                                {"blends", log_blends},
+                                                {"applies", true},
+                                                {"mesh_vertices", mesh.vertex_count()}}},
+                           {"boundary_metric", bm_json}};
   rep["summary"] = {
       {"ours", {{"frames", ours_sum.frames}, {"certified", ours_sum.certified}, {"frames_within_bound", ours_within},
                 {"max_bound_excess", ours_sum.max_bound_excess}, {"max_kappa", num(max_of(our_kappa))},
@@ -774,6 +958,10 @@ void run_compare(const Opts& o) {
                 {"keyframe_error_over_size", arap_key_error}, {"setup_ms", arap_setup_ms}, {"mean_ms", arap_frame_ms}}},
       {"ccw16", {{"max_kappa", num(max_of(ccw_kappa))}, {"max_isometric", num(max_of(ccw_iso))},
                  {"max_hole_period_over_size", num(max_of(ccw_period))}, {"setup_ms", ccw_setup_ms}, {"mean_ms", ccw_frame_ms}}}};
+  rep["summary"]["ccw16_boundary_metric"] =
+      bm.applies ? json{{"applies", true}, {"max_kappa", num(max_of(bm_kappa))}, {"max_isometric", num(max_of(bm_iso))},
+                        {"max_fit_metric", num(max_of(bm_fit))}, {"setup_ms", bm.setup_ms}, {"mean_ms", mean_of(bm_ms)}}
+                 : json{{"applies", false}, {"reason", bm.why_not}};
   json sbs = json::array();
   for (const Snapshot& s : snaps) {
     sbs.push_back({{"u", s.u},
@@ -797,7 +985,59 @@ void run_compare(const Opts& o) {
                               {"max_distance_to_ours_over_size", s.gap.raw},
                               {"max_distance_to_ours_after_rigid_alignment_over_size", s.gap.rigid}}}});
   }
+  if (bm.applies)
+    for (size_t i = 0; i < snaps.size(); ++i) {
+      const Snapshot& s = snaps[i];
+      sbs[i]["ccw16_boundary_metric"] = {{"kappa_max", num(s.bm.max_kappa)},
+                                         {"isometric_max", num(s.bm.max_isometric)},
+                                         {"fit_log_modulus", s.bm.fit_log_modulus},
+                                         {"fit_fzbar", s.bm.fit_fzbar},
+                                         {"fit_metric", s.bm.fit_metric},
+                                         {"max_distance_to_ours_over_size", s.bm_gap.raw},
+                                         {"max_distance_to_ours_after_rigid_alignment_over_size", s.bm_gap.rigid}};
+    }
   rep["side_by_side"] = sbs;
+  // Fig. 8 (simply connected): each variant's distance to our frames, as is and after the best
+  // rigid alignment, the largest over the three side-by-side times and over the whole sequence.
+  Fig8 fig8_log, fig8_bm;
+  if (bm.applies) {
+    for (const Snapshot& s : snaps) {
+      fig8_log.raw = std::max(fig8_log.raw, s.gap.raw);
+      fig8_log.rigid = std::max(fig8_log.rigid, s.gap.rigid);
+      fig8_bm.raw = std::max(fig8_bm.raw, s.bm_gap.raw);
+      fig8_bm.rigid = std::max(fig8_bm.rigid, s.bm_gap.rigid);
+    }
+    fig8_log.sequence_rigid = max_of(ccw_dist);
+    fig8_bm.sequence_rigid = max_of(bm_dist);
+    fig8_log.sequence_t = ts[static_cast<size_t>(std::max_element(ccw_dist.begin(), ccw_dist.end()) - ccw_dist.begin())];
+    fig8_bm.sequence_t = ts[static_cast<size_t>(std::max_element(bm_dist.begin(), bm_dist.end()) - bm_dist.begin())];
+    // At a keyframe ours and CCW16 (log derivatives) reproduce it exactly, CCW16 (boundary
+    // metric) up to its fit: the interpolation itself is what lies between the keyframes.
+    std::vector<double> log_between, bm_between;
+    for (size_t i = 0; i < F; ++i)
+      if (!ours[i].keyframe) log_between.push_back(ccw_dist[i]), bm_between.push_back(bm_dist[i]);
+    if (!log_between.empty()) {
+      fig8_log.between_keyframes_rigid = max_of(log_between);
+      fig8_bm.between_keyframes_rigid = max_of(bm_between);
+    }
+    auto fig8_json = [&](const Fig8& g, const std::string& name, const std::string& blends, int vertices) {
+      return json{{"name", name},
+                  {"blends", blends},
+                  {"mesh_vertices", vertices},
+                  {"max_distance_to_ours_over_size", g.raw},
+                  {"max_distance_to_ours_after_rigid_alignment_over_size", g.rigid},
+                  {"sequence_max_distance_after_rigid_alignment_over_size", num(g.sequence_rigid)},
+                  {"sequence_max_at_t", num(g.sequence_t)},
+                  {"between_keyframes_max_distance_after_rigid_alignment_over_size", num(g.between_keyframes_rigid)}};
+    };
+    rep["fig8"] = {{"applies", true},
+                   {"times", {snaps[0].t, snaps[1].t, snaps[2].t}},
+                   {"log_derivatives", fig8_json(fig8_log, "CCW16 (log derivatives)", log_blends, mesh.vertex_count())},
+                   {"boundary_metric", fig8_json(fig8_bm, "CCW16 (boundary metric)", bm_blends, bm.mesh->vertex_count())}};
+  } else {
+    rep["fig8"] = {{"applies", false},
+                   {"reason", "CCW16 (log derivatives) is not a map on this shape (its hole periods: Fig. 2); " + bm.why_not}};
+  }
   rep["colour_range"] = {1.0, range_hi};
   json t1 = json::array(), t2 = json::array();
   for (const OurRun& r : table1) t1.push_back(run_json(r));
@@ -818,6 +1058,8 @@ void run_compare(const Opts& o) {
   rep["table4_per_frame"] = {{"mesh_vertices", mesh.vertex_count()},
                              {"arap_ms", arap_frame_ms},
                              {"ccw16_ms", ccw_frame_ms},
+                             {"ccw16_boundary_metric_ms", bm.applies ? num(mean_of(bm_ms)) : json(nullptr)},
+                             {"ccw16_boundary_metric_mesh_vertices", bm.applies ? json(bm.mesh->vertex_count()) : json(nullptr)},
                              {"ours_solve_ms", ours_sum.mean_ms},
                              {"ours_iterations", ours_sum.mean_iterations},
                              {"ours_eval_cpu_ms", ours_eval_default_ms},
@@ -845,15 +1087,24 @@ void run_compare(const Opts& o) {
   line("**Settings:** |G| = " + std::to_string(setup->G.size()) + " boundary samples, |H| = " + std::to_string(setup->H.size()) +
        " (r = " + fixed(scene.hessian_ratio, 2) + "), PartProj; " + std::to_string(o.frames) + " frames over the keyframes' range " +
        "for the plots, " + std::to_string(o.table_frames) + " for Tables 1–2; baselines on a " + std::to_string(mesh.vertex_count()) +
-       "-vertex, " + std::to_string(mesh.triangle_count()) + "-triangle mesh; keyframes for ARAP are our keyframe maps at its vertices, for CCW16 their coefficients.");
+       "-vertex, " + std::to_string(mesh.triangle_count()) + "-triangle mesh" +
+       (bm.own_mesh ? " (CCW16 (boundary metric) on a coarser " + std::to_string(bm.mesh->vertex_count()) + "-vertex one: see Fig. 8)"
+                    : std::string()) +
+       "; keyframes for ARAP are our keyframe maps at its vertices, for CCW16 their coefficients.");
   line();
-  line("## Side by side (ours, ARAP, CCW16)");
+  line(bm.applies ? "## Side by side (ours, ARAP, CCW16 with log derivatives, CCW16 with the boundary metric)"
+                  : "## Side by side (ours, ARAP, CCW16 with log derivatives)");
   line();
   line("At t = 0.25, 0.5, 0.75 between keyframes " + std::to_string(o.segment) + " and " + std::to_string(o.segment + 1) +
        ". Texture with the conformal distortion \xce\xba = \xcf\x83\xe2\x82\x81/\xcf\x83\xe2\x82\x82 over it, one colour range [1, " +
        fixed(range_hi, 2) + "] for every panel (up to the keyframes' bound, rounded up); larger values and folds saturate to the top colour. "
        "Ours: \xce\xba of the map at the mesh's vertices (the dense evaluation on the Vulkan device). ARAP: \xce\xba per triangle, drawn flat. "
-       "CCW16: \xce\xba from its blended f_z, f_zbar at the vertices, positions integrated along a spanning tree of the mesh.");
+       "CCW16: \xce\xba from its blended f_z, f_zbar at the vertices, positions integrated along a spanning tree of the mesh; "
+       "two variants of it, CCW16 (log derivatives) and CCW16 (boundary metric), differ in what they blend (see " + std::string(bm.applies ? "Fig. 8" : "Fig. 2") + " below)." +
+       (bm.applies ? (bm.own_mesh ? " CCW16 (boundary metric) is drawn on its own, coarser " + std::to_string(bm.mesh->vertex_count()) +
+                                        "-vertex mesh (memory: Fig. 8 below)."
+                                  : std::string())
+                   : " " + bm.why_not + ", so it has no column here."));
   line();
   for (const Snapshot& s : snaps) {
     line("![" + scene.name + " at t = " + fixed(s.u, 2) + "](" + s.png + ")");
@@ -877,14 +1128,20 @@ void run_compare(const Opts& o) {
        sci(ours_sum.max_bound_excess) + ", relative) |");
   line("| ARAP | " + fixed(max_of(arap_kappa), 4) + " | " + fixed(max_of(arap_iso), 4) + " | " + std::to_string(F) + " | " +
        std::to_string(arap_folded) + " frames with flipped triangles; keyframes reproduced to " + sci(arap_key_error) + " \xc3\x97 size |");
-  line("| CCW16 | " + fixed(max_of(ccw_kappa), 4) + " | " + fixed(max_of(ccw_iso), 4) + " | " + std::to_string(F) + " | " +
+  line("| CCW16 (log derivatives) | " + fixed(max_of(ccw_kappa), 4) + " | " + fixed(max_of(ccw_iso), 4) + " | " + std::to_string(F) + " | " +
        (holes ? "not a map: largest hole period " + sci(max_of(ccw_period)) + " \xc3\x97 size" : std::string("simply connected: a map")) + " |");
+  if (bm.applies)
+    line("| CCW16 (boundary metric) | " + fixed(max_of(bm_kappa), 4) + " | " + fixed(max_of(bm_iso), 4) + " | " + std::to_string(F) +
+         " | simply connected: a map; blended metric realised at \xe2\x88\x82\xce\xa9 to " + sci(max_of(bm_fit)) + " (relative)" +
+         (bm.own_mesh ? "; on the " + std::to_string(bm.mesh->vertex_count()) + "-vertex mesh" : std::string()) + " |");
+  else
+    line("| CCW16 (boundary metric) | n/a | n/a | 0 | does not apply: " + std::to_string(holes) + " hole(s), a multiply-connected domain (paper \xc2\xa7" "1) |");
   line();
   if (holes) {
     line("## CCW16 on a shape with holes (Fig. 2)");
     line();
-    line("A frame of CCW16 is single-valued only if the integral of its blended derivatives around every hole (the period P) "
-         "vanishes. At the keyframes it does; in between it does not, and the integrated mesh tears along a seam by P:");
+    line("**CCW16 (log derivatives)** " + log_blends + ". A frame of it is single-valued only if the integral of its blended "
+         "derivatives around every hole (the period P) vanishes. At the keyframes it does; in between it does not, and the integrated mesh tears along a seam by P:");
     line();
     line("| t | hole periods \\|P\\| / size | seam jump / size | max \xce\xba |");
     line("|---|---|---|---|");
@@ -894,18 +1151,45 @@ void run_compare(const Opts& o) {
       for (size_t i = 0; i < s.ccw.seam_jump.size(); ++i) j += (i ? ", " : "") + sci(s.ccw.seam_jump[i] / size);
       line("| " + fixed(s.u, 2) + " | " + p + " | " + j + " | " + fixed(s.ccw.max_kappa, 4) + " |");
     }
+    line();
+    line("**CCW16 (boundary metric)** " + bm_blends + ". " + bm.why_not + ". It is the variant of the paper's Fig. 8 (CCW16 against ours on a simply-connected shape), "
+         "which therefore has no counterpart on this scene: run `hsi compare` on a shape without holes (e.g. assets/blob.json) for it.");
   } else {
     line("## CCW16 against ours on a simply-connected shape (Fig. 8)");
     line();
-    line("Both interpolate the same keyframes; the paper finds visually the same result. Largest distance between the two "
-         "frames over the mesh's vertices, relative to the shape's size (bounding-box diagonal), as they are and after the best "
-         "rigid alignment (the methods place the frame differently: ours by an interpolated rigid pose, CCW16 from an anchor point):");
+    line("Two variants of CCW16 interpolate the same keyframes. **CCW16 (log derivatives)** " + log_blends +
+         ". **CCW16 (boundary metric)** " + bm_blends +
+         "; it is the variant the paper's Fig. 8 finds visually the same as ours. Largest distance to our frame over the vertices "
+         "of each variant's mesh, relative to the shape's size (bounding-box diagonal), as they are and after the best rigid "
+         "alignment (the methods place the frame differently: ours by an interpolated rigid pose, CCW16 from an anchor point "
+         "and its mean rotation):");
     line();
-    line("| t | max \\|f_ours \xe2\x88\x92 f_CCW16\\| / size | after rigid alignment | max \xce\xba ours | max \xce\xba CCW16 |");
-    line("|---|---|---|---|---|");
+    line("| t | log derivatives: max \\|f_ours \xe2\x88\x92 f_CCW16\\| / size | after rigid alignment | boundary metric: max "
+         "\\|f_ours \xe2\x88\x92 f_CCW16\\| / size | after rigid alignment | boundary metric: metric fit at \xe2\x88\x82\xce\xa9 | "
+         "max \xce\xba ours | max \xce\xba log derivatives | max \xce\xba boundary metric |");
+    line("|---|---|---|---|---|---|---|---|---|");
     for (const Snapshot& s : snaps)
-      line("| " + fixed(s.u, 2) + " | " + sci(s.gap.raw) + " | " + sci(s.gap.rigid) + " | " + fixed(s.ours.distortion.conformal_max, 4) +
-           " | " + fixed(s.ccw.max_kappa, 4) + " |");
+      line("| " + fixed(s.u, 2) + " | " + sci(s.gap.raw) + " | " + sci(s.gap.rigid) + " | " + sci(s.bm_gap.raw) + " | " +
+           sci(s.bm_gap.rigid) + " | " + sci(s.bm.fit_metric) + " | " + fixed(s.ours.distortion.conformal_max, 4) + " | " +
+           fixed(s.ccw.max_kappa, 4) + " | " + fixed(s.bm.max_kappa, 4) + " |");
+    line();
+    line("Over the whole sequence (" + std::to_string(F) + " frames, every keyframe interval), after rigid alignment: CCW16 (log "
+         "derivatives) up to " + sci(fig8_log.sequence_rigid) + " of the size (at t = " + fixed(fig8_log.sequence_t, 3) +
+         "), CCW16 (boundary metric) up to " + sci(fig8_bm.sequence_rigid) + " (at t = " + fixed(fig8_bm.sequence_t, 3) + "). "
+         "Between the keyframes only (at a keyframe ours and the log-derivative variant reproduce it exactly, the "
+         "boundary-metric variant up to its fit): " + sci(fig8_log.between_keyframes_rigid) + " and " +
+         sci(fig8_bm.between_keyframes_rigid) + ".");
+    line();
+    line("![CCW16 against ours after rigid alignment](ccw16_distance.png)");
+    line();
+    line("The relative fit is how well the boundary-metric variant's rebuilt f_z, f_zbar realise the blended metric at the "
+         "boundary samples (\xe2\x80\x96M(f) \xe2\x88\x92 M(t)\xe2\x80\x96 / \xe2\x80\x96M(t)\xe2\x80\x96, largest over \xe2\x88\x82\xce\xa9). "
+         "Memory: this variant keeps its basis rows at every vertex and quadrature node of its mesh, " +
+         fixed(bm.render_mesh_mb, 0) + " MB on the " + std::to_string(mesh.vertex_count()) + "-vertex render mesh" +
+         (bm.own_mesh ? "; above the " + fixed(o.ccw16_memory_mb, 0) + " MB allowed (--ccw16-memory) it ran on a coarser " +
+                            std::to_string(bm.mesh->vertex_count()) + "-vertex mesh of the shape (" + fixed(bm.mb, 0) +
+                            " MB), and its distances, distortion and time are measured at that mesh's vertices."
+                      : " (within the " + fixed(o.ccw16_memory_mb, 0) + " MB allowed, --ccw16-memory)."));
   }
   line();
   line("## Table 1: Hessian PSD projection");
@@ -951,21 +1235,24 @@ void run_compare(const Opts& o) {
   line();
   line("## Table 4: time per frame against ARAP");
   line();
-  line("At the " + std::to_string(mesh.vertex_count()) + "-vertex mesh, means over the " + std::to_string(F) + " frames of the sequence.");
+  line("At the " + std::to_string(mesh.vertex_count()) + "-vertex mesh, means over the " + std::to_string(F) + " frames of the sequence" +
+       (bm.own_mesh ? " (CCW16 (boundary metric): at its " + std::to_string(bm.mesh->vertex_count()) + "-vertex mesh)" : std::string()) +
+       (bm.applies ? "." : "; CCW16 (boundary metric) does not apply to a shape with holes."));
   line();
   line("![time per frame](frame_time.png)");
   line();
-  line("| ARAP ms | CCW16 ms | ours solve ms | ours #iter | ours solve + f at vertices (CPU) ms | ARAP / ours solve | ARAP / ours solve + f |");
-  line("|---|---|---|---|---|---|---|");
-  line("| " + fixed(arap_frame_ms, 2) + " | " + fixed(ccw_frame_ms, 2) + " | " + fixed(ours_sum.mean_ms, 2) + " | " +
+  line("| ARAP ms | CCW16 (log derivatives) ms | CCW16 (boundary metric) ms | ours solve ms | ours #iter | ours solve + f at vertices (CPU) ms | ARAP / ours solve | ARAP / ours solve + f |");
+  line("|---|---|---|---|---|---|---|---|");
+  line("| " + fixed(arap_frame_ms, 2) + " | " + fixed(ccw_frame_ms, 2) + " | " + (bm.applies ? fixed(mean_of(bm_ms), 2) : std::string("n/a")) +
+       " | " + fixed(ours_sum.mean_ms, 2) + " | " +
        fixed(ours_sum.mean_iterations, 2) + " | " + fixed(ours_sum.mean_ms + ours_eval_default_ms, 2) + " | " +
        sci(arap_frame_ms / ours_sum.mean_ms) + " | " + sci(arap_frame_ms / (ours_sum.mean_ms + ours_eval_default_ms)) + " |");
   line();
   line("Raw numbers: [report.json](report.json). Made by `hsi compare` in " + fixed(s_since(t_start), 1) + " s.");
   write_file_atomic(out.add("report.md"), md);
   out.commit();
-  stage(t_start, "wrote %s/report.md with 3 side-by-side figures, 3 plots and Tables 1-4 (report.json: raw numbers)",
-        out.dir().string().c_str());
+  stage(t_start, "wrote %s/report.md with 3 side-by-side figures, %d plots and Tables 1-4 (report.json: raw numbers)",
+        out.dir().string().c_str(), bm.applies ? 4 : 3);
   std::printf("%s/report.md\n", out.dir().string().c_str());
 }
 
@@ -978,7 +1265,8 @@ void register_compare(CLI::App& app) {
 #endif
   CLI::App* cmd = app.add_subcommand(
       "compare",
-      "Reproduce the paper's comparisons on one scene, measured on this machine: ours, ARAP and CCW16 side by\n"
+      "Reproduce the paper's comparisons on one scene, measured on this machine: ours, ARAP and CCW16 (log\n"
+      "derivatives; on a simply-connected shape also its boundary-metric variant, the paper's Fig. 8) side by\n"
       "side with the distortion colour map at t = 0.25, 0.5, 0.75 of a keyframe interval, each method's largest\n"
       "distortion over the sequence against the keyframes' bounds, and Tables 1-4 (Hessian projections, the\n"
       "Hessian sample ratio, time against mesh resolution and against ARAP). Writes PNGs, report.json and\n"
@@ -998,6 +1286,10 @@ void register_compare(CLI::App& app) {
   cmd->add_option("--ratios", o->ratios, "Hessian sample ratios r of Table 2")->capture_default_str()->delimiter(',');
   cmd->add_option("--table3-vertices", o->table3_vertices, "Mesh resolutions of Table 3 (vertices, about)")
       ->capture_default_str()->delimiter(',');
+  cmd->add_option("--ccw16-memory", o->ccw16_memory_mb,
+                  "MB of basis rows CCW16's boundary-metric variant may hold (it keeps them at every vertex and quadrature\n"
+                  "node: ~300 MB at 10k vertices); above it, that variant runs on a coarser mesh and the report says so")
+      ->capture_default_str()->check(CLI::Range(1.0, 1e6));
   cmd->add_flag("--no-800k", o->no_800k, "Skip Table 3's rows of 800k vertices or more (a quick run)");
   cmd->add_option("--timing-frames", o->timing_frames, "Frames timed per resolution in Table 3")
       ->capture_default_str()->check(CLI::Range(1, 1000));

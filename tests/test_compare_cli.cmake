@@ -2,7 +2,8 @@
 # frames and samples, small meshes, no 800k row) under the Vulkan validation layer:
 # every figure and plot is written as a PNG of the size the report gives, report.md
 # embeds them, report.json's numbers are sane (our frames certified, CCW16's hole
-# period on the annulus > 0, ARAP's keyframes reproduced, every table filled), and a
+# period on the annulus > 0, ARAP's keyframes reproduced, every table filled, CCW16's
+# boundary-metric variant reported as not applicable to a shape with a hole), and a
 # bad scene fails with exit code 2 and a message naming it, leaving no report.
 # -D: HSI_CLI, HSI_SCENE, HSI_WORK_DIR
 file(REMOVE_RECURSE ${HSI_WORK_DIR})
@@ -129,6 +130,20 @@ endforeach()
 string(JSON ratio GET "${json}" table4_per_frame arap_over_ours_solve)
 if(NOT ratio GREATER 0)
   fail("table 4: ARAP / ours = ${ratio}")
+endif()
+# CCW16's boundary-metric variant does not apply to the annulus (a hole): reported, not skipped.
+string(JSON applies GET "${json}" summary ccw16_boundary_metric applies)
+string(JSON reason GET "${json}" summary ccw16_boundary_metric reason)
+string(JSON fig8 GET "${json}" fig8 applies)
+if(applies OR fig8 OR NOT reason MATCHES "multiply-connected")
+  fail("CCW16 (boundary metric) on the annulus: applies ${applies}, Fig. 8 applies ${fig8}, reason '${reason}'")
+endif()
+string(FIND "${md}" "CCW16 (boundary metric) does not apply to multiply-connected domains" at)
+if(at LESS 0)
+  fail("report.md does not say that CCW16 (boundary metric) does not apply to the annulus")
+endif()
+if(EXISTS ${dir}/ccw16_distance.png)
+  fail("ccw16_distance.png (Fig. 8) was written for a shape with a hole")
 endif()
 foreach(heading "Table 1" "Table 2" "Table 3" "Table 4" "Fig. 2" "Machine:")
   string(FIND "${md}" "${heading}" at)
