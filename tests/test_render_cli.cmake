@@ -6,14 +6,7 @@
 # -D: HSI_CLI, HSI_SCENE, HSI_OTHER_SCENE, HSI_WORK_DIR
 file(REMOVE_RECURSE ${HSI_WORK_DIR})
 file(MAKE_DIRECTORY ${HSI_WORK_DIR})
-function(run expect_rc)
-  execute_process(COMMAND ${ARGN} RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
-  message(STATUS "${ARGN}\n${out}${err}")
-  if(NOT rc STREQUAL expect_rc)
-    message(FATAL_ERROR "exit code ${rc}, expected ${expect_rc}")
-  endif()
-  set(RUN_OUTPUT "${out}${err}" PARENT_SCOPE)
-endfunction()
+include(${CMAKE_CURRENT_LIST_DIR}/cli_test.cmake)
 set(frames ${HSI_WORK_DIR}/frames)
 run(0 ${HSI_CLI} interpolate ${HSI_SCENE} --frames 4 --samples 1000 --png-frames 0 -o ${frames})
 run(0 ${HSI_CLI} render ${HSI_SCENE} ${frames} -o ${HSI_WORK_DIR}/render --size 160x120
