@@ -45,21 +45,14 @@ inline void frame_table(const vk::Context& ctx, const std::vector<std::string>& 
   std::printf("| scene | n | precision | segments | eval+cert dev ms | draw dev ms | frame dev ms | frame wall ms | "
               "certified |\n|---|---|---|---|---|---|---|---|---|\n");
   for (const std::string& path : scenes) {
-    const Scene scene = load_scene(path);
-    const Cage cage = scene_cage(scene);
-    HarmonicMap map = affine_map(cage, {1.1, 0.2}, {0.1, 0.0}, {0.0, 0.0});
-    for (const Keyframe& k : scene.keyframes)
-      if (k.coefficients) map = *k.coefficients;
-    vk::RgbaImage texture;
-    std::array<double, 4> rect{0, 0, 1, 1};
-    if (!scene.texture.empty()) {
-      texture = vk::read_png(scene.texture_path());
-      const BoundingBox bb = bounding_box(scene.shape);
-      rect = scene.texture_rect.value_or(std::array<double, 4>{bb.lo.real(), bb.lo.imag(), bb.hi.real(), bb.hi.imag()});
-    }
+    const VulkanScene v = load_vulkan_scene(path);
+    const Scene& scene = v.scene;
+    const Cage& cage = v.cage;
+    const HarmonicMap& map = v.map;
     vk::DenseCertifier certifier(ctx, scene.shape, cage, sample_boundary(scene.shape, scene.samples));
-    const std::string name = scene.name.empty() ? path : scene.name;
-    for (int n : sizes)
+    for (int n : sizes) {
+      const TriMesh mesh = render_mesh(scene.shape, n);
+      const vk::View view = frame_view(v, mesh, n);
       for (const vk::Precision precision : {vk::Precision::kFloat, vk::Precision::kDouble}) {
         vk::DenseEvalOptions eo;
         eo.precision = precision;
@@ -68,20 +61,9 @@ inline void frame_table(const vk::Context& ctx, const std::vector<std::string>& 
         vk::DenseEvaluator grid_eval(ctx, eo);
         vk::RendererOptions ro;
         ro.evaluation.precision = precision;
-        TriangulateOptions to;
-        to.max_edge = edge_for_vertex_count(scene.shape, std::max(2000, n * n / 50));
-        const TriMesh mesh = triangulate(scene.shape, to);
         vk::Renderer renderer(ctx, n, n, ro);
         renderer.set_mesh(mesh, scene.handles);
-        renderer.set_texture(texture, rect);
-        std::vector<cd> f;
-        cpu_mesh_eval(cage, map, mesh.vertices, f);
-        BoundingBox box{f[0], f[0]};
-        for (const cd& z : f) {
-          box.lo = {std::min(box.lo.real(), z.real()), std::min(box.lo.imag(), z.imag())};
-          box.hi = {std::max(box.hi.real(), z.real()), std::max(box.hi.imag(), z.imag())};
-        }
-        const vk::View view = vk::View::fit(box, n, n, 0.04 * n);
+        renderer.set_texture(v.texture, v.rect);
         vk::RenderStyle style;
         style.overlays = vk::kOverlayBoundary;
         const vk::Grid grid = vk::Grid::covering(bounding_box(scene.shape), n, n);
@@ -104,11 +86,12 @@ inline void frame_table(const vk::Context& ctx, const std::vector<std::string>& 
           frame_dev.push_back(ec + dr);
           wall.push_back(w);
         }
-        std::printf("| %s | %d | %s | %d | %.3f | %.3f | %.3f | %.2f | %s |\n", name.c_str(), n,
+        std::printf("| %s | %d | %s | %d | %.3f | %.3f | %.3f | %.2f | %s |\n", v.name.c_str(), n,
                     grid_eval.double_precision() ? "double" : "float", certifier.breakpoint_count(), median(ec_dev),
                     median(draw_dev), median(frame_dev), median(wall), certified ? "yes" : "no");
         std::fflush(stdout);
       }
+    }
   }
 }
 

@@ -5,6 +5,7 @@
 #pragma once
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cstdio>
 #include <string>
@@ -30,6 +31,54 @@ inline void cpu_mesh_eval(const Cage& cage, const HarmonicMap& map, const std::v
   }
 }
 
+// A scene as the Vulkan benchmarks draw it: its cage, the last keyframe given by
+// coefficients (an affine map when none is), and its texture with the rectangle it
+// covers (the shape's bounding box unless the scene says otherwise; not read when
+// `with_texture` is false).
+struct VulkanScene {
+  std::string name;
+  Scene scene;
+  Cage cage;
+  HarmonicMap map;
+  vk::RgbaImage texture;
+  std::array<double, 4> rect{0, 0, 1, 1};
+};
+
+inline VulkanScene load_vulkan_scene(const std::string& path, bool with_texture = true) {
+  VulkanScene v;
+  v.scene = load_scene(path);
+  v.name = v.scene.name.empty() ? path : v.scene.name;
+  v.cage = scene_cage(v.scene);
+  v.map = affine_map(v.cage, {1.1, 0.2}, {0.1, 0.0}, {0.0, 0.0});
+  for (const Keyframe& k : v.scene.keyframes)
+    if (k.coefficients) v.map = *k.coefficients;
+  if (with_texture && !v.scene.texture.empty()) {
+    v.texture = vk::read_png(v.scene.texture_path());
+    const BoundingBox bb = bounding_box(v.scene.shape);
+    v.rect = v.scene.texture_rect.value_or(std::array<double, 4>{bb.lo.real(), bb.lo.imag(), bb.hi.real(), bb.hi.imag()});
+  }
+  return v;
+}
+
+// The render mesh for an n × n image (about n²/50 vertices, as hsi render uses).
+inline TriMesh render_mesh(const Shape& shape, int n) {
+  TriangulateOptions to;
+  to.max_edge = edge_for_vertex_count(shape, std::max(2000, n * n / 50));
+  return triangulate(shape, to);
+}
+
+// The view that frames the mesh's image under the map in an n × n image.
+inline vk::View frame_view(const VulkanScene& v, const TriMesh& mesh, int n) {
+  std::vector<cd> f;
+  cpu_mesh_eval(v.cage, v.map, mesh.vertices, f);
+  BoundingBox box{f[0], f[0]};
+  for (const cd& z : f) {
+    box.lo = {std::min(box.lo.real(), z.real()), std::min(box.lo.imag(), z.imag())};
+    box.hi = {std::max(box.hi.real(), z.real()), std::max(box.hi.imag(), z.imag())};
+  }
+  return vk::View::fit(box, n, n, 0.04 * n);
+}
+
 inline void render_table(const vk::Context& ctx, const std::vector<std::string>& scenes, const std::vector<int>& sizes,
                          int frames, bool use_float) {
   using Clock = std::chrono::steady_clock;
@@ -52,35 +101,16 @@ inline void render_table(const vk::Context& ctx, const std::vector<std::string>&
   eo.skip_outside = true;
   vk::DenseEvaluator grid_eval(ctx, eo);
   for (const std::string& path : scenes) {
-    const Scene scene = load_scene(path);
-    const Cage cage = scene_cage(scene);
-    HarmonicMap map = affine_map(cage, {1.1, 0.2}, {0.1, 0.0}, {0.0, 0.0});
-    for (const Keyframe& k : scene.keyframes)
-      if (k.coefficients) map = *k.coefficients;
-    vk::RgbaImage texture;
-    std::array<double, 4> rect{0, 0, 1, 1};
-    if (!scene.texture.empty()) {
-      texture = vk::read_png(scene.texture_path());
-      const BoundingBox bb = bounding_box(scene.shape);
-      rect = scene.texture_rect.value_or(std::array<double, 4>{bb.lo.real(), bb.lo.imag(), bb.hi.real(), bb.hi.imag()});
-    }
-    const std::string name = scene.name.empty() ? path : scene.name;
+    const VulkanScene v = load_vulkan_scene(path);
+    const Scene& scene = v.scene;
+    const Cage& cage = v.cage;
+    const HarmonicMap& map = v.map;
     for (int n : sizes) {
-      TriangulateOptions to;
-      to.max_edge = edge_for_vertex_count(scene.shape, std::max(2000, n * n / 50));
-      const TriMesh mesh = triangulate(scene.shape, to);
+      const TriMesh mesh = render_mesh(scene.shape, n);
       vk::Renderer renderer(ctx, n, n, ro);
       renderer.set_mesh(mesh, scene.handles);
-      renderer.set_texture(texture, rect);
-      // The frame's view: where the map sends the mesh (CPU, once).
-      std::vector<cd> f;
-      cpu_mesh_eval(cage, map, mesh.vertices, f);
-      BoundingBox box{f[0], f[0]};
-      for (const cd& z : f) {
-        box.lo = {std::min(box.lo.real(), z.real()), std::min(box.lo.imag(), z.imag())};
-        box.hi = {std::max(box.hi.real(), z.real()), std::max(box.hi.imag(), z.imag())};
-      }
-      const vk::View view = vk::View::fit(box, n, n, 0.04 * n);
+      renderer.set_texture(v.texture, v.rect);
+      const vk::View view = frame_view(v, mesh, n);
       vk::RenderStyle style;
       style.overlays = vk::kOverlayBoundary;
       const vk::Grid grid = vk::Grid::covering(bounding_box(scene.shape), n, n);
@@ -104,11 +134,12 @@ inline void render_table(const vk::Context& ctx, const std::vector<std::string>&
         draw_ms.push_back(d);
         pair_ms.push_back(g + d);
       }
+      std::vector<cd> f;
       const auto t_cpu = Clock::now();
       cpu_mesh_eval(cage, map, mesh.vertices, f);
       const double cpu = ms_since(t_cpu);
       const double draw = median(draw_ms);
-      std::printf("| %s | %d² | %d | %.2f | %.2f | %.2f | %.2f | %.2f | %.1f | %.1f |\n", name.c_str(), n,
+      std::printf("| %s | %d² | %d | %.2f | %.2f | %.2f | %.2f | %.2f | %.1f | %.1f |\n", v.name.c_str(), n,
                   mesh.vertex_count(), median(grid_ms), draw, median(render_ms), median(readback_ms), median(pair_ms),
                   cpu, cpu / draw);
       std::fflush(stdout);

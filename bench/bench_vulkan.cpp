@@ -162,12 +162,11 @@ int main(int argc, char** argv) {
               "|---|---|---|---|---|---|---|---|---|\n");
 
   for (const std::string& path : scenes) {
-    const Scene scene = load_scene(path);
-    const Cage cage = scene_cage(scene);
-    HarmonicMap map = affine_map(cage, {1.1, 0.2}, {0.1, 0.0}, {0.0, 0.0});
-    for (const Keyframe& k : scene.keyframes)
-      if (k.coefficients) map = *k.coefficients;
-    const std::string name = scene.name.empty() ? path : scene.name;
+    const bench::VulkanScene v = bench::load_vulkan_scene(path, false);
+    const Scene& scene = v.scene;
+    const Cage& cage = v.cage;
+    const HarmonicMap& map = v.map;
+    const std::string& name = v.name;
     for (int n : sizes) {
       const vk::Grid grid = vk::Grid::covering(bounding_box(scene.shape), n, n);
       vk::DenseField field = eval.evaluate_grid(cage, map, grid, &scene.shape);  // warm-up
