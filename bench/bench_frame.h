@@ -1,14 +1,14 @@
 // Frame rows of bench_vulkan: what one displayed frame costs on the GPU when the
-// dense distortion field, the certificate and the picture are all made there:
-//   submission 1: the n × n grid evaluation over the shape (masked, results left on
-//                 the device: DenseEvaluator::record_grid) and the dense certificate
-//                 (DenseCertifier::record), one command buffer;
-//   submission 2: Renderer::draw at n × n pixels (mesh evaluated at f, textured,
-//                 boundary, 4× MSAA, the frame stays on the device).
-// Device times come from timestamp queries (Context::last_device_ms), so they are
-// what the GPU spent, apart from the host's recording, submission and wake-up that
-// the wall columns add. Both precisions of the evaluation shader are measured (the
-// certificate is always double: its bounds need it).
+// dense distortion field, the certificate and the picture are all made there, in one
+// submission:
+//   the n × n grid evaluation over the shape (masked, results left on the device:
+//   DenseEvaluator::record_grid) | the dense certificate (DenseCertifier::record) |
+//   the render mesh evaluated at f | the render pass at n × n pixels (textured,
+//   boundary, 4× MSAA; Renderer::record), the frame staying on the device.
+// Device times come from timestamp queries (Context::mark between the parts), so they
+// are what the GPU spent, apart from the host's recording, submission and wake-up
+// that the wall column adds. Both precisions of the evaluation shader are measured
+// (the certificate is always double: its bounds need it).
 #pragma once
 
 #include <algorithm>
@@ -24,7 +24,7 @@
 namespace hsi::bench {
 
 inline void frame_table(const vk::Context& ctx, const std::vector<std::string>& scenes, const std::vector<int>& sizes,
-                        int frames) {
+                        int frames, int msaa = 4) {
   using Clock = std::chrono::steady_clock;
   auto ms_since = [](Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); };
   auto median = [](std::vector<double> v) {
@@ -37,13 +37,14 @@ inline void frame_table(const vk::Context& ctx, const std::vector<std::string>& 
     return;
   }
   if (ctx.info().timestamp_valid_bits == 0) std::printf("\nFrames: %s has no timestamps; device columns are -1\n", ctx.info().name.c_str());
-  std::printf("\nFrames: evaluate an n x n grid over the shape (f, f_z, f_zbar, distortion; masked, on the device) +\n"
-              "certify (double, the scene's samples) + draw the frame at n x n pixels (mesh of ~n^2/50 vertices\n"
-              "evaluated on the GPU, textured, boundary, 4x MSAA). Medians over the frames. eval+cert dev / draw\n"
-              "dev: GPU time by timestamps of the two submissions; frame dev: their sum; frame wall: host time of\n"
-              "both submissions, waits included. precision: of the evaluation shader (grid and mesh).\n\n");
-  std::printf("| scene | n | precision | segments | eval+cert dev ms | draw dev ms | frame dev ms | frame wall ms | "
-              "certified |\n|---|---|---|---|---|---|---|---|---|\n");
+  std::printf("\nFrames: one submission per frame: evaluate an n x n grid over the shape (f, f_z, f_zbar,\n"
+              "distortion; masked, on the device) | certify (double, the scene's samples) | evaluate the render\n"
+              "mesh (~n^2/50 vertices) | draw the frame at n x n pixels (textured, boundary, %dx MSAA). Medians over\n"
+              "the frames of the GPU time of each part (timestamps between them) and of the whole submission\n"
+              "(frame dev); frame wall: host time, recording, submission and wait included. precision: of the\n"
+              "evaluation shaders (grid and mesh). pieces: certificate pieces per segment (1: no subdivision).\n\n", msaa);
+  std::printf("| scene | n | precision | segments | pieces | eval ms | certify ms | mesh ms | draw ms | frame dev ms | "
+              "frame wall ms | certified |\n|---|---|---|---|---|---|---|---|---|---|---|---|\n");
   for (const std::string& path : scenes) {
     const VulkanScene v = load_vulkan_scene(path);
     const Scene& scene = v.scene;
@@ -61,34 +62,45 @@ inline void frame_table(const vk::Context& ctx, const std::vector<std::string>& 
         vk::DenseEvaluator grid_eval(ctx, eo);
         vk::RendererOptions ro;
         ro.evaluation.precision = precision;
+        ro.msaa_samples = msaa;
         vk::Renderer renderer(ctx, n, n, ro);
         renderer.set_mesh(mesh, scene.handles);
         renderer.set_texture(v.texture, v.rect);
         vk::RenderStyle style;
         style.overlays = vk::kOverlayBoundary;
         const vk::Grid grid = vk::Grid::covering(bounding_box(scene.shape), n, n);
-        std::vector<double> ec_dev, draw_dev, frame_dev, wall;
+        std::vector<double> parts[4], frame_dev, wall;
         bool certified = true;
+        double pieces = 0;
         for (int i = -1; i < std::max(frames, 1); ++i) {  // i = -1: warm-up
           const auto t0 = Clock::now();
           ctx.submit_and_wait([&](VkCommandBuffer cmd) {
             grid_eval.record_grid(cmd, cage, map, grid, &scene.shape);
+            ctx.mark(cmd);
             certifier.record(cmd, map);
+            ctx.mark(cmd);
+            renderer.record(cmd, cage, map, view, style, true);
           });
-          const double ec = ctx.last_device_ms();
-          certified = certifier.collect().certified && certified;
-          renderer.draw(cage, map, view, style);
-          const double dr = ctx.last_device_ms();
+          const CertificateResult cr = certifier.collect();
           const double w = ms_since(t0);
+          certified = cr.certified && certified;
           if (i < 0) continue;
-          ec_dev.push_back(ec);
-          draw_dev.push_back(dr);
-          frame_dev.push_back(ec + dr);
+          const std::vector<double>& marks = ctx.last_device_marks();
+          const double total = ctx.last_device_ms();
+          if (marks.size() == 3) {
+            const double at[5] = {0, marks[0], marks[1], marks[2], total};
+            for (int k = 0; k < 4; ++k) parts[k].push_back(at[k + 1] - at[k]);
+          }
+          frame_dev.push_back(total);
           wall.push_back(w);
+          long n_pieces = 0;
+          for (const SegmentCertificate& sc : certifier.last_segments()) n_pieces += sc.pieces;
+          pieces = static_cast<double>(n_pieces) / std::max(certifier.breakpoint_count(), 1);
         }
-        std::printf("| %s | %d | %s | %d | %.3f | %.3f | %.3f | %.2f | %s |\n", v.name.c_str(), n,
-                    grid_eval.double_precision() ? "double" : "float", certifier.breakpoint_count(), median(ec_dev),
-                    median(draw_dev), median(frame_dev), median(wall), certified ? "yes" : "no");
+        auto part = [&](int k) { return parts[k].empty() ? -1.0 : median(parts[k]); };
+        std::printf("| %s | %d | %s | %d | %.3f | %.3f | %.3f | %.3f | %.3f | %.3f | %.2f | %s |\n", v.name.c_str(), n,
+                    grid_eval.double_precision() ? "double" : "float", certifier.breakpoint_count(), pieces, part(0),
+                    part(1), part(2), part(3), median(frame_dev), median(wall), certified ? "yes" : "no");
         std::fflush(stdout);
       }
     }

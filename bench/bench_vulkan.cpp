@@ -12,6 +12,7 @@
 
 #include "hsi/certificate.h"
 #include "hsi/compute/dense_certify.h"
+#include "hsi/compute/diagnostics.h"
 #include "hsi/compute/dense_eval.h"
 #include "hsi/scene_io.h"
 #include "bench_frame.h"
@@ -106,6 +107,21 @@ void certification_table(const vk::Context& ctx, const std::vector<std::string>&
   }
 }
 
+// FMA throughput reached by compute work on the context's queue, for comparison with
+// the GPU's peak (an H100 SXM: ~67 TFLOP/s float, ~34 double).
+void probe_table(const vk::Context& ctx) {
+  std::printf("\nThroughput probe: 8 independent FMA chains per invocation, 256 per workgroup.\n\n"
+              "| queue family | precision | workgroups | device ms | GFLOP/s |\n|---|---|---|---|---|\n");
+  for (const bool dbl : {false, true}) {
+    if (dbl && !ctx.info().float64) continue;
+    for (const uint32_t wg : {1024u, 16384u}) {
+      const vk::ThroughputProbe p = vk::probe_fma_throughput(ctx, dbl, wg, dbl ? 1024u : 4096u);
+      std::printf("| %u | %s | %u | %.3f | %.0f |\n", ctx.info().queue_family, dbl ? "double" : "float", wg,
+                  p.device_ms, p.gflops);
+    }
+  }
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -133,6 +149,10 @@ int main(int argc, char** argv) {
   app.add_option("--frame-frames", frame_frames,
                  "Frames per size for the frame rows (evaluate + certify + draw, device timestamps; 0: none)")
       ->capture_default_str();
+  int msaa = 4;
+  app.add_option("--msaa", msaa, "MSAA samples of the frame rows' drawing")->capture_default_str();
+  bool probe = false;
+  app.add_flag("--probe", probe, "Also measure the FMA throughput that compute work reaches (float, double)");
   CLI11_PARSE(app, argc, argv);
 
   vk::ContextOptions co;
@@ -207,7 +227,8 @@ int main(int argc, char** argv) {
   else if (certify_frames > 0)
     certification_table(*ctx, scenes, certify_frames, certify_samples);
   if (render_frames > 0) bench::render_table(*ctx, scenes, sizes, render_frames, use_float);
-  if (frame_frames > 0) bench::frame_table(*ctx, scenes, sizes, frame_frames);
+  if (frame_frames > 0) bench::frame_table(*ctx, scenes, sizes, frame_frames, msaa);
+  if (probe) probe_table(*ctx);
   std::printf("\nload average at the end: %s\n", load_average().c_str());
   if (validation && ctx->validation_log()->count()) {
     std::fprintf(stderr, "%s\n", ctx->validation_log()->summary().c_str());

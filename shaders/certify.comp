@@ -1,15 +1,24 @@
 // Dense certification (math.md §6): the injectivity certificate of
 // engine/src/certificate.cpp (the CPU reference) on the GPU, one invocation per
 // boundary segment of the reference's breakpoint list (hsi::certificate_segments).
-// Host side: compute/src/dense_certify.cpp. Two passes over one pipeline, chosen by
-// pc.mode:
-//   mode 0  one invocation per breakpoint: f_z, conj f_zbar, f_zz, (conj f_zbar)'
-//           straight from the cage, with a bound on their rounding error -> vals[]
+// Host side: compute/src/dense_certify.cpp. One pipeline, its pass chosen by pc.mode:
+//   mode 2  once per shape, one invocation per (breakpoint i, column j): the basis
+//           matrix at the breakpoints (the map-independent half of modes 0 and 1):
+//           the column's terms of f_z and f_zz at point i, the weights of their
+//           rounding-error bounds, and its weight in segment i's Lipschitz constant
+//           -> basis[j S + i]
+//   mode 3  per map, with that matrix: 8 breakpoints per workgroup, each a row
+//           summed by 8 invocations over strided columns, then reduced in a fixed
+//           order: f_z, conj f_zbar, f_zz, (conj f_zbar)' with their error bounds
+//           -> vals[], and the Lipschitz constants of segment i -> lip[]
+//   mode 0  instead of 2 + 3 where the matrix would not fit (the host decides): one
+//           invocation per breakpoint, the same values straight from the cage -> vals[]
 //   mode 1  one invocation per segment [p, q] (q = the next breakpoint of the loop):
-//           the Lipschitz constants of f_zz and (conj f_zbar)' on the segment, then
-//           the reference's test with adaptive subdivision, depth first with an
-//           explicit stack (same pieces, same order, same depth cap and piece
-//           budget) -> out[]
+//           the Lipschitz constants of f_zz and (conj f_zbar)' on the segment (from
+//           lip[] after mode 3, else computed here), then the reference's test with
+//           adaptive subdivision, depth first with an explicit stack (same pieces,
+//           same order, same depth cap and piece budget; values at the midpoints
+//           straight from the cage) -> out[]
 //
 // Double precision only (shaderFloat64): a float version could not keep the bounds
 // sound at the margins the certificate works with. The piece test is the
@@ -33,8 +42,10 @@
 layout(local_size_x = 64) in;
 
 // Mirrored in dense_certify.cpp.
-const uint kModeValues = 0u, kModeSegments = 1u;
+const uint kModeValues = 0u, kModeSegments = 1u, kModeBasis = 2u, kModeBasisValues = 3u;
 const uint kStopAtFirstFailure = 1u;  // pc.flags
+const uint kHaveLip = 2u;             // pc.flags: mode 1 reads lip[] (written by mode 3)
+const uint kRows = 8u, kChunks = 8u;  // mode 3: rows per workgroup, invocations per row (kRows kChunks = 64)
 // Segment status (out[].status).
 const uint kCertified = 0u;  // every piece proved
 const uint kFolds = 1u;      // |f_zbar| >= |f_z| at an end of the failing piece: a real fold
@@ -58,8 +69,9 @@ layout(push_constant) uniform Push {
   uint jumps_at;      // geom index of (|S_j^phi|, |S_j^psi|) upper bounds, m entries, then (|phi_log|, |psi_log|), N
   uint max_depth;     // CertificateOptions::max_depth
   uint max_pieces;    // CertificateOptions::max_pieces_per_segment (clamped to uint)
-  uint flags;         // kStopAtFirstFailure
-  uint pad0, pad1, pad2;
+  uint flags;         // kStopAtFirstFailure | kHaveLip
+  uint diff_at;       // mode 3: geom index of the column inputs (4 blocks of m + N, see basis_values)
+  uint pad1, pad2;
 } pc;
 
 // f_z = a, conj f_zbar = b and their z-derivatives a1 = f_zz, b1 = (conj f_zbar)',
@@ -86,6 +98,30 @@ layout(std430, binding = 3) readonly buffer Next { uint next[]; };
 layout(std430, binding = 4) buffer Vals { Values vals[]; };
 layout(std430, binding = 5) writeonly buffer Out { SegmentOut out_seg[]; };
 layout(std430, binding = 6) coherent buffer Control { uint stop; };
+layout(std430, binding = 7) buffer Lip { dvec2 lip[]; };  // (L_a, L_b) per segment
+
+// One column j of the basis matrix at breakpoint i (mode 2), for a cage column (vertex
+// j, its edge to the next vertex j+) or a hole column (rho_h):
+//   q   the term of f_z per unit input: (1/2 pi i) log(B_{j+}/B_j) / (z_{j+} - z_j)
+//       (input phi_{j+} - phi_j), or 1/(w - rho) (input phi_{m+h})
+//   e   the term of f_zz per unit phi_j: (1/2 pi i) (B_{j+} - B_{j-}) / (B_{j-} B_j B_{j+}),
+//       or -1/(w - rho)^2
+//   wq, we  upper bounds of |q|, |e| with the slack for their rounding, as mode 0 sums
+//       them: (1 + |log|)/|A| / (2 pi) and (|B_{j+}| + |B_{j-}|)/|B_{j-} B_j B_{j+}| / (2 pi);
+//       1/|w - rho| and 1/|w - rho|^2
+//   wl  the column's weight in segment i's Lipschitz constants: 1/(2 pi dist^2) for a
+//       cage vertex, 2/dist^3 for a hole point (lower distance bounds), or -1 where the
+//       distance bound is not positive (the constant is then infinite)
+struct BasisEntry {
+  dvec2 q, e;
+  double wq, we, wl, pad;
+};
+layout(std430, binding = 8) buffer Basis { BasisEntry basis[]; };
+
+// Mode 3's partial sums, one slot per invocation.
+shared dvec2 sh_a[64], sh_b[64], sh_a1[64], sh_b1[64], sh_lip[64];
+shared dvec4 sh_err[64];
+shared uint sh_bad[64];
 
 double hsi_inf() { return packDouble2x32(uvec2(0u, 0x7ff00000u)); }
 
@@ -176,9 +212,116 @@ double distance_lower(dvec2 z, dvec2 p, dvec2 q) {
   return d - 16.0lf * kU * (length(z) + length(p) + length(q));
 }
 
+// Mode 2: basis[t] for t = j S + i (t < S (m + N)).
+void basis_entry(uint t) {
+  const uint S = pc.count, i = t % S, j = t / S;
+  const dvec2 w = points[i], p0 = w, q0 = points[next[i]];
+  BasisEntry b;
+  b.pad = 0.0lf;
+  if (j < pc.vertex_count) {
+    uint first = 0u, k = 1u;
+    for (uint l = 0u; l < pc.cage_loops; ++l)
+      if (j >= loops[l].x && j < loops[l].x + loops[l].y) {
+        first = loops[l].x;
+        k = loops[l].y;
+      }
+    const uint local = j - first;
+    const uint vn = first + (local + 1u == k ? 0u : local + 1u), vp = first + (local == 0u ? k - 1u : local - 1u);
+    const dvec2 z0 = geom[pc.cage_at + j], z1 = geom[pc.cage_at + vn];
+    const dvec2 bm = geom[pc.cage_at + vp] - w, b0 = z0 - w, bp = z1 - w;
+    // The same operations as values_at, edge j -> j+ and vertex j.
+    const dvec2 L = clog(cdiv(bp, b0));
+    const dvec2 A = z1 - z0;
+    b.q = div_2pi_i(cdiv(L, A));
+    b.wq = (1.0lf + cabs(L)) / cabs(A) * kInv2Pi;
+    b.e = div_2pi_i(cdiv(bp - bm, cmul(cmul(bm, b0), bp)));
+    b.we = (cabs(bp) + cabs(bm)) / (cabs(bm) * cabs(b0) * cabs(bp)) * kInv2Pi;
+    const double d = distance_lower(z0, p0, q0);
+    b.wl = d > 0.0lf ? kInv2Pi / (d * d) : -1.0lf;
+  } else {
+    const uint h = j - pc.vertex_count;
+    const dvec2 rho = geom[pc.holes_at + h];
+    const dvec2 d = w - rho;
+    const dvec2 inv = cinv(d);
+    b.q = inv;
+    b.e = -cmul(inv, inv);
+    const double r = 1.0lf / cabs(d);
+    b.wq = r;
+    b.we = r * r;
+    const double dl = distance_lower(rho, p0, q0);
+    b.wl = dl > 0.0lf ? 2.0lf / (dl * dl * dl) : -1.0lf;
+  }
+  basis[t] = b;
+}
+
+// Mode 3: row i of the matrix times the map's column inputs. geom[pc.diff_at ...]
+// holds four blocks of m + N entries: x_j = phi_{j+} - phi_j (cage) or phi_{m+h}
+// (holes); the same for psi; (|x_j^phi|, |x_j^psi|) and (|phi_j|, |psi_j|), both
+// rounded up. The error bound is mode 0's with 8 more ulps per term for the two
+// roundings the matrix adds (the 1/(2 pi i) folded into q and e, the product).
+void basis_values(uint wg, uint lane) {
+  const uint S = pc.count, M = pc.vertex_count + pc.hole_count;
+  const uint r = lane % kRows, c = lane / kRows;
+  const uint i = wg * kRows + r;
+  dvec2 a = dvec2(0), b = dvec2(0), a1 = dvec2(0), b1 = dvec2(0), la = dvec2(0);
+  dvec4 s = dvec4(0);
+  uint bad = 0u;
+  if (i < S) {
+    for (uint j = c; j < M; j += kChunks) {
+      const BasisEntry e = basis[j * S + i];
+      const dvec2 xa = geom[pc.diff_at + j], xb = geom[pc.diff_at + M + j];
+      const dvec2 ax = geom[pc.diff_at + 2u * M + j], av = geom[pc.diff_at + 3u * M + j];
+      const dvec2 phi = geom[pc.phi_at + j], psi = geom[pc.psi_at + j];
+      a += cmul(e.q, xa);
+      b += cmul(e.q, xb);
+      a1 += cmul(e.e, phi);
+      b1 += cmul(e.e, psi);
+      s += dvec4(e.wq * ax.x, e.wq * ax.y, e.we * av.x, e.we * av.y);
+      if (e.wl < 0.0lf) bad = 1u;
+      la += e.wl * geom[pc.jumps_at + j];
+    }
+  }
+  sh_a[lane] = a;
+  sh_b[lane] = b;
+  sh_a1[lane] = a1;
+  sh_b1[lane] = b1;
+  sh_err[lane] = s;
+  sh_lip[lane] = la;
+  sh_bad[lane] = bad;
+  barrier();
+  if (c != 0u || i >= S) return;
+  for (uint k = 1u; k < kChunks; ++k) {
+    const uint o = k * kRows + r;
+    a += sh_a[o];
+    b += sh_b[o];
+    a1 += sh_a1[o];
+    b1 += sh_b1[o];
+    s += sh_err[o];
+    la += sh_lip[o];
+    bad |= sh_bad[o];
+  }
+  Values v;
+  v.a = a;
+  v.b = b;
+  v.a1 = a1;
+  v.b1 = b1;
+  v.err = (2.0lf * double(M) + 72.0lf) * kU * s;
+  vals[i] = v;
+  const double lip_up = 1.0lf + (2.0lf * double(M) + 40.0lf) * kU;
+  lip[i] = bad != 0u ? dvec2(hsi_inf()) : la * lip_up;
+}
+
 void main() {
-  const uint index = (gl_WorkGroupID.y * gl_NumWorkGroups.x + gl_WorkGroupID.x) * gl_WorkGroupSize.x +
-                     gl_LocalInvocationID.x;
+  const uint wg = gl_WorkGroupID.y * gl_NumWorkGroups.x + gl_WorkGroupID.x;
+  const uint index = wg * gl_WorkGroupSize.x + gl_LocalInvocationID.x;
+  if (pc.mode == kModeBasisValues) {
+    basis_values(wg, gl_LocalInvocationID.x);
+    return;
+  }
+  if (pc.mode == kModeBasis) {
+    if (index < pc.count * (pc.vertex_count + pc.hole_count)) basis_entry(index);
+    return;
+  }
   if (index >= pc.count) return;
 
   if (pc.mode == kModeValues) {
@@ -214,7 +357,7 @@ void main() {
   const dvec2 p0 = points[index], q0 = points[jn];
   double lip_a = 0.0lf, lip_b = 0.0lf;
   bool lip_ok = true;
-  for (uint j = 0u; j < pc.vertex_count; ++j) {
+  for (uint j = 0u; j < ((pc.flags & kHaveLip) != 0u ? 0u : pc.vertex_count); ++j) {
     const double d = distance_lower(geom[pc.cage_at + j], p0, q0);
     lip_ok = lip_ok && d > 0.0lf;
     const double wgt = 1.0lf / (d * d);
@@ -224,7 +367,7 @@ void main() {
   }
   lip_a *= kInv2Pi;
   lip_b *= kInv2Pi;
-  for (uint h = 0u; h < pc.hole_count; ++h) {
+  for (uint h = 0u; h < ((pc.flags & kHaveLip) != 0u ? 0u : pc.hole_count); ++h) {
     const double d = distance_lower(geom[pc.holes_at + h], p0, q0);
     lip_ok = lip_ok && d > 0.0lf;
     const double wgt = 2.0lf / (d * d * d);
@@ -235,6 +378,10 @@ void main() {
   const double lip_up = 1.0lf + (2.0lf * double(pc.vertex_count + pc.hole_count) + 32.0lf) * kU;
   lip_a = lip_ok ? lip_a * lip_up : hsi_inf();
   lip_b = lip_ok ? lip_b * lip_up : hsi_inf();
+  if ((pc.flags & kHaveLip) != 0u) {
+    lip_a = lip[index].x;
+    lip_b = lip[index].y;
+  }
 
   // Depth-first over the pieces, exactly as the reference's recursion: the stack
   // holds pending right ends (point, values, depth); the current piece runs from

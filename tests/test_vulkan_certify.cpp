@@ -3,7 +3,8 @@
 // and point, winding, segment and subdivision counts, and bounds within 1e-9, on every
 // bundled scene's keyframes, on interpolated frames, and on the folded-map corpus of
 // test_certificate.cpp (orientation reversal, a zero of f_z inside, a fold between
-// breakpoints, random maps across the fold boundary). Runs on lavapipe where there is
+// breakpoints, random maps across the fold boundary); both ways of computing the
+// breakpoint values (the precomputed basis matrix, and from the cage per map). Runs on lavapipe where there is
 // no GPU, with the validation layer on: any validation message fails the test.
 // Without a Vulkan device the tests WARN and pass unless HSI_REQUIRE_VULKAN=1.
 #include <catch2/catch.hpp>
@@ -41,6 +42,13 @@ void with_vulkan(Body&& body) {
     }
     body(ctx);
   });
+}
+
+// Forces the per-map values from the cage (mode 0) instead of the basis matrix.
+vk::DenseCertifyOptions direct_options() {
+  vk::DenseCertifyOptions o;
+  o.max_basis_bytes = 0;
+  return o;
 }
 
 constexpr double kBoundTol = 1e-9;  // the stated tolerance of the bounds (relative to σ1 max)
@@ -140,6 +148,9 @@ TEST_CASE("dense certificate agrees with the CPU on every bundled scene's keyfra
       const BoundarySamples samples = sample_boundary(scene.shape, scene.samples);
       const Certifier cpu(scene.shape, cage, samples);
       vk::DenseCertifier gpu(ctx, scene.shape, cage, samples);
+      vk::DenseCertifier direct(ctx, scene.shape, cage, samples, direct_options());
+      CHECK(gpu.uses_basis());
+      CHECK_FALSE(direct.uses_basis());
       REQUIRE(gpu.breakpoint_count() == cpu.breakpoint_count());
       CHECK(gpu.segments().points == cpu.segments().points);
       std::vector<HarmonicMap> keys;
@@ -151,6 +162,10 @@ TEST_CASE("dense certificate agrees with the CPU on every bundled scene's keyfra
         const CertificateResult c = cpu.certify(keys[k]), g = gpu.certify(keys[k]);
         CHECK(c.certified);  // bundled keyframes are certified
         check_agree(c, g, agree);
+        {
+          INFO("values from the cage (no basis matrix)");
+          check_agree(c, direct.certify(keys[k]), agree);
+        }
         // Naive coefficient blends between keyframes (not harmonic interpolation): often
         // folded, so both verdicts are exercised on real shapes.
         if (k + 1 < keys.size())
@@ -263,11 +278,15 @@ TEST_CASE("dense certificate agrees with the CPU on the folded-map corpus", "[vu
         const BoundarySamples g = sample_boundary(s, 400);
         const Certifier cpu(s, cage, g);
         vk::DenseCertifier gpu(ctx, s, cage, g);
+        vk::DenseCertifier direct(ctx, s, cage, g, direct_options());
         for (unsigned seed = 0; seed < 24; ++seed) {
           const double amp = 0.02 + 0.03 * (seed % 12);
           const HarmonicMap m = random_perturbation(cage, 1000 + seed, amp);
           INFO("seed " << seed << " amp " << amp);
-          check_agree(cpu.certify(m), gpu.certify(m), agree);
+          const CertificateResult c = cpu.certify(m);
+          check_agree(c, gpu.certify(m), agree);
+          INFO("values from the cage (no basis matrix)");
+          check_agree(c, direct.certify(m), agree);
         }
       }
       CHECK(agree.certified > 0);

@@ -556,3 +556,45 @@ TEST_CASE("render: an unwelded mesh shows per-triangle distortion flat", "[vulka
     CHECK(bad == 0);
   });
 }
+
+TEST_CASE("render: a frame recorded into the caller's submission is render()'s image; marks time its parts",
+          "[vulkan][render]") {
+  with_vulkan([](vk::Context& ctx) {
+    const Bundled b("two_holes");
+    const HarmonicMap key = b.keyframes().back();
+    const int W = 160, H = 120;
+    vk::Renderer r(ctx, W, H);
+    r.set_mesh(b.mesh, b.scene.handles);
+    r.set_texture(b.texture, b.rect);
+    const vk::View view = frame_view(b.scene.shape, b.cage, key, W, H, 8);
+    vk::RenderStyle style;
+    style.overlays = vk::kOverlayBoundary | vk::kOverlayHandles;
+    CHECK_THROWS_WITH(r.read_frame(), Contains("no frame drawn yet"));
+    const vk::RgbaImage reference = r.render(b.cage, key, view, style);
+    // Draw something else first, so read_frame() must return the recorded frame.
+    r.draw(b.cage, identity_map(b.cage), view, style);
+    REQUIRE(compare(r.read_frame(), reference).mean_abs > 1);
+    ctx.submit_and_wait([&](VkCommandBuffer cmd) {
+      ctx.mark(cmd);
+      r.record(cmd, b.cage, key, view, style, true);
+    });
+    const vk::RgbaImage recorded = r.read_frame();
+    const Difference d = compare(recorded, reference);
+    INFO("mean abs diff " << d.mean_abs << "/255");
+    CHECK(d.mean_abs == 0);
+    CHECK(d.outlier_fraction == 0);
+    if (ctx.info().timestamp_valid_bits > 0) {
+      // The marks of that submission (read_frame's own submission came after it, so
+      // repeat the record to look at them).
+      ctx.submit_and_wait([&](VkCommandBuffer cmd) {
+        ctx.mark(cmd);
+        r.record(cmd, b.cage, key, view, style, true);
+      });
+      const std::vector<double> marks = ctx.last_device_marks();
+      REQUIRE(marks.size() == 2);
+      CHECK(marks[0] >= 0);
+      CHECK(marks[1] >= marks[0]);
+      CHECK(ctx.last_device_ms() >= marks[1]);
+    }
+  });
+}

@@ -28,11 +28,14 @@ struct PushConstants {
   uint32_t mode, count, cage_loops, hole_count;
   uint32_t vertex_count, cage_at, holes_at, phi_at;
   uint32_t psi_at, jumps_at, max_depth, max_pieces;
-  uint32_t flags, pad0, pad1, pad2;
+  uint32_t flags, diff_at, pad1, pad2;
 };
 static_assert(sizeof(PushConstants) == 64);
-constexpr uint32_t kModeValues = 0, kModeSegments = 1, kStopAtFirstFailure = 1;
+constexpr uint32_t kModeValues = 0, kModeSegments = 1, kModeBasis = 2, kModeBasisValues = 3;
+constexpr uint32_t kStopAtFirstFailure = 1, kHaveLip = 2;
 constexpr uint32_t kWorkgroupSize = 64;  // local_size_x in the shader
+constexpr uint32_t kRowsPerGroup = 8;    // mode 3: breakpoints per workgroup (kRows in the shader)
+constexpr VkDeviceSize kBasisEntryBytes = 64;  // `BasisEntry` in certify.comp (std430)
 
 // Mirrors `SegmentOut` in certify.comp (std430).
 struct SegmentOut {
@@ -42,11 +45,11 @@ struct SegmentOut {
 static_assert(sizeof(SegmentOut) == 80);
 constexpr VkDeviceSize kValuesBytes = 96;  // `Values` in certify.comp: 4 dvec2 + dvec4 (std430)
 
-enum Binding : uint32_t { kLoops, kGeom, kPoints, kNext, kValues, kOut, kControl, kBindingCount };
+enum Binding : uint32_t { kLoops, kGeom, kPoints, kNext, kValues, kOut, kControl, kLip, kBasis, kBindingCount };
 constexpr std::array<VkDescriptorType, kBindingCount> kBindings = {
     VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER,
     VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER,
-    VK_DESCRIPTOR_TYPE_STORAGE_BUFFER};
+    VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER};
 
 Buffer upload_buffer(const Context& ctx, const void* data, VkDeviceSize bytes) {
   Buffer b(ctx, std::max<VkDeviceSize>(bytes, 64), VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, MemoryUse::kUpload);
@@ -66,7 +69,7 @@ void memory_barrier(VkCommandBuffer cmd, VkPipelineStageFlags src_stage, VkAcces
 }  // namespace
 
 DenseCertifier::DenseCertifier(const Context& context, const Shape& shape, const Cage& cage,
-                               const BoundarySamples& samples)
+                               const BoundarySamples& samples, const DenseCertifyOptions& options)
     : context_(&context), cage_(cage), segments_(certificate_segments(shape, samples)) {
   if (!context.info().float64)
     throw VulkanError("dense certification needs double precision (shaderFloat64), which " + context.info().name +
@@ -116,12 +119,54 @@ DenseCertifier::DenseCertifier(const Context& context, const Shape& shape, const
   control_ = Buffer(context, 16, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT,
                     MemoryUse::kDeviceLocal);
 
+  lip_ = Buffer(context, S * 16, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, MemoryUse::kDeviceLocal);
+
+  // The basis matrix, where it fits: computed here once (mode 2).
+  const uint64_t cols = static_cast<uint64_t>(cage.vertex_count() + cage.hole_count());
+  const uint64_t entries = static_cast<uint64_t>(S) * cols;
+  const VkDeviceSize basis_bytes = entries * kBasisEntryBytes;
+  const bool fits = basis_bytes <= options.max_basis_bytes && basis_bytes <= context.info().max_storage_buffer_range &&
+                    entries <= std::numeric_limits<uint32_t>::max() - kWorkgroupSize;
+  if (fits) basis_ = Buffer(context, basis_bytes, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, MemoryUse::kDeviceLocal);
+  // Unused bindings still need a buffer.
   set_.bind(kLoops, loops_);
   set_.bind(kPoints, points_);
   set_.bind(kNext, next_);
   set_.bind(kValues, values_);
   set_.bind(kOut, out_);
   set_.bind(kControl, control_);
+  set_.bind(kLip, lip_);
+  set_.bind(kBasis, basis_ ? basis_ : lip_);
+  if (!fits) return;
+
+  std::vector<double> geom;  // the cage and hole points, where record() puts them too
+  for (const Loop& loop : cage.loops)
+    for (const cd& z : loop) {
+      geom.push_back(z.real());
+      geom.push_back(z.imag());
+    }
+  for (const cd& rho : cage.hole_points) {
+    geom.push_back(rho.real());
+    geom.push_back(rho.imag());
+  }
+  geom_ = upload_buffer(context, geom.data(), geom.size() * sizeof(double));
+  set_.bind(kGeom, geom_);
+  PushConstants pc{};
+  pc.mode = kModeBasis;
+  pc.count = static_cast<uint32_t>(S);
+  pc.cage_loops = static_cast<uint32_t>(cage.loops.size());
+  pc.hole_count = static_cast<uint32_t>(cage.hole_count());
+  pc.vertex_count = static_cast<uint32_t>(cage.vertex_count());
+  pc.cage_at = 0;
+  pc.holes_at = static_cast<uint32_t>(cage.vertex_count());
+  const auto [gx, gy] = split_dispatch(context, (entries + kWorkgroupSize - 1) / kWorkgroupSize);
+  context.submit_and_wait([&](VkCommandBuffer cmd) {
+    vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, pipeline_.pipeline());
+    const VkDescriptorSet set = set_.handle();
+    vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, pipeline_.layout(), 0, 1, &set, 0, nullptr);
+    vkCmdPushConstants(cmd, pipeline_.layout(), VK_SHADER_STAGE_COMPUTE_BIT, 0, sizeof(pc), &pc);
+    vkCmdDispatch(cmd, gx, gy, 1);
+  });
 }
 
 CertificateResult DenseCertifier::certify(const HarmonicMap& map, const CertificateOptions& options) {
@@ -156,7 +201,7 @@ void DenseCertifier::record(VkCommandBuffer cmd, const HarmonicMap& map, const C
   // geom (complex entries): cage vertices, ρ, φ, ψ, then per column upper bounds of
   // (|S_j^φ|, |S_j^ψ|) (cage vertices) or (|φ_log|, |ψ_log|) (holes).
   std::vector<double> geom;
-  geom.reserve(static_cast<size_t>(2 * (m + N + 3 * cols)));
+  geom.reserve(static_cast<size_t>(2 * (m + N + 7 * cols)));
   auto push = [&geom](double x, double y) {
     geom.push_back(x);
     geom.push_back(y);
@@ -178,6 +223,32 @@ void DenseCertifier::record(VkCommandBuffer cmd, const HarmonicMap& map, const C
   constexpr double u = std::numeric_limits<double>::epsilon() / 2;
   for (int j = 0; j < m; ++j) push((s_phi(j) + err_phi(j)) * (1 + 2 * u), (s_psi(j) + err_psi(j)) * (1 + 2 * u));
   for (int h = 0; h < N; ++h) push(std::abs(map.phi(m + h)) * (1 + 4 * u), std::abs(map.psi(m + h)) * (1 + 4 * u));
+  if (basis_) {
+    // The matrix's column inputs (certify.comp, basis_values): x = φ_{j+} − φ_j per
+    // cage vertex (its loop's next vertex) and φ_{m+h} per hole, the same for ψ, then
+    // upper bounds of |x| and of |φ_j|, |ψ_j|.
+    pc.diff_at = static_cast<uint32_t>(geom.size() / 2);
+    std::vector<cd> xa(static_cast<size_t>(cols)), xb(static_cast<size_t>(cols));
+    int first = 0;
+    for (const Loop& loop : cage_.loops) {
+      const int k = static_cast<int>(loop.size());
+      for (int j = 0; j < k; ++j) {
+        const int v = first + j, vn = first + (j + 1 == k ? 0 : j + 1);
+        xa[static_cast<size_t>(v)] = map.phi(vn) - map.phi(v);
+        xb[static_cast<size_t>(v)] = map.psi(vn) - map.psi(v);
+      }
+      first += k;
+    }
+    for (int h = 0; h < N; ++h) {
+      xa[static_cast<size_t>(m + h)] = map.phi(m + h);
+      xb[static_cast<size_t>(m + h)] = map.psi(m + h);
+    }
+    for (const cd& x : xa) push(x.real(), x.imag());
+    for (const cd& x : xb) push(x.real(), x.imag());
+    for (size_t j = 0; j < xa.size(); ++j) push(std::abs(xa[j]) * (1 + 4 * u), std::abs(xb[j]) * (1 + 4 * u));
+    for (Eigen::Index j = 0; j < cols; ++j)
+      push(std::abs(map.phi(j)) * (1 + 4 * u), std::abs(map.psi(j)) * (1 + 4 * u));
+  }
 
   const Context& ctx = *context_;
   const VkDeviceSize geom_bytes = geom.size() * sizeof(double);
@@ -195,10 +266,11 @@ void DenseCertifier::record(VkCommandBuffer cmd, const HarmonicMap& map, const C
   pc.max_depth = static_cast<uint32_t>(std::max(options.max_depth, 0));
   pc.max_pieces = static_cast<uint32_t>(
       std::clamp<long>(options.max_pieces_per_segment, 0, static_cast<long>(std::numeric_limits<uint32_t>::max())));
-  pc.flags = options.stop_at_first_failure ? kStopAtFirstFailure : 0u;
+  pc.flags = (options.stop_at_first_failure ? kStopAtFirstFailure : 0u) | (basis_ ? kHaveLip : 0u);
   stats_.upload_ms = ms_since(t_upload);
 
   const auto [gx, gy] = split_dispatch(ctx, (S + kWorkgroupSize - 1) / kWorkgroupSize);
+  const auto [vx, vy] = split_dispatch(ctx, (S + kRowsPerGroup - 1) / kRowsPerGroup);
   {
     // Earlier submissions' shader writes and reads of these buffers come first.
     memory_barrier(cmd, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT | VK_PIPELINE_STAGE_TRANSFER_BIT,
@@ -212,9 +284,12 @@ void DenseCertifier::record(VkCommandBuffer cmd, const HarmonicMap& map, const C
     const VkDescriptorSet set = set_.handle();
     vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, pipeline_.layout(), 0, 1, &set, 0, nullptr);
     PushConstants p = pc;
-    p.mode = kModeValues;
+    p.mode = basis_ ? kModeBasisValues : kModeValues;
     vkCmdPushConstants(cmd, pipeline_.layout(), VK_SHADER_STAGE_COMPUTE_BIT, 0, sizeof(p), &p);
-    vkCmdDispatch(cmd, gx, gy, 1);
+    if (basis_)
+      vkCmdDispatch(cmd, vx, vy, 1);
+    else
+      vkCmdDispatch(cmd, gx, gy, 1);
     memory_barrier(cmd, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_WRITE_BIT,
                    VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_READ_BIT | VK_ACCESS_SHADER_WRITE_BIT);
     p.mode = kModeSegments;

@@ -738,20 +738,38 @@ void Renderer::draw(const Cage& cage, const HarmonicMap& map, const View& view, 
   frame(&cage, &map, handle_count_, view, style, false);
 }
 
-void Renderer::frame(const Cage* cage, const HarmonicMap* map, size_t handles, const View& view, const RenderStyle& style,
-                     bool copy_out) {
+void Renderer::record(VkCommandBuffer cmd, const Cage& cage, const HarmonicMap& map, const View& view,
+                      const RenderStyle& style, bool mark_evaluation) {
+  check_frame(view, style);
+  stats_ = {};
+  record_frame(cmd, &cage, &map, handle_count_, view, style, false, mark_evaluation);
+}
+
+void Renderer::check_frame(const View& view, const RenderStyle& style) const {
   if (points_.empty()) throw InputError("renderer: no mesh (call set_mesh first)");
   if (!(view.pixels_per_unit > 0) || !std::isfinite(view.pixels_per_unit))
     throw InputError("renderer: the view needs a finite positive scale");
   if (!(style.distortion_hi > style.distortion_lo))
     throw InputError("renderer: the distortion range needs hi > lo (got " + std::to_string(style.distortion_lo) +
                      ", " + std::to_string(style.distortion_hi) + ")");
-  Impl& r = *impl_;
+}
+
+void Renderer::frame(const Cage* cage, const HarmonicMap* map, size_t handles, const View& view, const RenderStyle& style,
+                     bool copy_out) {
+  check_frame(view, style);
   const auto t0 = Clock::now();
   stats_ = {};
+  context_->submit_and_wait(
+      [&](VkCommandBuffer cmd) { record_frame(cmd, cage, map, handles, view, style, copy_out, false); });
+  stats_.gpu_ms = ms_since(t0) - stats_.upload_ms;
+}
+
+void Renderer::record_frame(VkCommandBuffer cmd, const Cage* cage, const HarmonicMap* map, size_t handles,
+                            const View& view, const RenderStyle& style, bool copy_out, bool mark_evaluation) {
+  Impl& r = *impl_;
+  const auto t0 = Clock::now();
   if (uv_dirty_) upload_uv();
   const VkDevice dev = context_->device();
-
   RenderPush pc{};
   const double s = view.pixels_per_unit;
   pc.scale[0] = static_cast<float>(s);
@@ -765,125 +783,130 @@ void Renderer::frame(const Cage* cage, const HarmonicMap* map, size_t handles, c
   pc.overlay_alpha = std::clamp(style.distortion_opacity, 0.0f, 1.0f);
   const float border = style.border_px > 0 ? style.border_px : std::max(4.0f, static_cast<float>(std::min(width_, height_)) / 64);
   const uint32_t border_px = std::min(static_cast<uint32_t>(std::lround(border)), static_cast<uint32_t>(std::min(width_, height_) / 2));
-  const VkImage resolve = r.resolve.image.get();
   const uint32_t w = static_cast<uint32_t>(width_), h = static_cast<uint32_t>(height_);
 
-  context_->submit_and_wait([&](VkCommandBuffer cmd) {
-    if (cage) {
-      // The previous frame's vertex shaders read the evaluation's outputs; this frame rewrites them.
-      VkMemoryBarrier war{};
-      war.sType = VK_STRUCTURE_TYPE_MEMORY_BARRIER;
-      vkCmdPipelineBarrier(cmd, VK_PIPELINE_STAGE_VERTEX_SHADER_BIT, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, 0, 1, &war, 0,
-                           nullptr, 0, nullptr);
-      eval_.record_points(cmd, *cage, *map, points_);
-      VkMemoryBarrier raw{};
-      raw.sType = VK_STRUCTURE_TYPE_MEMORY_BARRIER;
-      raw.srcAccessMask = VK_ACCESS_SHADER_WRITE_BIT;
-      raw.dstAccessMask = VK_ACCESS_SHADER_READ_BIT;
-      vkCmdPipelineBarrier(cmd, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_PIPELINE_STAGE_VERTEX_SHADER_BIT, 0, 1, &raw, 0,
-                           nullptr, 0, nullptr);
+  if (cage) {
+    // The previous frame's vertex shaders read the evaluation's outputs; this frame rewrites them.
+    VkMemoryBarrier war{};
+    war.sType = VK_STRUCTURE_TYPE_MEMORY_BARRIER;
+    vkCmdPipelineBarrier(cmd, VK_PIPELINE_STAGE_VERTEX_SHADER_BIT, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, 0, 1, &war, 0,
+                         nullptr, 0, nullptr);
+    eval_.record_points(cmd, *cage, *map, points_);
+    VkMemoryBarrier raw{};
+    raw.sType = VK_STRUCTURE_TYPE_MEMORY_BARRIER;
+    raw.srcAccessMask = VK_ACCESS_SHADER_WRITE_BIT;
+    raw.dstAccessMask = VK_ACCESS_SHADER_READ_BIT;
+    vkCmdPipelineBarrier(cmd, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_PIPELINE_STAGE_VERTEX_SHADER_BIT, 0, 1, &raw, 0,
+                         nullptr, 0, nullptr);
+    if (mark_evaluation) context_->mark(cmd);
+  }
+  // (Given geometry was written by the host before this submission, which makes it visible.)
+
+  // The set is not bound in any pending command buffer: point it at this frame's buffers.
+  const Buffer& f = cage ? eval_.device_output(0) : r.given_f;
+  const Buffer& fields = cage ? eval_.device_output(3) : r.given_fields;
+  const VkDescriptorBufferInfo infos[3] = {{f.handle(), 0, VK_WHOLE_SIZE},
+                                           {fields.handle(), 0, VK_WHOLE_SIZE},
+                                           {r.segments.handle(), 0, VK_WHOLE_SIZE}};
+  const VkDescriptorImageInfo image_info{r.sampler.get(), (has_texture_ ? r.texture : r.white).view.get(),
+                                         VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL};
+  VkWriteDescriptorSet writes[4] = {};
+  const uint32_t binding_of[4] = {0, 1, 3, 2};
+  for (int k = 0; k < 4; ++k) {
+    writes[k].sType = VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET;
+    writes[k].dstSet = r.set;
+    writes[k].dstBinding = binding_of[k];
+    writes[k].descriptorCount = 1;
+    if (k < 3) {
+      writes[k].descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
+      writes[k].pBufferInfo = &infos[k];
+    } else {
+      writes[k].descriptorType = VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER;
+      writes[k].pImageInfo = &image_info;
     }
-    // (Given geometry was written by the host before this submission, which makes it visible.)
+  }
+  vkUpdateDescriptorSets(dev, 4, writes, 0, nullptr);
 
-    // The set is not bound in any pending command buffer: point it at this frame's buffers.
-    const Buffer& f = cage ? eval_.device_output(0) : r.given_f;
-    const Buffer& fields = cage ? eval_.device_output(3) : r.given_fields;
-    const VkDescriptorBufferInfo infos[3] = {{f.handle(), 0, VK_WHOLE_SIZE},
-                                             {fields.handle(), 0, VK_WHOLE_SIZE},
-                                             {r.segments.handle(), 0, VK_WHOLE_SIZE}};
-    const VkDescriptorImageInfo image_info{r.sampler.get(), (has_texture_ ? r.texture : r.white).view.get(),
-                                           VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL};
-    VkWriteDescriptorSet writes[4] = {};
-    const uint32_t binding_of[4] = {0, 1, 3, 2};
-    for (int k = 0; k < 4; ++k) {
-      writes[k].sType = VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET;
-      writes[k].dstSet = r.set;
-      writes[k].dstBinding = binding_of[k];
-      writes[k].descriptorCount = 1;
-      if (k < 3) {
-        writes[k].descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
-        writes[k].pBufferInfo = &infos[k];
-      } else {
-        writes[k].descriptorType = VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER;
-        writes[k].pImageInfo = &image_info;
-      }
-    }
-    vkUpdateDescriptorSets(dev, 4, writes, 0, nullptr);
+  const std::array<float, 4> bg = premultiplied(style.background);
+  VkClearValue clear{};
+  std::memcpy(clear.color.float32, bg.data(), sizeof(float) * 4);
+  VkRenderPassBeginInfo begin{};
+  begin.sType = VK_STRUCTURE_TYPE_RENDER_PASS_BEGIN_INFO;
+  begin.renderPass = r.render_pass.get();
+  begin.framebuffer = r.framebuffer.get();
+  begin.renderArea = {{0, 0}, {w, h}};
+  begin.clearValueCount = 1;
+  begin.pClearValues = &clear;
+  vkCmdBeginRenderPass(cmd, &begin, VK_SUBPASS_CONTENTS_INLINE);
+  vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, r.layout.get(), 0, 1, &r.set, 0, nullptr);
 
-    const std::array<float, 4> bg = premultiplied(style.background);
-    VkClearValue clear{};
-    std::memcpy(clear.color.float32, bg.data(), sizeof(float) * 4);
-    VkRenderPassBeginInfo begin{};
-    begin.sType = VK_STRUCTURE_TYPE_RENDER_PASS_BEGIN_INFO;
-    begin.renderPass = r.render_pass.get();
-    begin.framebuffer = r.framebuffer.get();
-    begin.renderArea = {{0, 0}, {w, h}};
-    begin.clearValueCount = 1;
-    begin.pClearValues = &clear;
-    vkCmdBeginRenderPass(cmd, &begin, VK_SUBPASS_CONTENTS_INLINE);
-    vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, r.layout.get(), 0, 1, &r.set, 0, nullptr);
+  if (style.uncertified && border_px > 0) {
+    VkClearAttachment red{};
+    red.aspectMask = VK_IMAGE_ASPECT_COLOR_BIT;
+    red.colorAttachment = 0;
+    red.clearValue.color = {{0.86f, 0.04f, 0.04f, 1.0f}};
+    const uint32_t b = border_px;
+    const VkClearRect rects[4] = {{{{0, 0}, {w, b}}, 0, 1},
+                                  {{{0, static_cast<int32_t>(h - b)}, {w, b}}, 0, 1},
+                                  {{{0, static_cast<int32_t>(b)}, {b, h - 2 * b}}, 0, 1},
+                                  {{{static_cast<int32_t>(w - b), static_cast<int32_t>(b)}, {b, h - 2 * b}}, 0, 1}};
+    vkCmdClearAttachments(cmd, 1, &red, h > 2 * b ? 4 : 2, rects);
+  }
 
-    if (style.uncertified && border_px > 0) {
-      VkClearAttachment red{};
-      red.aspectMask = VK_IMAGE_ASPECT_COLOR_BIT;
-      red.colorAttachment = 0;
-      red.clearValue.color = {{0.86f, 0.04f, 0.04f, 1.0f}};
-      const uint32_t b = border_px;
-      const VkClearRect rects[4] = {{{{0, 0}, {w, b}}, 0, 1},
-                                    {{{0, static_cast<int32_t>(h - b)}, {w, b}}, 0, 1},
-                                    {{{0, static_cast<int32_t>(b)}, {b, h - 2 * b}}, 0, 1},
-                                    {{{static_cast<int32_t>(w - b), static_cast<int32_t>(b)}, {b, h - 2 * b}}, 0, 1}};
-      vkCmdClearAttachments(cmd, 1, &red, h > 2 * b ? 4 : 2, rects);
-    }
+  // The shape.
+  pc.flags = (has_texture_ ? kTextured : 0u) | ((style.overlays & kOverlayDistortion) ? kDistortion : 0u) |
+             (style.uncertified ? kUncertified : 0u);
+  std::memcpy(pc.color, style.fill.data(), sizeof pc.color);
+  vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, r.mesh.get());
+  vkCmdPushConstants(cmd, r.layout.get(), kPushStages, 0, sizeof pc, &pc);
+  const VkDeviceSize zero = 0;
+  const VkBuffer uv = r.uv.handle();
+  vkCmdBindVertexBuffers(cmd, 0, 1, &uv, &zero);
+  vkCmdBindIndexBuffer(cmd, r.index.handle(), 0, VK_INDEX_TYPE_UINT32);
+  vkCmdDrawIndexed(cmd, static_cast<uint32_t>(index_count_), 1, 0, 0, 0);
 
-    // The shape.
-    pc.flags = (has_texture_ ? kTextured : 0u) | ((style.overlays & kOverlayDistortion) ? kDistortion : 0u) |
-               (style.uncertified ? kUncertified : 0u);
-    std::memcpy(pc.color, style.fill.data(), sizeof pc.color);
-    vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, r.mesh.get());
+  if ((style.overlays & kOverlayBoundary) && segment_count_ > 0 && style.boundary_width_px > 0) {
+    std::memcpy(pc.color, style.boundary_color.data(), sizeof pc.color);
+    pc.size_px = style.boundary_width_px;
+    vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, r.line.get());
     vkCmdPushConstants(cmd, r.layout.get(), kPushStages, 0, sizeof pc, &pc);
-    const VkDeviceSize zero = 0;
-    const VkBuffer uv = r.uv.handle();
-    vkCmdBindVertexBuffers(cmd, 0, 1, &uv, &zero);
-    vkCmdBindIndexBuffer(cmd, r.index.handle(), 0, VK_INDEX_TYPE_UINT32);
-    vkCmdDrawIndexed(cmd, static_cast<uint32_t>(index_count_), 1, 0, 0, 0);
+    vkCmdDraw(cmd, 6, static_cast<uint32_t>(segment_count_), 0, 0);
+  }
+  if ((style.overlays & kOverlayHandles) && handles > 0 && style.handle_radius_px > 0) {
+    std::memcpy(pc.color, style.handle_color.data(), sizeof pc.color);
+    std::memcpy(pc.color2, style.handle_outline.data(), sizeof pc.color2);
+    pc.size_px = style.handle_radius_px;
+    pc.size2_px = std::clamp(style.handle_outline_px, 0.0f, style.handle_radius_px);
+    pc.first = static_cast<uint32_t>(vertex_count_);
+    vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, r.disc.get());
+    vkCmdPushConstants(cmd, r.layout.get(), kPushStages, 0, sizeof pc, &pc);
+    vkCmdDraw(cmd, 6, static_cast<uint32_t>(handles), 0, 0);
+  }
+  vkCmdEndRenderPass(cmd);
+  drawn_ = true;
+  if (copy_out) record_copy_out(cmd);
+  stats_.upload_ms = ms_since(t0);
+}
 
-    if ((style.overlays & kOverlayBoundary) && segment_count_ > 0 && style.boundary_width_px > 0) {
-      std::memcpy(pc.color, style.boundary_color.data(), sizeof pc.color);
-      pc.size_px = style.boundary_width_px;
-      vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, r.line.get());
-      vkCmdPushConstants(cmd, r.layout.get(), kPushStages, 0, sizeof pc, &pc);
-      vkCmdDraw(cmd, 6, static_cast<uint32_t>(segment_count_), 0, 0);
-    }
-    if ((style.overlays & kOverlayHandles) && handles > 0 && style.handle_radius_px > 0) {
-      std::memcpy(pc.color, style.handle_color.data(), sizeof pc.color);
-      std::memcpy(pc.color2, style.handle_outline.data(), sizeof pc.color2);
-      pc.size_px = style.handle_radius_px;
-      pc.size2_px = std::clamp(style.handle_outline_px, 0.0f, style.handle_radius_px);
-      pc.first = static_cast<uint32_t>(vertex_count_);
-      vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, r.disc.get());
-      vkCmdPushConstants(cmd, r.layout.get(), kPushStages, 0, sizeof pc, &pc);
-      vkCmdDraw(cmd, 6, static_cast<uint32_t>(handles), 0, 0);
-    }
-    vkCmdEndRenderPass(cmd);
-    if (!copy_out) {
-      stats_.upload_ms = ms_since(t0);
-      return;
-    }
+void Renderer::record_copy_out(VkCommandBuffer cmd) {
+  // The render pass's dependency to VK_SUBPASS_EXTERNAL orders the resolve before this.
+  VkBufferImageCopy copy{};
+  copy.imageSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, 1};
+  copy.imageExtent = {static_cast<uint32_t>(width_), static_cast<uint32_t>(height_), 1};
+  vkCmdCopyImageToBuffer(cmd, impl_->resolve.image.get(), VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL,
+                         impl_->readback.handle(), 1, &copy);
+  VkMemoryBarrier host{};
+  host.sType = VK_STRUCTURE_TYPE_MEMORY_BARRIER;
+  host.srcAccessMask = VK_ACCESS_TRANSFER_WRITE_BIT;
+  host.dstAccessMask = VK_ACCESS_HOST_READ_BIT;
+  vkCmdPipelineBarrier(cmd, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_PIPELINE_STAGE_HOST_BIT, 0, 1, &host, 0, nullptr, 0,
+                       nullptr);
+}
 
-    VkBufferImageCopy copy{};
-    copy.imageSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, 1};
-    copy.imageExtent = {w, h, 1};
-    vkCmdCopyImageToBuffer(cmd, resolve, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, r.readback.handle(), 1, &copy);
-    VkMemoryBarrier host{};
-    host.sType = VK_STRUCTURE_TYPE_MEMORY_BARRIER;
-    host.srcAccessMask = VK_ACCESS_TRANSFER_WRITE_BIT;
-    host.dstAccessMask = VK_ACCESS_HOST_READ_BIT;
-    vkCmdPipelineBarrier(cmd, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_PIPELINE_STAGE_HOST_BIT, 0, 1, &host, 0, nullptr, 0,
-                         nullptr);
-    stats_.upload_ms = ms_since(t0);
-  });
-  stats_.gpu_ms = ms_since(t0) - stats_.upload_ms;
+RgbaImage Renderer::read_frame() {
+  if (!drawn_) throw InputError("renderer: no frame drawn yet (draw, record or render first)");
+  context_->submit_and_wait([&](VkCommandBuffer cmd) { record_copy_out(cmd); });
+  return read_image();
 }
 
 }  // namespace hsi::vk

@@ -335,6 +335,8 @@ void Context::pick_device(const ContextOptions& options) {
       physical_ = d;
       queue_family_ = static_cast<uint32_t>(family);
       info_.timestamp_valid_bits = families[static_cast<size_t>(family)].timestampValidBits;
+      info_.queue_flags = families[static_cast<size_t>(family)].queueFlags;
+      info_.queue_family = static_cast<uint32_t>(family);
     }
   }
   if (!physical_) {
@@ -407,7 +409,7 @@ void Context::create_device(const ContextOptions&) {
     VkQueryPoolCreateInfo q{};
     q.sType = VK_STRUCTURE_TYPE_QUERY_POOL_CREATE_INFO;
     q.queryType = VK_QUERY_TYPE_TIMESTAMP;
-    q.queryCount = 2;
+    q.queryCount = 2 + kMaxMarks;
     check(vkCreateQueryPool(device_, &q, nullptr, &timestamps_), "vkCreateQueryPool");
   }
 }
@@ -449,8 +451,11 @@ void Context::submit_and_wait(const std::function<void(VkCommandBuffer)>& record
   begin.sType = VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO;
   begin.flags = VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT;
   check(vkBeginCommandBuffer(cmd, &begin), "vkBeginCommandBuffer");
+  // A submission made while another is being recorded (an upload) keeps the outer one's marks.
+  const uint32_t outer_marks = marks_;
+  marks_ = 0;
   if (timestamps_) {
-    vkCmdResetQueryPool(cmd, timestamps_, 0, 2);
+    vkCmdResetQueryPool(cmd, timestamps_, 0, 2 + kMaxMarks);
     vkCmdWriteTimestamp(cmd, VK_PIPELINE_STAGE_TOP_OF_PIPE_BIT, timestamps_, 0);
   }
   record(cmd);
@@ -470,14 +475,25 @@ void Context::submit_and_wait(const std::function<void(VkCommandBuffer)>& record
   check(vkQueueSubmit(queue_, 1, &submit, fence.get()), "vkQueueSubmit");
   check(vkWaitForFences(device_, 1, &raw_fence, VK_TRUE, UINT64_MAX), "vkWaitForFences");
   last_device_ms_ = -1;
+  last_marks_ms_.clear();
   if (timestamps_) {
-    uint64_t ticks[2] = {0, 0};
-    if (vkGetQueryPoolResults(device_, timestamps_, 0, 2, sizeof ticks, ticks, sizeof(uint64_t),
+    uint64_t ticks[2 + kMaxMarks] = {};
+    const uint32_t n = 2 + marks_;
+    if (vkGetQueryPoolResults(device_, timestamps_, 0, n, n * sizeof(uint64_t), ticks, sizeof(uint64_t),
                               VK_QUERY_RESULT_64_BIT | VK_QUERY_RESULT_WAIT_BIT) == VK_SUCCESS) {
       const uint64_t mask = info_.timestamp_valid_bits >= 64 ? ~uint64_t{0} : (uint64_t{1} << info_.timestamp_valid_bits) - 1;
-      last_device_ms_ = static_cast<double>((ticks[1] - ticks[0]) & mask) * info_.timestamp_period_ns * 1e-6;
+      auto ms = [&](uint64_t t) { return static_cast<double>((t - ticks[0]) & mask) * info_.timestamp_period_ns * 1e-6; };
+      last_device_ms_ = ms(ticks[1]);
+      for (uint32_t k = 0; k < marks_; ++k) last_marks_ms_.push_back(ms(ticks[2 + k]));
     }
   }
+  marks_ = outer_marks;
+}
+
+void Context::mark(VkCommandBuffer cmd) const {
+  if (!timestamps_ || marks_ >= kMaxMarks) return;
+  vkCmdWriteTimestamp(cmd, VK_PIPELINE_STAGE_BOTTOM_OF_PIPE_BIT, timestamps_, 2 + marks_);
+  ++marks_;
 }
 
 std::pair<uint32_t, uint32_t> split_dispatch(const Context& context, uint64_t groups) {

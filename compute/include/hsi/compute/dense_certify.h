@@ -27,6 +27,16 @@
 
 namespace hsi::vk {
 
+struct DenseCertifyOptions {
+  // The map-independent half of the breakpoint values and Lipschitz constants is
+  // precomputed once per shape as a matrix of breakpoints × (m + N) columns, 64 bytes
+  // an entry (S = 10,000 breakpoints, m + N = 100: 64 MB); each map then costs one
+  // matrix-vector product instead of a complex log per breakpoint and cage edge.
+  // Above this size (or the device's maxStorageBufferRange) the values are computed
+  // from the cage for every map instead (same verdicts, slower).
+  VkDeviceSize max_basis_bytes = VkDeviceSize{1} << 30;
+};
+
 // Host wall-clock times of the last certify() call, in milliseconds.
 struct DenseCertifyStats {
   double upload_ms = 0;    // packing and writing the coefficients and jump bounds
@@ -48,7 +58,8 @@ class DenseCertifier {
  public:
   // Precomputes the segments and uploads them. The context must outlive this.
   // Throws VulkanError if the device has no shaderFloat64.
-  DenseCertifier(const Context& context, const Shape& shape, const Cage& cage, const BoundarySamples& samples);
+  DenseCertifier(const Context& context, const Shape& shape, const Cage& cage, const BoundarySamples& samples,
+                 const DenseCertifyOptions& options = {});
 
   // As Certifier::certify. The map must have m + N coefficients (else InputError);
   // options.max_depth must be in [0, kMaxDepth] (else InputError).
@@ -66,6 +77,8 @@ class DenseCertifier {
 
   const CertificateSegments& segments() const { return segments_; }
   int breakpoint_count() const { return static_cast<int>(segments_.size()); }
+  // Whether the precomputed basis matrix is used (see DenseCertifyOptions).
+  bool uses_basis() const { return static_cast<bool>(basis_); }
   // The per-segment outcomes and statuses of the last certify() call.
   const std::vector<SegmentCertificate>& last_segments() const { return outcomes_; }
   const std::vector<SegmentStatus>& last_status() const { return status_; }
@@ -78,7 +91,7 @@ class DenseCertifier {
   ComputePipeline pipeline_;
   DescriptorSet set_;
   std::vector<uint32_t> loops_host_;
-  Buffer loops_, geom_, points_, next_, values_, out_, control_, readback_;
+  Buffer loops_, geom_, points_, next_, values_, out_, control_, readback_, lip_, basis_;
   std::vector<SegmentCertificate> outcomes_;
   std::vector<SegmentStatus> status_;
   DenseCertifyStats stats_;

@@ -123,6 +123,16 @@ class Renderer {
   // The same frame left on the device (in the resolved image), nothing copied out:
   // what a consumer that keeps frames on the GPU pays (and what the benchmark times).
   void draw(const Cage& cage, const HarmonicMap& map, const View& view, const RenderStyle& style);
+  // draw() recorded into the caller's command buffer (e.g. one submission per frame
+  // with the dense evaluation and the certificate): the mesh evaluation, its
+  // barriers and the render pass. The caller submits `cmd` and waits for it before
+  // the next record/draw/render. With mark_evaluation, a Context::mark follows the
+  // mesh evaluation (to time the two parts).
+  void record(VkCommandBuffer cmd, const Cage& cage, const HarmonicMap& map, const View& view, const RenderStyle& style,
+              bool mark_evaluation = false);
+  // The last frame drawn (draw, record after its submission finished, or render),
+  // copied to the host as render() returns it. InputError before any frame.
+  RgbaImage read_frame();
 
   // One frame from given geometry instead of a map: vertex i of the mesh (set_mesh)
   // at positions[i], its conformal distortion σ1/σ2 (for the overlay; ≤ 0, infinite
@@ -146,7 +156,11 @@ class Renderer {
   // cage == nullptr: draw the given-geometry buffers (upload_given) with `handles` discs.
   void frame(const Cage* cage, const HarmonicMap* map, size_t handles, const View& view, const RenderStyle& style,
              bool copy_out);
+  void check_frame(const View& view, const RenderStyle& style) const;
+  void record_frame(VkCommandBuffer cmd, const Cage* cage, const HarmonicMap* map, size_t handles, const View& view,
+                    const RenderStyle& style, bool copy_out, bool mark_evaluation);
   RgbaImage read_image();
+  void record_copy_out(VkCommandBuffer cmd);
 
   const Context* context_;
   int width_, height_, samples_ = 1;
@@ -155,7 +169,7 @@ class Renderer {
   std::vector<cd> rest_vertices_;
   size_t vertex_count_ = 0, handle_count_ = 0, index_count_ = 0, segment_count_ = 0;
   std::array<double, 4> texture_rect_{0, 0, 1, 1};
-  bool has_texture_ = false, uv_dirty_ = true;
+  bool has_texture_ = false, uv_dirty_ = true, drawn_ = false;
   RenderStats stats_;
   std::unique_ptr<Impl> impl_;
 };

@@ -103,6 +103,10 @@ struct DeviceInfo {
   // Timestamp queries on the chosen queue: nanoseconds per tick, valid bits (0: none).
   double timestamp_period_ns = 0;
   uint32_t timestamp_valid_bits = 0;
+  // The chosen queue family's VkQueueFlags and index.
+  VkQueueFlags queue_flags = 0;
+  uint32_t queue_family = 0;
+  bool can_draw() const { return (queue_flags & VK_QUEUE_GRAPHICS_BIT) != 0; }
   bool is_cpu() const { return type == VK_PHYSICAL_DEVICE_TYPE_CPU; }
   std::string type_name() const;
 };
@@ -138,6 +142,13 @@ class Context {
   // command buffer's start and end (what the device spent, without the host's
   // recording, submission and wake-up); negative where the queue has no timestamps.
   double last_device_ms() const { return last_device_ms_; }
+  // Inside a submit_and_wait's recording: writes a timestamp once everything recorded
+  // so far has finished, so a submission can be split into timed parts. After the
+  // submission, last_device_marks()[k] is the time of mark k since the start in ms
+  // (empty without timestamps). At most kMaxMarks per submission (more are ignored).
+  static constexpr uint32_t kMaxMarks = 16;
+  void mark(VkCommandBuffer cmd) const;
+  const std::vector<double>& last_device_marks() const { return last_marks_ms_; }
 
  private:
   void create_instance(const ContextOptions& options);
@@ -154,8 +165,10 @@ class Context {
   VkQueue queue_ = VK_NULL_HANDLE;
   uint32_t queue_family_ = 0;
   VkCommandPool command_pool_ = VK_NULL_HANDLE;
-  VkQueryPool timestamps_ = VK_NULL_HANDLE;  // 2 queries: start, end of a submit_and_wait
+  VkQueryPool timestamps_ = VK_NULL_HANDLE;  // start, end of a submit_and_wait, then its marks
   mutable double last_device_ms_ = -1;
+  mutable uint32_t marks_ = 0;  // marks recorded in the submission being recorded
+  mutable std::vector<double> last_marks_ms_;
   DeviceInfo info_;
   VkPhysicalDeviceMemoryProperties memory_{};
 };
