@@ -17,6 +17,7 @@
 #include "hsi/scene_io.h"
 #include "bench_frame.h"
 #include "bench_render.h"
+#include "hsi/compute/renderer.h"
 
 using namespace hsi;
 
@@ -107,9 +108,129 @@ void certification_table(const vk::Context& ctx, const std::vector<std::string>&
   }
 }
 
+// Where the grid evaluation's time goes: one n × n grid per variant, GPU time by
+// timestamps: the frame's pass (mask + evaluation inside), every point evaluated
+// without a mask, and the mask alone (the shape moved off the grid, so every point
+// runs the outer loop's crossing test and nothing is evaluated).
+void eval_breakdown(const vk::Context& ctx, const std::vector<std::string>& scenes, int n, int draw_between) {
+  std::printf("\nGrid evaluation breakdown at %d x %d (device ms, median of 5):\n\n"
+              "| scene | precision | inside | masked + inside evaluated | all evaluated, no mask | mask only |\n"
+              "|---|---|---|---|---|---|\n", n, n);
+  for (const std::string& path : scenes) {
+    const bench::VulkanScene v = bench::load_vulkan_scene(path, false);
+    const vk::Grid grid = vk::Grid::covering(bounding_box(v.scene.shape), n, n);
+    Shape away = v.scene.shape;
+    const cd shift = 10.0 * (bounding_box(away).hi - bounding_box(away).lo);
+    for (int l = 0; l < away.loop_count(); ++l)
+      for (cd& z : away.loop(l)) z += shift;
+    for (const vk::Precision precision : {vk::Precision::kFloat, vk::Precision::kDouble}) {
+      vk::DenseEvalOptions eo;
+      eo.precision = precision;
+      eo.skip_outside = true;
+      eo.max_points_per_pass = std::max<uint32_t>(eo.max_points_per_pass, static_cast<uint32_t>(n * n));
+      vk::DenseEvaluator ev(ctx, eo);
+      const Shape* masks[3] = {&v.scene.shape, nullptr, &away};
+      double t[3];
+      std::unique_ptr<vk::Renderer> renderer;
+      TriMesh mesh;
+      vk::View view;
+      if (draw_between) {
+        mesh = bench::render_mesh(v.scene.shape, 256);
+        view = bench::frame_view(v, mesh, 256);
+        renderer = std::make_unique<vk::Renderer>(ctx, 256, 256);
+        renderer->set_mesh(mesh, v.scene.handles);
+      }
+      for (int k = 0; k < 3; ++k) {
+        std::vector<double> ms;
+        for (int i = 0; i < 6; ++i) {
+          if (renderer) renderer->draw(v.cage, v.map, view, vk::RenderStyle{});
+          ctx.submit_and_wait([&](VkCommandBuffer cmd) { ev.record_grid(cmd, v.cage, v.map, grid, masks[k]); });
+          if (i > 0) ms.push_back(ctx.last_device_ms());
+        }
+        std::sort(ms.begin(), ms.end());
+        t[k] = ms[ms.size() / 2];
+      }
+      const vk::DenseField f = ev.evaluate_grid(v.cage, v.map, grid, &v.scene.shape);
+      size_t inside = 0;
+      for (uint8_t b : f.inside) inside += b;
+      std::printf("| %s | %s | %.0f%% | %.3f | %.3f | %.3f |\n", v.name.c_str(), ev.double_precision() ? "double" : "float",
+                  100.0 * static_cast<double>(inside) / static_cast<double>(f.inside.size()), t[0], t[1], t[2]);
+    }
+  }
+}
+
+// The frame's evaluation timed inside submissions that also certify and/or draw.
+void interference_table(const vk::Context& ctx, const std::vector<std::string>& scenes, int n) {
+  std::printf("\nEvaluation (float, masked) inside a frame's submission, device ms to the mark after it, median of 5:\n\n"
+              "| scene | eval alone | eval, certify | eval, draw | eval, certify, draw | certify part | draw part |\n"
+              "|---|---|---|---|---|---|---|\n");
+  for (const std::string& path : scenes) {
+    const bench::VulkanScene v = bench::load_vulkan_scene(path);
+    const vk::Grid grid = vk::Grid::covering(bounding_box(v.scene.shape), n, n);
+    vk::DenseEvalOptions eo;
+    eo.precision = vk::Precision::kFloat;
+    eo.skip_outside = true;
+    eo.max_points_per_pass = std::max<uint32_t>(eo.max_points_per_pass, static_cast<uint32_t>(n * n));
+    vk::DenseEvaluator ev(ctx, eo);
+    vk::DenseCertifier certifier(ctx, v.scene.shape, v.cage, sample_boundary(v.scene.shape, v.scene.samples));
+    const TriMesh mesh = bench::render_mesh(v.scene.shape, n);
+    const vk::View view = bench::frame_view(v, mesh, n);
+    vk::RendererOptions ro;
+    ro.evaluation.precision = vk::Precision::kFloat;
+    vk::Renderer renderer(ctx, n, n, ro);
+    renderer.set_mesh(mesh, v.scene.handles);
+    renderer.set_texture(v.texture, v.rect);
+    vk::RenderStyle style;
+    style.overlays = vk::kOverlayBoundary;
+    double t[4], cert_part = 0, draw_part = 0;
+    for (int variant = 0; variant < 4; ++variant) {
+      const bool cert = variant & 1, draw = variant & 2;
+      std::vector<double> ms, cp, dp;
+      for (int i = 0; i < 6; ++i) {
+        ctx.submit_and_wait([&](VkCommandBuffer cmd) {
+          ev.record_grid(cmd, v.cage, v.map, grid, &v.scene.shape);
+          ctx.mark(cmd);
+          if (cert) certifier.record(cmd, v.map);
+          ctx.mark(cmd);
+          if (draw) renderer.record(cmd, v.cage, v.map, view, style);
+        });
+        if (cert) certifier.collect();
+        const std::vector<double>& mk = ctx.last_device_marks();
+        if (i == 0 || mk.size() != 2) continue;
+        ms.push_back(mk[0]);
+        cp.push_back(mk[1] - mk[0]);
+        dp.push_back(ctx.last_device_ms() - mk[1]);
+      }
+      auto med = [](std::vector<double> x) {
+        std::sort(x.begin(), x.end());
+        return x.empty() ? -1.0 : x[x.size() / 2];
+      };
+      t[variant] = med(ms);
+      if (variant == 3) {
+        cert_part = med(cp);
+        draw_part = med(dp);
+      }
+    }
+    std::printf("| %s | %.3f | %.3f | %.3f | %.3f | %.3f | %.3f |\n", v.name.c_str(), t[0], t[1], t[2], t[3], cert_part,
+                draw_part);
+  }
+}
+
 // FMA throughput reached by compute work on the context's queue, for comparison with
 // the GPU's peak (an H100 SXM: ~67 TFLOP/s float, ~34 double).
 void probe_table(const vk::Context& ctx) {
+  const VkPhysicalDeviceMemoryProperties& mp = ctx.memory_properties();
+  std::printf("\nMemory types (heap: flags):");
+  for (uint32_t i = 0; i < mp.memoryTypeCount; ++i)
+    std::printf(" %u:%u:0x%x", i, mp.memoryTypes[i].heapIndex, mp.memoryTypes[i].propertyFlags);
+  std::printf("\nHeaps:");
+  for (uint32_t i = 0; i < mp.memoryHeapCount; ++i)
+    std::printf(" %u:%.0fMiB:0x%x", i, static_cast<double>(mp.memoryHeaps[i].size) / 1048576.0, mp.memoryHeaps[i].flags);
+  for (const vk::MemoryUse use : {vk::MemoryUse::kDeviceLocal, vk::MemoryUse::kUpload, vk::MemoryUse::kReadback}) {
+    const vk::Buffer b(ctx, 4096, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, use);
+    std::printf("\nMemoryUse %d -> flags 0x%x", static_cast<int>(use), b.memory_flags());
+  }
+  std::printf("\n");
   std::printf("\nThroughput probe: 8 independent FMA chains per invocation, 256 per workgroup.\n\n"
               "| queue family | precision | workgroups | device ms | GFLOP/s |\n|---|---|---|---|---|\n");
   for (const bool dbl : {false, true}) {
@@ -151,6 +272,8 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   int msaa = 4;
   app.add_option("--msaa", msaa, "MSAA samples of the frame rows' drawing")->capture_default_str();
+  int breakdown = 0;
+  app.add_option("--eval-breakdown", breakdown, "Also time the grid evaluation's parts at this n (0: no)");
   bool probe = false;
   app.add_flag("--probe", probe, "Also measure the FMA throughput that compute work reaches (float, double)");
   CLI11_PARSE(app, argc, argv);
@@ -229,6 +352,12 @@ int main(int argc, char** argv) {
   if (render_frames > 0) bench::render_table(*ctx, scenes, sizes, render_frames, use_float);
   if (frame_frames > 0) bench::frame_table(*ctx, scenes, sizes, frame_frames, msaa);
   if (probe) probe_table(*ctx);
+  if (breakdown > 0) interference_table(*ctx, scenes, breakdown);
+  if (breakdown > 0) {
+    eval_breakdown(*ctx, scenes, breakdown, 0);
+    std::printf("\nThe same, each evaluation submitted right after a 256 x 256 Renderer::draw:\n");
+    eval_breakdown(*ctx, scenes, breakdown, 1);
+  }
   std::printf("\nload average at the end: %s\n", load_average().c_str());
   if (validation && ctx->validation_log()->count()) {
     std::fprintf(stderr, "%s\n", ctx->validation_log()->summary().c_str());

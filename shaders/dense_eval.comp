@@ -19,6 +19,13 @@ const uint kEvaluated = 8u;  // the fields were computed (not skipped as outside
 const uint kGridMode = 1u;
 const uint kMask = 2u;
 const uint kSkipOutside = 4u;
+const uint kRowPass = 8u;   // this dispatch: one invocation per grid row, its crossings -> rows
+const uint kRowMask = 16u;  // the mask from the rows' crossings (grid mode, at most 32 loops)
+
+// Crossings of a grid row with the mask shape's edges, at most kRowCap per row (a row
+// with more falls back to the full test).
+const uint kRowCap = 64u;
+const uint kRowOverflow = 0xffffffffu;
 
 layout(push_constant) uniform Push {
   uint base;         // index of this pass's first point in the whole set (grid row-major)
@@ -33,6 +40,7 @@ layout(push_constant) uniform Push {
   uint phi_at;       // geom index of phi_0 (m + N entries)
   uint psi_at;       // geom index of psi_0 (m + N entries)
   uint vertex_count; // m
+  uint inva_at;      // geom index of 1/(z_{j+} - z_j), one per cage vertex (its edge to the next)
 } pc;
 
 layout(std430, binding = 0) readonly buffer Loops { uvec2 loops[]; };
@@ -44,6 +52,8 @@ layout(std430, binding = 4) writeonly buffer OutFz { Real2 out_fz[]; };
 layout(std430, binding = 5) writeonly buffer OutFzbar { Real2 out_fzbar_conj[]; };
 layout(std430, binding = 6) writeonly buffer OutFields { Real4 out_fields[]; };  // sigma1, sigma2, sigma1/sigma2, E_SD
 layout(std430, binding = 7) writeonly buffer OutFlags { uint out_flags[]; };
+layout(std430, binding = 8) buffer RowCount { uint row_n[]; };    // per grid row: crossings or kRowOverflow
+layout(std430, binding = 9) buffer RowCross { Real2 row_x[]; };   // row j: [j kRowCap, ...): (x, loop index)
 
 // Even-odd crossing test, the same arithmetic as hsi::point_in_loop (precise: no
 // contraction into fma, so grid masks match the CPU bit for bit in double).
@@ -67,25 +77,69 @@ bool in_shape(Real2 p) {
   return true;
 }
 
+// The y of grid row j, as main() computes it.
+Real row_y(uint j) {
+  precise Real y = geom[0].y + Real(j) * geom[1].y;
+  return y;
+}
+
+// kRowPass: every crossing of row j with the shape's edges, in_loop's test and
+// arithmetic (so the parities below are in_loop's, bit for bit).
+void row_crossings(uint j) {
+  const Real py = row_y(j);
+  uint n = 0u;
+  for (uint k = 0u; k < pc.shape_loops; ++k) {
+    const uvec2 loop = loops[pc.cage_loops + k];
+    for (uint i = 0u, jj = loop.y - 1u; i < loop.y; jj = i++) {
+      const Real2 a = geom[loop.x + i], b = geom[loop.x + jj];
+      if ((a.y > py) != (b.y > py)) {
+        precise Real x = a.x + (py - a.y) * (b.x - a.x) / (b.y - a.y);
+        if (n < kRowCap) row_x[j * kRowCap + n] = Real2(x, Real(k));
+        ++n;
+      }
+    }
+  }
+  row_n[j] = n > kRowCap ? kRowOverflow : n;
+}
+
+// in_shape for grid point p of row j from the row's crossings: per loop, the parity
+// of crossings right of p (in_loop's `p.x < x`); inside = odd for the outer loop and
+// even for every hole.
+bool in_shape_row(Real2 p, uint j) {
+  const uint n = row_n[j];
+  if (n == kRowOverflow) return in_shape(p);
+  uint parity = 0u;
+  for (uint c = 0u; c < n; ++c) {
+    const Real2 e = row_x[j * kRowCap + c];
+    if (p.x < e.x) parity ^= 1u << uint(e.y);
+  }
+  return parity == 1u;
+}
+
 void main() {
   const uint local = (gl_WorkGroupID.y * gl_NumWorkGroups.x + gl_WorkGroupID.x) * gl_WorkGroupSize.x +
                      gl_LocalInvocationID.x;
   if (local >= pc.count) return;
+  if ((pc.flags & kRowPass) != 0u) {
+    row_crossings(local);
+    return;
+  }
 
   Real2 w;
+  uint row = 0u;
   if ((pc.flags & kGridMode) != 0u) {
     const uint index = pc.base + local;
-    const uint i = index % pc.width, j = index / pc.width;
+    const uint i = index % pc.width;
+    row = index / pc.width;
     // origin + (i dx, j dy), evaluated exactly like the host's grid_point().
     precise Real x = geom[0].x + Real(i) * geom[1].x;
-    precise Real y = geom[0].y + Real(j) * geom[1].y;
-    w = Real2(x, y);
+    w = Real2(x, row_y(row));
   } else {
     w = points[local];
   }
 
   uint flags = 0u;
-  if ((pc.flags & kMask) != 0u && in_shape(w)) flags |= kInside;
+  if ((pc.flags & kMask) != 0u && ((pc.flags & kRowMask) != 0u ? in_shape_row(w, row) : in_shape(w))) flags |= kInside;
   if ((pc.flags & kSkipOutside) != 0u && (flags & kInside) == 0u) {
     const Real nan = hsi_nan();
     out_f[local] = Real2(nan);
@@ -100,24 +154,26 @@ void main() {
   // A_{j+1} = z_{j+1} - z_j and L_j = log(B_{j+1}/B_j); with q = L_j / A_{j+1} it adds
   //   C_j += q B_{j+1},  C_{j+1} -= q B_j,  D_j -= q,  D_{j+1} += q   (times 1/(2 pi i)),
   // so Σ C φ gains q (B_{j+1} φ_j - B_j φ_{j+1}) and Σ D φ gains q (φ_{j+1} - φ_j).
+  // B_{j+}/B_j = B_{j+} conj(B_j) / |B_j|^2 with 1/|B_j|^2 carried from the edge
+  // before, and 1/A from the host: one division per edge.
   Real2 c_phi = Real2(0), c_psi = Real2(0), d_phi = Real2(0), d_psi = Real2(0);
   for (uint l = 0u; l < pc.cage_loops; ++l) {
     const uint first = loops[l].x, k = loops[l].y;
-    Real2 z0 = geom[pc.cage_at + first];
-    Real2 b0 = z0 - w;
+    Real2 b0 = geom[pc.cage_at + first] - w;
+    Real r0 = Real(1) / cabs2(b0);
     Real2 phi0 = geom[pc.phi_at + first], psi0 = geom[pc.psi_at + first];
     for (uint j = 0u; j < k; ++j) {
       const uint v = first + (j + 1u == k ? 0u : j + 1u);
-      const Real2 z1 = geom[pc.cage_at + v];
-      const Real2 b1 = z1 - w;
+      const Real2 b1 = geom[pc.cage_at + v] - w;
+      const Real r1 = Real(1) / cabs2(b1);
       const Real2 phi1 = geom[pc.phi_at + v], psi1 = geom[pc.psi_at + v];
-      const Real2 q = cdiv(clog(cdiv(b1, b0)), z1 - z0);
+      const Real2 q = cmul(clog(cmul(b1, cconj(b0)) * r0), geom[pc.inva_at + first + j]);
       c_phi += cmul(q, cmul(b1, phi0) - cmul(b0, phi1));
       c_psi += cmul(q, cmul(b1, psi0) - cmul(b0, psi1));
       d_phi += cmul(q, phi1 - phi0);
       d_psi += cmul(q, psi1 - psi0);
-      z0 = z1;
       b0 = b1;
+      r0 = r1;
       phi0 = phi1;
       psi0 = psi1;
     }

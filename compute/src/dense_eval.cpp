@@ -27,16 +27,30 @@ struct PushConstants {
   uint32_t base, count, flags, width;
   uint32_t cage_loops, shape_loops, hole_count, cage_at;
   uint32_t holes_at, phi_at, psi_at, vertex_count;
+  uint32_t inva_at;
 };
-static_assert(sizeof(PushConstants) == 48);
-constexpr uint32_t kGridMode = 1u, kMask = 2u, kSkipOutside = 4u;
+static_assert(sizeof(PushConstants) == 52);
+constexpr uint32_t kGridMode = 1u, kMask = 2u, kSkipOutside = 4u, kRowPass = 8u, kRowMask = 16u;
+constexpr uint32_t kRowCap = 64;         // crossings stored per grid row (kRowCap in the shader)
+constexpr uint32_t kMaxRowMaskLoops = 32;  // the row mask keeps one parity bit per loop
 constexpr uint32_t kWorkgroupSize = 64;  // local_size_x in the shader
 
-constexpr std::array<VkDescriptorType, 8> kBindings = {
+constexpr std::array<VkDescriptorType, 10> kBindings = {
     VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER,
     VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER,
-    VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER};
+    VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER,
+    VK_DESCRIPTOR_TYPE_STORAGE_BUFFER};
 constexpr uint32_t kOutBinding = 3;  // out_[k] is binding 3 + k
+constexpr uint32_t kRowCountBinding = 8, kRowCrossBinding = 9;
+
+void compute_barrier(VkCommandBuffer cmd) {
+  VkMemoryBarrier b{};
+  b.sType = VK_STRUCTURE_TYPE_MEMORY_BARRIER;
+  b.srcAccessMask = VK_ACCESS_SHADER_WRITE_BIT;
+  b.dstAccessMask = VK_ACCESS_SHADER_READ_BIT;
+  vkCmdPipelineBarrier(cmd, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, 0, 1, &b, 0,
+                       nullptr, 0, nullptr);
+}
 
 uint32_t to_u32(size_t n, const char* what) {
   if (n > std::numeric_limits<uint32_t>::max())
@@ -243,6 +257,9 @@ DenseField DenseEvaluator::run(const Job& job) {
   for (Eigen::Index j = 0; j < cols; ++j) push(job.map.phi(j));
   pc.psi_at = static_cast<uint32_t>(geom.size() / 2);
   for (Eigen::Index j = 0; j < cols; ++j) push(job.map.psi(j));
+  pc.inva_at = static_cast<uint32_t>(geom.size() / 2);
+  for (const Loop& loop : cage.loops)
+    for (size_t j = 0; j < loop.size(); ++j) push(1.0 / (loop[j + 1 == loop.size() ? 0 : j + 1] - loop[j]));
   if (mask)
     for (int l = 0; l < job.shape->loop_count(); ++l) {
       const Loop& loop = job.shape->loop(l);
@@ -258,6 +275,10 @@ DenseField DenseEvaluator::run(const Job& job) {
   pc.vertex_count = static_cast<uint32_t>(m);
   pc.width = job.grid ? static_cast<uint32_t>(job.grid->width) : 0u;
   pc.flags = (job.grid ? kGridMode : 0u) | (mask ? kMask : 0u) | (mask && options_.skip_outside ? kSkipOutside : 0u);
+  // A grid's mask from each row's crossings with the shape (a pass over the rows
+  // first): far fewer tests per point than every edge of the shape.
+  const bool row_mask = job.grid && mask && pc.shape_loops <= kMaxRowMaskLoops && job.grid->height > 0;
+  if (row_mask) pc.flags |= kRowMask;
 
   const Context& ctx = *context_;
   {
@@ -274,17 +295,35 @@ DenseField DenseEvaluator::run(const Job& job) {
   const uint32_t pass_max = static_cast<uint32_t>(std::max<uint64_t>(
       kWorkgroupSize, std::min<uint64_t>({options_.max_points_per_pass, range_limit, total})));
   ensure_capacity(pass_max);
+  const uint32_t rows = row_mask ? static_cast<uint32_t>(job.grid->height) : 1u;
+  if (!row_count_ || row_count_.size() < rows * sizeof(uint32_t)) {
+    row_count_ = Buffer(ctx, rows * sizeof(uint32_t), VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, MemoryUse::kDeviceLocal);
+    row_cross_ = Buffer(ctx, static_cast<VkDeviceSize>(rows) * kRowCap * 2 * real, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT,
+                        MemoryUse::kDeviceLocal);
+  }
   set_.bind(0, loops_);
   set_.bind(1, geom_);
   set_.bind(2, points_);
   for (uint32_t k = 0; k < 5; ++k) set_.bind(kOutBinding + k, out_[k]);
+  set_.bind(kRowCountBinding, row_count_);
+  set_.bind(kRowCrossBinding, row_cross_);
   stats_.upload_ms += ms_since(t_upload);
 
-  auto record_dispatch = [&](VkCommandBuffer cmd, uint32_t n) {
-    const auto [gx, gy] = split_dispatch(ctx, (n + kWorkgroupSize - 1) / kWorkgroupSize);
+  // first: also the row pass (the rows serve every pass of the grid).
+  auto record_dispatch = [&](VkCommandBuffer cmd, uint32_t n, bool first) {
     vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, pipeline_.pipeline());
     const VkDescriptorSet set = set_.handle();
     vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, pipeline_.layout(), 0, 1, &set, 0, nullptr);
+    if (row_mask && first) {
+      PushConstants rp = pc;
+      rp.flags |= kRowPass;
+      rp.count = rows;
+      vkCmdPushConstants(cmd, pipeline_.layout(), VK_SHADER_STAGE_COMPUTE_BIT, 0, sizeof(rp), &rp);
+      const auto [rx, ry] = split_dispatch(ctx, (rows + kWorkgroupSize - 1) / kWorkgroupSize);
+      vkCmdDispatch(cmd, rx, ry, 1);
+      compute_barrier(cmd);
+    }
+    const auto [gx, gy] = split_dispatch(ctx, (n + kWorkgroupSize - 1) / kWorkgroupSize);
     vkCmdPushConstants(cmd, pipeline_.layout(), VK_SHADER_STAGE_COMPUTE_BIT, 0, sizeof(pc), &pc);
     vkCmdDispatch(cmd, gx, gy, 1);
   };
@@ -303,7 +342,7 @@ DenseField DenseEvaluator::run(const Job& job) {
     }
     pc.base = 0;
     pc.count = static_cast<uint32_t>(total);
-    record_dispatch(job.record_into, pc.count);
+    record_dispatch(job.record_into, pc.count, true);
     return out;
   }
 
@@ -328,7 +367,7 @@ DenseField DenseEvaluator::run(const Job& job) {
     const auto t_gpu = Clock::now();
     const bool staged = static_cast<bool>(readback_[0]) || static_cast<bool>(readback_[4]);
     ctx.submit_and_wait([&](VkCommandBuffer cmd) {
-      record_dispatch(cmd, n);
+      record_dispatch(cmd, n, start == 0);
       VkMemoryBarrier barrier{};
       barrier.sType = VK_STRUCTURE_TYPE_MEMORY_BARRIER;
       barrier.srcAccessMask = VK_ACCESS_SHADER_WRITE_BIT;

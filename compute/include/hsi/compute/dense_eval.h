@@ -140,6 +140,7 @@ class DenseEvaluator {
   DescriptorSet set_;
   uint32_t capacity_ = 0;  // points per pass the buffers below hold
   Buffer loops_, geom_, points_;
+  Buffer row_count_, row_cross_;  // a grid mask's crossings per row (dense_eval.comp)
   Buffer out_[5];       // f, f_z, fzbar_conj, fields, flags (device-local)
   Buffer readback_[5];  // host copies, where out_ is not host-readable
   DenseEvalStats stats_;
