@@ -41,7 +41,7 @@ inline void frame_table(const vk::Context& ctx, const std::vector<std::string>& 
               "distortion; masked, on the device) | certify (double, the scene's samples) | evaluate the render\n"
               "mesh (~n^2/50 vertices) | draw the frame at n x n pixels (textured, boundary, %dx MSAA). Medians over\n"
               "the frames of the GPU time of each part (timestamps between them) and of the whole submission\n"
-              "(frame dev), after 0.5 s of warm-up frames; frame wall: host time, recording, submission and wait\n"
+              "(frame dev), after 1 s of warm-up frames; frame wall: host time, recording, submission and wait\n"
               "included. precision: of the\n"
               "evaluation shaders (grid and mesh). pieces: certificate pieces per segment (1: no subdivision).\n\n", msaa);
   std::printf("| scene | n | precision | segments | pieces | eval ms | certify ms | mesh ms | draw ms | frame dev ms | "
@@ -73,10 +73,10 @@ inline void frame_table(const vk::Context& ctx, const std::vector<std::string>& 
         std::vector<double> parts[4], frame_dev, wall;
         bool certified = true;
         double pieces = 0;
-        // i < 0: warm-up, at least 0.5 s of frames: a GPU idle during the host's work
+        // i < 0: warm-up, at least 1 s of frames: a GPU idle during the host's work
         // before (the CPU reference of the other tables) runs at a low clock until its
         // power management sees sustained load (on the H100, ~5.7x slower).
-        const auto warm_until = Clock::now() + std::chrono::milliseconds(500);
+        const auto warm_until = Clock::now() + std::chrono::milliseconds(1000);
         for (int i = -1; i < std::max(frames, 1); ++i) {
           if (i == -1 && Clock::now() < warm_until) i = -2;
           const auto t0 = Clock::now();
