@@ -427,7 +427,7 @@ void run_compare(const Opts& o) {
     rect = scene.texture_rect ? *scene.texture_rect
                               : std::array<double, 4>{rest_box.lo.real(), rest_box.lo.imag(), rest_box.hi.real(), rest_box.hi.imag()};
   } else {
-    texture = checker_texture(rest_box, rect);
+    texture = vk::checker_texture(rest_box, rect);
   }
 
   Outputs out(o.out);

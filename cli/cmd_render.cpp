@@ -173,7 +173,7 @@ void run_render(const Opts& o) {
                               : std::array<double, 4>{rest_box.lo.real(), rest_box.lo.imag(), rest_box.hi.real(), rest_box.hi.imag()};
   } else {
     if (!o.no_texture) std::printf("scene %s has no texture: drawing a checkerboard instead\n", scene.name.c_str());
-    texture = checker_texture(rest_box, rect);
+    texture = vk::checker_texture(rest_box, rect);
   }
 
   // The rest mesh: boundary vertices on the shape's edges, so the outline clips exactly.

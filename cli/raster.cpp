@@ -10,27 +10,6 @@
 
 namespace hsi::cli {
 
-vk::RgbaImage checker_texture(const BoundingBox& box, std::array<double, 4>& rect) {
-  const cd ext = box.hi - box.lo;
-  const double side = std::max(ext.real(), ext.imag());
-  const int checks = 16;
-  const int px_per_check = 32;
-  const int w = std::max(1, static_cast<int>(std::ceil(ext.real() / side * checks))) * px_per_check;
-  const int h = std::max(1, static_cast<int>(std::ceil(ext.imag() / side * checks))) * px_per_check;
-  rect = {box.lo.real(), box.hi.imag() - h / static_cast<double>(px_per_check) * side / checks,
-          box.lo.real() + w / static_cast<double>(px_per_check) * side / checks, box.hi.imag()};
-  vk::RgbaImage img(w, h);
-  for (int y = 0; y < h; ++y)
-    for (int x = 0; x < w; ++x) {
-      const bool odd = ((x / px_per_check) + (y / px_per_check)) % 2;
-      const bool line = x % px_per_check == 0 || y % px_per_check == 0;
-      const uint8_t v[4] = {static_cast<uint8_t>(line ? 70 : odd ? 232 : 180), static_cast<uint8_t>(line ? 80 : odd ? 214 : 196),
-                            static_cast<uint8_t>(line ? 110 : odd ? 178 : 228), 255};
-      std::copy(v, v + 4, img.at(x, y));
-    }
-  return img;
-}
-
 Surface make_surface(int w, int h) {
   Surface s;
   s.surf.reset(cairo_image_surface_create(CAIRO_FORMAT_ARGB32, w, h));

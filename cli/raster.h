@@ -1,7 +1,7 @@
 // Compositing rendered frames with cairo (hsi render, hsi compare): cairo surfaces
 // from the renderer's RGBA images, PNG output, text with a halo, the distortion
-// colour bar, and the checkerboard used when a scene has no texture. Kept in the CLI
-// so that compute/ stays free of text.
+// colour bar. Kept in the CLI so that compute/ stays free of text. (The checkerboard
+// for scenes without a texture is vk::checker_texture, compute/image.h.)
 #pragma once
 
 #include <cairo.h>
@@ -15,11 +15,6 @@
 #include "hsi/domain.h"
 
 namespace hsi::cli {
-
-// A checkerboard over the rest shape's bounding box (square checks), for --no-texture
-// or a scene without a texture: it still shows how the map deforms the shape. Sets
-// `rect` to the world rectangle it covers.
-vk::RgbaImage checker_texture(const BoundingBox& box, std::array<double, 4>& rect);
 
 // A cairo image surface (premultiplied ARGB32) with its drawing context.
 struct Surface {

@@ -4,6 +4,8 @@
 
 #include <png.h>
 
+#include <algorithm>
+#include <cmath>
 #include <cstring>
 #include <fstream>
 #include <iterator>
@@ -68,6 +70,27 @@ void write_png(const std::filesystem::path& path, const RgbaImage& image) {
     throw InputError(path.string() + ": PNG encoding failed (" + img.message + ")");
   bytes.resize(size);
   write_file_atomic(path, bytes);
+}
+
+RgbaImage checker_texture(const BoundingBox& box, std::array<double, 4>& rect, bool grid_lines) {
+  const cd ext = box.hi - box.lo;
+  const double side = std::max(ext.real(), ext.imag());
+  constexpr int kChecks = 16, kPx = 32;
+  const int w = std::max(1, static_cast<int>(std::ceil(ext.real() / side * kChecks))) * kPx;
+  const int h = std::max(1, static_cast<int>(std::ceil(ext.imag() / side * kChecks))) * kPx;
+  rect = {box.lo.real(), box.hi.imag() - h / static_cast<double>(kPx) * side / kChecks,
+          box.lo.real() + w / static_cast<double>(kPx) * side / kChecks, box.hi.imag()};
+  RgbaImage img(w, h);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      const bool odd = ((x / kPx) + (y / kPx)) % 2;
+      const bool line = grid_lines && (x % kPx == 0 || y % kPx == 0);
+      const uint8_t v[4] = {static_cast<uint8_t>(line ? 70 : odd ? 232 : 180),
+                            static_cast<uint8_t>(line ? 80 : odd ? 214 : 196),
+                            static_cast<uint8_t>(line ? 110 : odd ? 178 : 228), 255};
+      std::copy(v, v + 4, img.at(x, y));
+    }
+  return img;
 }
 
 }  // namespace hsi::vk

@@ -93,26 +93,6 @@ double nice_upper(double hi) {
 
 ImU32 rgba(float r, float g, float b, float a = 1) { return ImGui::ColorConvertFloat4ToU32(ImVec4(r, g, b, a)); }
 
-// A checkerboard for scenes without a texture (as hsi render draws them).
-vk::RgbaImage checker_texture(const BoundingBox& box, std::array<double, 4>& rect) {
-  const cd ext = box.hi - box.lo;
-  const double side = std::max(ext.real(), ext.imag());
-  const int checks = 16, px = 32;
-  const int w = std::max(1, static_cast<int>(std::ceil(ext.real() / side * checks))) * px;
-  const int h = std::max(1, static_cast<int>(std::ceil(ext.imag() / side * checks))) * px;
-  rect = {box.lo.real(), box.hi.imag() - h / static_cast<double>(px) * side / checks,
-          box.lo.real() + w / static_cast<double>(px) * side / checks, box.hi.imag()};
-  vk::RgbaImage img(w, h);
-  for (int y = 0; y < h; ++y)
-    for (int x = 0; x < w; ++x) {
-      const bool odd = ((x / px) + (y / px)) % 2;
-      const uint8_t v[4] = {static_cast<uint8_t>(odd ? 232 : 180), static_cast<uint8_t>(odd ? 214 : 196),
-                            static_cast<uint8_t>(odd ? 178 : 228), 255};
-      std::copy(v, v + 4, img.at(x, y));
-    }
-  return img;
-}
-
 class App {
  public:
   App(const Options& o, GLFWwindow* window, vk::Context& ctx);
@@ -330,7 +310,7 @@ void App::load() {
     texture_rect_ = scene_.texture_rect ? *scene_.texture_rect
                                         : std::array<double, 4>{rest.lo.real(), rest.lo.imag(), rest.hi.real(), rest.hi.imag()};
   } else {
-    texture_ = checker_texture(rest, texture_rect_);
+    texture_ = vk::checker_texture(rest, texture_rect_, false);
   }
   TriangulateOptions to;
   to.max_edge = edge_for_vertex_count(scene_.shape, o_.mesh_vertices);

@@ -8,6 +8,8 @@
 #include <filesystem>
 #include <vector>
 
+#include "hsi/domain.h"
+
 namespace hsi::vk {
 
 struct RgbaImage {
@@ -28,5 +30,11 @@ struct RgbaImage {
 RgbaImage read_png(const std::filesystem::path& path);
 // Writes an RGBA8 PNG atomically (temporary file, then rename). Throws InputError.
 void write_png(const std::filesystem::path& path, const RgbaImage& image);
+
+// A checkerboard over a rest shape's bounding box (16 square checks along the longer
+// side, 32 pixels each), the texture for a scene without one: it still shows how the
+// map deforms the shape. Sets `rect` to the world rectangle [x0, y0, x1, y1] it
+// covers. grid_lines: dark lines along the checks' edges (hsi render) or plain (viewer).
+RgbaImage checker_texture(const BoundingBox& box, std::array<double, 4>& rect, bool grid_lines = true);
 
 }  // namespace hsi::vk
