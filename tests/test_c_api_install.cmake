@@ -17,7 +17,9 @@ foreach(f include/hsi/hsi.h include/hsi/baked_runtime.h lib/cmake/hsi/hsiConfig.
   endif()
 endforeach()
 step(configure ${CMAKE_COMMAND} -S ${HSI_CONSUMER_DIR} -B ${HSI_WORK_DIR}/build -G ${HSI_GENERATOR}
-     -DCMAKE_BUILD_TYPE=Release -DCMAKE_PREFIX_PATH=${HSI_WORK_DIR}/prefix)
+     -DCMAKE_BUILD_TYPE=Release -DCMAKE_PREFIX_PATH=${HSI_WORK_DIR}/prefix
+     # A sanitizer build installs instrumented static libraries: link the consumer as it was.
+     "-DCMAKE_EXE_LINKER_FLAGS=${HSI_CONSUMER_LINK_FLAGS}")
 step(build ${CMAKE_COMMAND} --build ${HSI_WORK_DIR}/build)
 step(consumer ${HSI_WORK_DIR}/build/consumer ${HSI_SCENE} ${HSI_WORK_DIR}/seq.hsib)
 if(NOT STEP_OUTPUT MATCHES "consumer ok: hsi 0.1.0, 3 frames baked")

@@ -3,6 +3,8 @@
 // live at once: device calls go through the loader's dispatch.
 #include "hsi/compute/vulkan_context.h"
 
+#include <dlfcn.h>
+
 #include <algorithm>
 #include <bit>
 #include <cstdlib>
@@ -156,7 +158,26 @@ std::string DeviceInfo::type_name() const {
 
 // --- context ----------------------------------------------------------------------
 
+#if defined(__SANITIZE_ADDRESS__)
+// AddressSanitizer builds only: LeakSanitizer reports at exit, after the Vulkan loader
+// has dlclose()d the driver and the layers, so what they keep until exit shows as
+// "<unknown module>" and the suppressions by module (tests/sanitizers/lsan.supp)
+// cannot match it. Loading them once with RTLD_NODELETE keeps them mapped. Names
+// that do not exist on this machine are skipped.
+void pin_vulkan_modules() {
+  static const bool pinned = [] {
+    for (const char* lib : {"libvulkan.so.1", "libvulkan_lvp.so", "libVkLayer_khronos_validation.so"})
+      dlopen(lib, RTLD_NOW | RTLD_NODELETE);
+    return true;
+  }();
+  (void)pinned;
+}
+#endif
+
 Context::Context(const ContextOptions& options) {
+#if defined(__SANITIZE_ADDRESS__)
+  pin_vulkan_modules();
+#endif
   try {
     create_instance(options);
     pick_device(options);
