@@ -54,8 +54,7 @@ inline VulkanScene load_vulkan_scene(const std::string& path, bool with_texture 
     if (k.coefficients) v.map = *k.coefficients;
   if (with_texture && !v.scene.texture.empty()) {
     v.texture = vk::read_png(v.scene.texture_path());
-    const BoundingBox bb = bounding_box(v.scene.shape);
-    v.rect = v.scene.texture_rect.value_or(std::array<double, 4>{bb.lo.real(), bb.lo.imag(), bb.hi.real(), bb.hi.imag()});
+    v.rect = v.scene.texture_rect_or_bounds();
   }
   return v;
 }

@@ -424,8 +424,7 @@ void run_compare(const Opts& o) {
     if (!std::filesystem::exists(tp))
       throw InputError(o.scene + ": the texture file " + tp.string() + " does not exist (fix \"texture\" in the scene)");
     texture = vk::read_png(tp);
-    rect = scene.texture_rect ? *scene.texture_rect
-                              : std::array<double, 4>{rest_box.lo.real(), rest_box.lo.imag(), rest_box.hi.real(), rest_box.hi.imag()};
+    rect = scene.texture_rect_or_bounds();
   } else {
     texture = vk::checker_texture(rest_box, rect);
   }
@@ -640,7 +639,7 @@ void run_compare(const Opts& o) {
       if (std::isfinite(k)) range_hi = std::max(range_hi, std::min(k, s.ours.bound.conformal_max));
     snaps.push_back(std::move(s));
   }
-  range_hi = nice_upper(range_hi);
+  range_hi = vk::round_distortion_hi(range_hi);
 
   // One view for every panel (same scale and place), panels fitted to its aspect.
   const cd ext = box.hi - box.lo;

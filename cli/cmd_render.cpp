@@ -169,8 +169,7 @@ void run_render(const Opts& o) {
       throw InputError(o.scene + ": the texture file " + tp.string() +
                        " does not exist (fix \"texture\" in the scene, or render with --no-texture)");
     texture = vk::read_png(tp);
-    rect = scene.texture_rect ? *scene.texture_rect
-                              : std::array<double, 4>{rest_box.lo.real(), rest_box.lo.imag(), rest_box.hi.real(), rest_box.hi.imag()};
+    rect = scene.texture_rect_or_bounds();
   } else {
     if (!o.no_texture) std::printf("scene %s has no texture: drawing a checkerboard instead\n", scene.name.c_str());
     texture = vk::checker_texture(rest_box, rect);
@@ -205,7 +204,7 @@ void run_render(const Opts& o) {
   }
   if (!std::isfinite(box.lo.real())) throw InputError(frames_path.string() + ": the selected frames map the shape to non-finite points");
   const double lo = o.distortion_range.empty() ? 1.0 : o.distortion_range[0];
-  const double hi = o.distortion_range.empty() ? nice_upper(kappa_max) : o.distortion_range[1];
+  const double hi = o.distortion_range.empty() ? vk::round_distortion_hi(kappa_max) : o.distortion_range[1];
 
   // Image size and layout: margins for the labels, a strip for the legend.
   int W = 0, H = 0;

@@ -80,14 +80,6 @@ std::string fmt(const char* f, double v) {
   return buf;
 }
 
-double nice_upper(double hi) {
-  const double span = std::max(hi - 1.0, 1e-3);
-  const double base = std::pow(10.0, std::floor(std::log10(span / 4)));
-  for (double m : {1.0, 2.0, 2.5, 5.0, 10.0})
-    if (4 * m * base >= span * (1 - 1e-12)) return 1.0 + 4 * m * base;
-  return 1.0 + 40 * base;
-}
-
 void draw_legend(cairo_t* cr, int W, int H, double area, double lo, double hi, double font) {
   const std::string caption = "conformal distortion \xcf\x83\xe2\x82\x81/\xcf\x83\xe2\x82\x82";  // σ₁/σ₂
   const double caption_w = text_width(cr, caption, 0.85 * font, false);

@@ -33,9 +33,6 @@ void text(cairo_t* cr, double x, double y, const std::string& s, double size, bo
 double text_width(cairo_t* cr, const std::string& s, double size, bool bold);
 std::string fmt(const char* f, double v);  // snprintf of one number
 
-// The legend's upper end: 1 + 4 steps of a round size (1, 2, 2.5 or 5 × 10^k) that
-// reach hi, so that its five ticks read as round numbers.
-double nice_upper(double hi);
 // The colour bar of the distortion overlay over [lo, hi] with its caption, centred in
 // the band of height `area` at the bottom of a W × H image.
 void draw_legend(cairo_t* cr, int W, int H, double area, double lo, double hi, double font);

@@ -395,8 +395,7 @@ struct Bundled {
     o.max_edge = edge_for_vertex_count(scene.shape, 6000);
     mesh = triangulate(scene.shape, o);
     texture = vk::read_png(scene.texture_path());
-    const BoundingBox bb = bounding_box(scene.shape);
-    rect = scene.texture_rect.value_or(std::array<double, 4>{bb.lo.real(), bb.lo.imag(), bb.hi.real(), bb.hi.imag()});
+    rect = scene.texture_rect_or_bounds();
   }
   std::vector<HarmonicMap> keyframes() const {
     std::vector<HarmonicMap> out;
@@ -597,4 +596,12 @@ TEST_CASE("render: a frame recorded into the caller's submission is render()'s i
       CHECK(ctx.last_device_ms() >= marks[1]);
     }
   });
+}
+
+TEST_CASE("render: the distortion legend's upper end is a round number at or above the largest value", "[render]") {
+  CHECK(vk::round_distortion_hi(1.9) == Approx(2.0));   // steps of 0.25
+  CHECK(vk::round_distortion_hi(5.49) == Approx(9.0));  // steps of 2
+  CHECK(vk::round_distortion_hi(2.0) == Approx(2.0));   // already round
+  CHECK(vk::round_distortion_hi(1.0) == Approx(1.001));  // the smallest span, 1e-3, in steps of 0.00025
+  for (double hi : {1.01, 1.37, 3.3, 12.0, 250.0}) CHECK(vk::round_distortion_hi(hi) >= hi);
 }

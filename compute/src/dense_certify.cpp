@@ -57,15 +57,6 @@ Buffer upload_buffer(const Context& ctx, const void* data, VkDeviceSize bytes) {
   return b;
 }
 
-void memory_barrier(VkCommandBuffer cmd, VkPipelineStageFlags src_stage, VkAccessFlags src_access,
-                    VkPipelineStageFlags dst_stage, VkAccessFlags dst_access) {
-  VkMemoryBarrier b{};
-  b.sType = VK_STRUCTURE_TYPE_MEMORY_BARRIER;
-  b.srcAccessMask = src_access;
-  b.dstAccessMask = dst_access;
-  vkCmdPipelineBarrier(cmd, src_stage, dst_stage, 0, 1, &b, 0, nullptr, 0, nullptr);
-}
-
 }  // namespace
 
 DenseCertifier::DenseCertifier(const Context& context, const Shape& shape, const Cage& cage,

@@ -43,15 +43,6 @@ constexpr std::array<VkDescriptorType, 10> kBindings = {
 constexpr uint32_t kOutBinding = 3;  // out_[k] is binding 3 + k
 constexpr uint32_t kRowCountBinding = 8, kRowCrossBinding = 9;
 
-void compute_barrier(VkCommandBuffer cmd) {
-  VkMemoryBarrier b{};
-  b.sType = VK_STRUCTURE_TYPE_MEMORY_BARRIER;
-  b.srcAccessMask = VK_ACCESS_SHADER_WRITE_BIT;
-  b.dstAccessMask = VK_ACCESS_SHADER_READ_BIT;
-  vkCmdPipelineBarrier(cmd, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, 0, 1, &b, 0,
-                       nullptr, 0, nullptr);
-}
-
 uint32_t to_u32(size_t n, const char* what) {
   if (n > std::numeric_limits<uint32_t>::max())
     throw InputError(std::string("dense evaluation: too many ") + what + " (" + std::to_string(n) + ")");
@@ -321,7 +312,8 @@ DenseField DenseEvaluator::run(const Job& job) {
       vkCmdPushConstants(cmd, pipeline_.layout(), VK_SHADER_STAGE_COMPUTE_BIT, 0, sizeof(rp), &rp);
       const auto [rx, ry] = split_dispatch(ctx, (rows + kWorkgroupSize - 1) / kWorkgroupSize);
       vkCmdDispatch(cmd, rx, ry, 1);
-      compute_barrier(cmd);
+      memory_barrier(cmd, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_WRITE_BIT,
+                     VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_READ_BIT);
     }
     const auto [gx, gy] = split_dispatch(ctx, (n + kWorkgroupSize - 1) / kWorkgroupSize);
     vkCmdPushConstants(cmd, pipeline_.layout(), VK_SHADER_STAGE_COMPUTE_BIT, 0, sizeof(pc), &pc);
@@ -368,27 +360,21 @@ DenseField DenseEvaluator::run(const Job& job) {
     const bool staged = static_cast<bool>(readback_[0]) || static_cast<bool>(readback_[4]);
     ctx.submit_and_wait([&](VkCommandBuffer cmd) {
       record_dispatch(cmd, n, start == 0);
-      VkMemoryBarrier barrier{};
-      barrier.sType = VK_STRUCTURE_TYPE_MEMORY_BARRIER;
-      barrier.srcAccessMask = VK_ACCESS_SHADER_WRITE_BIT;
       if (staged) {
-        barrier.dstAccessMask = VK_ACCESS_TRANSFER_READ_BIT;
-        vkCmdPipelineBarrier(cmd, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_PIPELINE_STAGE_TRANSFER_BIT, 0, 1, &barrier,
-                             0, nullptr, 0, nullptr);
+        memory_barrier(cmd, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_WRITE_BIT,
+                       VK_PIPELINE_STAGE_TRANSFER_BIT, VK_ACCESS_TRANSFER_READ_BIT);
         const VkDeviceSize elem[5] = {2 * real, 2 * real, 2 * real, 4 * real, 4};
         for (int k = 0; k < 5; ++k)
           if (readback_[k]) {
             const VkBufferCopy region{0, 0, n * elem[k]};
             vkCmdCopyBuffer(cmd, out_[k].handle(), readback_[k].handle(), 1, &region);
           }
-        barrier.srcAccessMask = VK_ACCESS_TRANSFER_WRITE_BIT | VK_ACCESS_SHADER_WRITE_BIT;
-        barrier.dstAccessMask = VK_ACCESS_HOST_READ_BIT;
-        vkCmdPipelineBarrier(cmd, VK_PIPELINE_STAGE_TRANSFER_BIT | VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT,
-                             VK_PIPELINE_STAGE_HOST_BIT, 0, 1, &barrier, 0, nullptr, 0, nullptr);
+        memory_barrier(cmd, VK_PIPELINE_STAGE_TRANSFER_BIT | VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT,
+                       VK_ACCESS_TRANSFER_WRITE_BIT | VK_ACCESS_SHADER_WRITE_BIT, VK_PIPELINE_STAGE_HOST_BIT,
+                       VK_ACCESS_HOST_READ_BIT);
       } else {
-        barrier.dstAccessMask = VK_ACCESS_HOST_READ_BIT;
-        vkCmdPipelineBarrier(cmd, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_PIPELINE_STAGE_HOST_BIT, 0, 1, &barrier, 0,
-                             nullptr, 0, nullptr);
+        memory_barrier(cmd, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_WRITE_BIT, VK_PIPELINE_STAGE_HOST_BIT,
+                       VK_ACCESS_HOST_READ_BIT);
       }
     });
     stats_.gpu_ms += ms_since(t_gpu);

@@ -145,13 +145,9 @@ Buffer static_buffer(const Context& ctx, VkBufferUsageFlags usage, const void* d
   ctx.submit_and_wait([&](VkCommandBuffer cmd) {
     const VkBufferCopy region{0, 0, bytes};
     vkCmdCopyBuffer(cmd, staging.handle(), b.handle(), 1, &region);
-    VkMemoryBarrier barrier{};
-    barrier.sType = VK_STRUCTURE_TYPE_MEMORY_BARRIER;
-    barrier.srcAccessMask = VK_ACCESS_TRANSFER_WRITE_BIT;
-    barrier.dstAccessMask = VK_ACCESS_VERTEX_ATTRIBUTE_READ_BIT | VK_ACCESS_INDEX_READ_BIT | VK_ACCESS_SHADER_READ_BIT;
-    vkCmdPipelineBarrier(cmd, VK_PIPELINE_STAGE_TRANSFER_BIT,
-                         VK_PIPELINE_STAGE_VERTEX_INPUT_BIT | VK_PIPELINE_STAGE_VERTEX_SHADER_BIT, 0, 1, &barrier, 0,
-                         nullptr, 0, nullptr);
+    memory_barrier(cmd, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_ACCESS_TRANSFER_WRITE_BIT,
+                   VK_PIPELINE_STAGE_VERTEX_INPUT_BIT | VK_PIPELINE_STAGE_VERTEX_SHADER_BIT,
+                   VK_ACCESS_VERTEX_ATTRIBUTE_READ_BIT | VK_ACCESS_INDEX_READ_BIT | VK_ACCESS_SHADER_READ_BIT);
   });
   return b;
 }
@@ -738,6 +734,14 @@ void Renderer::draw(const Cage& cage, const HarmonicMap& map, const View& view, 
   frame(&cage, &map, handle_count_, view, style, false);
 }
 
+double round_distortion_hi(double hi) {
+  const double span = std::max(hi - 1.0, 1e-3);
+  const double base = std::pow(10.0, std::floor(std::log10(span / 4)));
+  for (double m : {1.0, 2.0, 2.5, 5.0, 10.0})
+    if (4 * m * base >= span * (1 - 1e-12)) return 1.0 + 4 * m * base;
+  return 1.0 + 40 * base;
+}
+
 void Renderer::record(VkCommandBuffer cmd, const Cage& cage, const HarmonicMap& map, const View& view,
                       const RenderStyle& style, bool mark_evaluation) {
   check_frame(view, style);
@@ -787,17 +791,10 @@ void Renderer::record_frame(VkCommandBuffer cmd, const Cage* cage, const Harmoni
 
   if (cage) {
     // The previous frame's vertex shaders read the evaluation's outputs; this frame rewrites them.
-    VkMemoryBarrier war{};
-    war.sType = VK_STRUCTURE_TYPE_MEMORY_BARRIER;
-    vkCmdPipelineBarrier(cmd, VK_PIPELINE_STAGE_VERTEX_SHADER_BIT, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, 0, 1, &war, 0,
-                         nullptr, 0, nullptr);
+    memory_barrier(cmd, VK_PIPELINE_STAGE_VERTEX_SHADER_BIT, 0, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, 0);
     eval_.record_points(cmd, *cage, *map, points_);
-    VkMemoryBarrier raw{};
-    raw.sType = VK_STRUCTURE_TYPE_MEMORY_BARRIER;
-    raw.srcAccessMask = VK_ACCESS_SHADER_WRITE_BIT;
-    raw.dstAccessMask = VK_ACCESS_SHADER_READ_BIT;
-    vkCmdPipelineBarrier(cmd, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_PIPELINE_STAGE_VERTEX_SHADER_BIT, 0, 1, &raw, 0,
-                         nullptr, 0, nullptr);
+    memory_barrier(cmd, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_WRITE_BIT,
+                   VK_PIPELINE_STAGE_VERTEX_SHADER_BIT, VK_ACCESS_SHADER_READ_BIT);
     if (mark_evaluation) context_->mark(cmd);
   }
   // (Given geometry was written by the host before this submission, which makes it visible.)
@@ -895,12 +892,8 @@ void Renderer::record_copy_out(VkCommandBuffer cmd) {
   copy.imageExtent = {static_cast<uint32_t>(width_), static_cast<uint32_t>(height_), 1};
   vkCmdCopyImageToBuffer(cmd, impl_->resolve.image.get(), VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL,
                          impl_->readback.handle(), 1, &copy);
-  VkMemoryBarrier host{};
-  host.sType = VK_STRUCTURE_TYPE_MEMORY_BARRIER;
-  host.srcAccessMask = VK_ACCESS_TRANSFER_WRITE_BIT;
-  host.dstAccessMask = VK_ACCESS_HOST_READ_BIT;
-  vkCmdPipelineBarrier(cmd, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_PIPELINE_STAGE_HOST_BIT, 0, 1, &host, 0, nullptr, 0,
-                       nullptr);
+  memory_barrier(cmd, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_ACCESS_TRANSFER_WRITE_BIT, VK_PIPELINE_STAGE_HOST_BIT,
+                 VK_ACCESS_HOST_READ_BIT);
 }
 
 RgbaImage Renderer::read_frame() {

@@ -517,6 +517,15 @@ void Context::mark(VkCommandBuffer cmd) const {
   ++marks_;
 }
 
+void memory_barrier(VkCommandBuffer cmd, VkPipelineStageFlags src_stage, VkAccessFlags src_access,
+                    VkPipelineStageFlags dst_stage, VkAccessFlags dst_access) {
+  VkMemoryBarrier b{};
+  b.sType = VK_STRUCTURE_TYPE_MEMORY_BARRIER;
+  b.srcAccessMask = src_access;
+  b.dstAccessMask = dst_access;
+  vkCmdPipelineBarrier(cmd, src_stage, dst_stage, 0, 1, &b, 0, nullptr, 0, nullptr);
+}
+
 std::pair<uint32_t, uint32_t> split_dispatch(const Context& context, uint64_t groups) {
   const uint64_t max_x = context.info().max_workgroup_count[0], max_y = context.info().max_workgroup_count[1];
   if (groups == 0) return {0, 0};

@@ -76,9 +76,7 @@ void render_frame(hsi_sequence& s, uint32_t frame, const hsi_render_options& o, 
       const TriMesh mesh = triangulate(scene.shape, to);
       cache->renderer->set_mesh(mesh, scene.handles);
       if (!scene.texture.empty()) {
-        const BoundingBox bb = bounding_box(scene.shape);
-        const std::array<double, 4> rect = scene.texture_rect.value_or(std::array<double, 4>{bb.lo.real(), bb.lo.imag(), bb.hi.real(), bb.hi.imag()});
-        cache->renderer->set_texture(vk::read_png(scene.texture_path()), rect);
+        cache->renderer->set_texture(vk::read_png(scene.texture_path()), scene.texture_rect_or_bounds());
       }
       cache->frames_box = frames_box(s.seq, mesh);
       cache->width = w;

@@ -107,8 +107,7 @@ std::string encode_glb(const Scene& scene, const FrameFile& frames, const GltfOp
   b.model.asset.generator = "hsi 0.1.0 (harmonic shape interpolation)";
 
   // Texture coordinates: the rest position in the texture's rectangle (v down).
-  const BoundingBox bb = bounding_box(scene.shape);
-  const std::array<double, 4> rect = scene.texture_rect.value_or(std::array<double, 4>{bb.lo.real(), bb.lo.imag(), bb.hi.real(), bb.hi.imag()});
+  const std::array<double, 4> rect = scene.texture_rect_or_bounds();
   std::vector<float> uv(2 * P);
   for (size_t v = 0; v < P; ++v) {
     uv[2 * v] = static_cast<float>((mesh.vertices[v].real() - rect[0]) / (rect[2] - rect[0]));

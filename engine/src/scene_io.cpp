@@ -81,6 +81,12 @@ std::filesystem::path Scene::texture_path() const {
   return base_dir / texture;
 }
 
+std::array<double, 4> Scene::texture_rect_or_bounds() const {
+  if (texture_rect) return *texture_rect;
+  const BoundingBox bb = bounding_box(shape);
+  return {bb.lo.real(), bb.lo.imag(), bb.hi.real(), bb.hi.imag()};
+}
+
 Scene parse_scene(const std::string& text, const std::filesystem::path& base_dir, const std::string& source) {
   const Ctx c{source};
   json j;

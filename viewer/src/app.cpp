@@ -82,15 +82,6 @@ double number(const ScriptStep& s, size_t i) {
   throw InputError("script line " + std::to_string(s.line) + ": '" + s.args[i] + "' is not a number");
 }
 
-// The legend's upper end: a round number above hi.
-double nice_upper(double hi) {
-  const double span = std::max(hi - 1.0, 1e-3);
-  const double base = std::pow(10.0, std::floor(std::log10(span / 4)));
-  for (double m : {1.0, 2.0, 2.5, 5.0, 10.0})
-    if (4 * m * base >= span * (1 - 1e-12)) return 1.0 + 4 * m * base;
-  return 1.0 + 40 * base;
-}
-
 ImU32 rgba(float r, float g, float b, float a = 1) { return ImGui::ColorConvertFloat4ToU32(ImVec4(r, g, b, a)); }
 
 class App {
@@ -307,8 +298,7 @@ void App::load() {
     if (!std::filesystem::exists(tp))
       throw InputError(o_.scene + ": the texture file " + tp.string() + " does not exist (fix \"texture\" in the scene)");
     texture_ = vk::read_png(tp);
-    texture_rect_ = scene_.texture_rect ? *scene_.texture_rect
-                                        : std::array<double, 4>{rest.lo.real(), rest.lo.imag(), rest.hi.real(), rest.hi.imag()};
+    texture_rect_ = scene_.texture_rect_or_bounds();
   } else {
     texture_ = vk::checker_texture(rest, texture_rect_, false);
   }
@@ -351,7 +341,7 @@ void App::keyframes_changed() {
   const cd pad = 0.06 * (box_.hi - box_.lo);
   box_.lo -= cd(pad.real(), pad.imag());
   box_.hi += cd(pad.real(), pad.imag());
-  dist_hi_ = nice_upper(std::max(kappa * 1.1, 1.2));
+  dist_hi_ = vk::round_distortion_hi(std::max(kappa * 1.1, 1.2));
   cur_ = std::clamp(cur_, 0, solver_->frame_count() - 1);
   shown_.reset();
   shown_index_ = -1;

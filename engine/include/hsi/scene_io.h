@@ -58,6 +58,9 @@ struct Scene {
   std::string source;                   // where it was read from (the path), for messages; may be empty
 
   std::filesystem::path texture_path() const;  // resolved against base_dir
+  // The world rectangle [x0, y0, x1, y1] the texture covers: texture_rect, or the rest
+  // shape's bounding box when the scene gives none.
+  std::array<double, 4> texture_rect_or_bounds() const;
 };
 
 // An InputError raised while working on `scene` after it was loaded (its cage, its

@@ -72,6 +72,11 @@ struct RenderStyle {
   float border_px = 0;
 };
 
+// A round upper end for the distortion colour map over [1, hi']: 1 + 4 steps of a
+// round size (1, 2, 2.5 or 5 × 10^k) that reach hi, so that a legend's five ticks read
+// as round numbers (hsi render, hsi compare, the viewer).
+double round_distortion_hi(double hi);
+
 // The mesh with every triangle's corners made vertices of their own (3 per triangle,
 // in triangle order: vertex 3t + k is corner k of triangle t), boundary edges and
 // loops carried over: drawing it through Renderer::render(positions, kappa, ...)

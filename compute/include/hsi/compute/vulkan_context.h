@@ -308,4 +308,8 @@ class DescriptorSet {
 // device's per-dimension limit; shaders flatten (x, y) back to a linear index.
 std::pair<uint32_t, uint32_t> split_dispatch(const Context& context, uint64_t groups);
 
+// A global memory barrier: `src_access` by `src_stage` before `dst_access` by `dst_stage`.
+void memory_barrier(VkCommandBuffer cmd, VkPipelineStageFlags src_stage, VkAccessFlags src_access,
+                    VkPipelineStageFlags dst_stage, VkAccessFlags dst_access);
+
 }  // namespace hsi::vk
