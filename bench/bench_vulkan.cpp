@@ -17,7 +17,6 @@
 #include "hsi/scene_io.h"
 #include "bench_frame.h"
 #include "bench_render.h"
-#include "hsi/compute/renderer.h"
 
 using namespace hsi;
 
@@ -112,7 +111,7 @@ void certification_table(const vk::Context& ctx, const std::vector<std::string>&
 // timestamps: the frame's pass (mask + evaluation inside), every point evaluated
 // without a mask, and the mask alone (the shape moved off the grid, so every point
 // runs the outer loop's crossing test and nothing is evaluated).
-void eval_breakdown(const vk::Context& ctx, const std::vector<std::string>& scenes, int n, int draw_between) {
+void eval_breakdown(const vk::Context& ctx, const std::vector<std::string>& scenes, int n) {
   std::printf("\nGrid evaluation breakdown at %d x %d (device ms, median of 5):\n\n"
               "| scene | precision | inside | masked + inside evaluated | all evaluated, no mask | mask only |\n"
               "|---|---|---|---|---|---|\n", n, n);
@@ -131,19 +130,9 @@ void eval_breakdown(const vk::Context& ctx, const std::vector<std::string>& scen
       vk::DenseEvaluator ev(ctx, eo);
       const Shape* masks[3] = {&v.scene.shape, nullptr, &away};
       double t[3];
-      std::unique_ptr<vk::Renderer> renderer;
-      TriMesh mesh;
-      vk::View view;
-      if (draw_between) {
-        mesh = bench::render_mesh(v.scene.shape, 256);
-        view = bench::frame_view(v, mesh, 256);
-        renderer = std::make_unique<vk::Renderer>(ctx, 256, 256);
-        renderer->set_mesh(mesh, v.scene.handles);
-      }
       for (int k = 0; k < 3; ++k) {
         std::vector<double> ms;
         for (int i = 0; i < 6; ++i) {
-          if (renderer) renderer->draw(v.cage, v.map, view, vk::RenderStyle{});
           ctx.submit_and_wait([&](VkCommandBuffer cmd) { ev.record_grid(cmd, v.cage, v.map, grid, masks[k]); });
           if (i > 0) ms.push_back(ctx.last_device_ms());
         }
@@ -156,63 +145,6 @@ void eval_breakdown(const vk::Context& ctx, const std::vector<std::string>& scen
       std::printf("| %s | %s | %.0f%% | %.3f | %.3f | %.3f |\n", v.name.c_str(), ev.double_precision() ? "double" : "float",
                   100.0 * static_cast<double>(inside) / static_cast<double>(f.inside.size()), t[0], t[1], t[2]);
     }
-  }
-}
-
-// The frame's evaluation timed inside submissions that also certify and/or draw.
-void interference_table(const vk::Context& ctx, const std::vector<std::string>& scenes, int n) {
-  std::printf("\nEvaluation (float, masked) inside a frame's submission, device ms to the mark after it, median of 5:\n\n"
-              "| scene | eval alone | eval, certify | eval, draw | eval, certify, draw | certify part | draw part |\n"
-              "|---|---|---|---|---|---|---|\n");
-  for (const std::string& path : scenes) {
-    const bench::VulkanScene v = bench::load_vulkan_scene(path);
-    const vk::Grid grid = vk::Grid::covering(bounding_box(v.scene.shape), n, n);
-    vk::DenseEvalOptions eo;
-    eo.precision = vk::Precision::kFloat;
-    eo.skip_outside = true;
-    eo.max_points_per_pass = std::max<uint32_t>(eo.max_points_per_pass, static_cast<uint32_t>(n * n));
-    vk::DenseEvaluator ev(ctx, eo);
-    vk::DenseCertifier certifier(ctx, v.scene.shape, v.cage, sample_boundary(v.scene.shape, v.scene.samples));
-    const TriMesh mesh = bench::render_mesh(v.scene.shape, n);
-    const vk::View view = bench::frame_view(v, mesh, n);
-    vk::RendererOptions ro;
-    ro.evaluation.precision = vk::Precision::kFloat;
-    vk::Renderer renderer(ctx, n, n, ro);
-    renderer.set_mesh(mesh, v.scene.handles);
-    renderer.set_texture(v.texture, v.rect);
-    vk::RenderStyle style;
-    style.overlays = vk::kOverlayBoundary;
-    double t[4], cert_part = 0, draw_part = 0;
-    for (int variant = 0; variant < 4; ++variant) {
-      const bool cert = variant & 1, draw = variant & 2;
-      std::vector<double> ms, cp, dp;
-      for (int i = 0; i < 6; ++i) {
-        ctx.submit_and_wait([&](VkCommandBuffer cmd) {
-          ev.record_grid(cmd, v.cage, v.map, grid, &v.scene.shape);
-          ctx.mark(cmd);
-          if (cert) certifier.record(cmd, v.map);
-          ctx.mark(cmd);
-          if (draw) renderer.record(cmd, v.cage, v.map, view, style);
-        });
-        if (cert) certifier.collect();
-        const std::vector<double>& mk = ctx.last_device_marks();
-        if (i == 0 || mk.size() != 2) continue;
-        ms.push_back(mk[0]);
-        cp.push_back(mk[1] - mk[0]);
-        dp.push_back(ctx.last_device_ms() - mk[1]);
-      }
-      auto med = [](std::vector<double> x) {
-        std::sort(x.begin(), x.end());
-        return x.empty() ? -1.0 : x[x.size() / 2];
-      };
-      t[variant] = med(ms);
-      if (variant == 3) {
-        cert_part = med(cp);
-        draw_part = med(dp);
-      }
-    }
-    std::printf("| %s | %.3f | %.3f | %.3f | %.3f | %.3f | %.3f |\n", v.name.c_str(), t[0], t[1], t[2], t[3], cert_part,
-                draw_part);
   }
 }
 
@@ -352,12 +284,7 @@ int main(int argc, char** argv) {
   if (render_frames > 0) bench::render_table(*ctx, scenes, sizes, render_frames, use_float);
   if (frame_frames > 0) bench::frame_table(*ctx, scenes, sizes, frame_frames, msaa);
   if (probe) probe_table(*ctx);
-  if (breakdown > 0) interference_table(*ctx, scenes, breakdown);
-  if (breakdown > 0) {
-    eval_breakdown(*ctx, scenes, breakdown, 0);
-    std::printf("\nThe same, each evaluation submitted right after a 256 x 256 Renderer::draw:\n");
-    eval_breakdown(*ctx, scenes, breakdown, 1);
-  }
+  if (breakdown > 0) eval_breakdown(*ctx, scenes, breakdown);
   std::printf("\nload average at the end: %s\n", load_average().c_str());
   if (validation && ctx->validation_log()->count()) {
     std::fprintf(stderr, "%s\n", ctx->validation_log()->summary().c_str());

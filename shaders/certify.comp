@@ -355,32 +355,35 @@ void main() {
   // upper bounds of |S_j| (host) and lower bounds of the distances, raised by the
   // rounding of the sum.
   const dvec2 p0 = points[index], q0 = points[jn];
-  double lip_a = 0.0lf, lip_b = 0.0lf;
-  bool lip_ok = true;
-  for (uint j = 0u; j < ((pc.flags & kHaveLip) != 0u ? 0u : pc.vertex_count); ++j) {
-    const double d = distance_lower(geom[pc.cage_at + j], p0, q0);
-    lip_ok = lip_ok && d > 0.0lf;
-    const double wgt = 1.0lf / (d * d);
-    const dvec2 s = geom[pc.jumps_at + j];
-    lip_a += wgt * s.x;
-    lip_b += wgt * s.y;
-  }
-  lip_a *= kInv2Pi;
-  lip_b *= kInv2Pi;
-  for (uint h = 0u; h < ((pc.flags & kHaveLip) != 0u ? 0u : pc.hole_count); ++h) {
-    const double d = distance_lower(geom[pc.holes_at + h], p0, q0);
-    lip_ok = lip_ok && d > 0.0lf;
-    const double wgt = 2.0lf / (d * d * d);
-    const dvec2 s = geom[pc.jumps_at + pc.vertex_count + h];
-    lip_a += wgt * s.x;
-    lip_b += wgt * s.y;
-  }
-  const double lip_up = 1.0lf + (2.0lf * double(pc.vertex_count + pc.hole_count) + 32.0lf) * kU;
-  lip_a = lip_ok ? lip_a * lip_up : hsi_inf();
-  lip_b = lip_ok ? lip_b * lip_up : hsi_inf();
-  if ((pc.flags & kHaveLip) != 0u) {
+  double lip_a, lip_b;
+  if ((pc.flags & kHaveLip) != 0u) {  // from the basis matrix (mode 3)
     lip_a = lip[index].x;
     lip_b = lip[index].y;
+  } else {
+    lip_a = 0.0lf;
+    lip_b = 0.0lf;
+    bool lip_ok = true;
+    for (uint j = 0u; j < pc.vertex_count; ++j) {
+      const double d = distance_lower(geom[pc.cage_at + j], p0, q0);
+      lip_ok = lip_ok && d > 0.0lf;
+      const double wgt = 1.0lf / (d * d);
+      const dvec2 s = geom[pc.jumps_at + j];
+      lip_a += wgt * s.x;
+      lip_b += wgt * s.y;
+    }
+    lip_a *= kInv2Pi;
+    lip_b *= kInv2Pi;
+    for (uint h = 0u; h < pc.hole_count; ++h) {
+      const double d = distance_lower(geom[pc.holes_at + h], p0, q0);
+      lip_ok = lip_ok && d > 0.0lf;
+      const double wgt = 2.0lf / (d * d * d);
+      const dvec2 s = geom[pc.jumps_at + pc.vertex_count + h];
+      lip_a += wgt * s.x;
+      lip_b += wgt * s.y;
+    }
+    const double lip_up = 1.0lf + (2.0lf * double(pc.vertex_count + pc.hole_count) + 32.0lf) * kU;
+    lip_a = lip_ok ? lip_a * lip_up : hsi_inf();
+    lip_b = lip_ok ? lip_b * lip_up : hsi_inf();
   }
 
   // Depth-first over the pieces, exactly as the reference's recursion: the stack
