@@ -24,7 +24,7 @@
 namespace hsi::bench {
 
 inline void frame_table(const vk::Context& ctx, const std::vector<std::string>& scenes, const std::vector<int>& sizes,
-                        int frames, int msaa = 4) {
+                        int frames, int msaa, const std::vector<vk::Rasterizer>& rasterizers) {
   using Clock = std::chrono::steady_clock;
   auto ms_since = [](Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); };
   auto median = [](std::vector<double> v) {
@@ -41,11 +41,12 @@ inline void frame_table(const vk::Context& ctx, const std::vector<std::string>& 
               "distortion; masked, on the device) | certify (double, the scene's samples) | evaluate the render\n"
               "mesh (~n^2/50 vertices) | draw the frame at n x n pixels (textured, boundary, %dx MSAA). Medians over\n"
               "the frames of the GPU time of each part (timestamps between them) and of the whole submission\n"
-              "(frame dev), after 1 s of warm-up frames; frame wall: host time, recording, submission and wait\n"
-              "included. precision: of the\n"
-              "evaluation shaders (grid and mesh). pieces: certificate pieces per segment (1: no subdivision).\n\n", msaa);
-  std::printf("| scene | n | precision | segments | pieces | eval ms | certify ms | mesh ms | draw ms | frame dev ms | "
-              "frame wall ms | certified |\n|---|---|---|---|---|---|---|---|---|---|---|---|\n");
+              "(frame dev), after 1 s of warm-up frames (3 s before the first row); frame wall: host time,\n"
+              "recording, submission and wait included. precision: of the evaluation shaders (grid and mesh). raster: how the frame's triangles became pixels (renderer.h:\n"
+              "graphics pipeline, or compute shaders with a visibility buffer). pieces: certificate pieces per\n"
+              "segment (1: no subdivision).\n\n", msaa);
+  std::printf("| scene | n | precision | raster | segments | pieces | eval ms | certify ms | mesh ms | draw ms | "
+              "frame dev ms | frame wall ms | certified |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
   for (const std::string& path : scenes) {
     const VulkanScene v = load_vulkan_scene(path);
     const Scene& scene = v.scene;
@@ -55,7 +56,8 @@ inline void frame_table(const vk::Context& ctx, const std::vector<std::string>& 
     for (int n : sizes) {
       const TriMesh mesh = render_mesh(scene.shape, n);
       const vk::View view = frame_view(v, mesh, n);
-      for (const vk::Precision precision : {vk::Precision::kFloat, vk::Precision::kDouble}) {
+      for (const vk::Precision precision : {vk::Precision::kFloat, vk::Precision::kDouble})
+      for (const vk::Rasterizer rasterizer : rasterizers) {
         vk::DenseEvalOptions eo;
         eo.precision = precision;
         eo.skip_outside = true;
@@ -64,6 +66,7 @@ inline void frame_table(const vk::Context& ctx, const std::vector<std::string>& 
         vk::RendererOptions ro;
         ro.evaluation.precision = precision;
         ro.msaa_samples = msaa;
+        ro.rasterizer = rasterizer;
         vk::Renderer renderer(ctx, n, n, ro);
         renderer.set_mesh(mesh, scene.handles);
         renderer.set_texture(v.texture, v.rect);
@@ -76,7 +79,11 @@ inline void frame_table(const vk::Context& ctx, const std::vector<std::string>& 
         // i < 0: warm-up, at least 1 s of frames: a GPU idle during the host's work
         // before (the CPU reference of the other tables) runs at a low clock until its
         // power management sees sustained load (on the H100, ~5.7x slower).
-        const auto warm_until = Clock::now() + std::chrono::milliseconds(1000);
+        // The first row waits longer: its clocks start from idle (the rows' frames at
+        // 1024² measured up to 2.3× slow after only 1 s).
+        static bool first_row = true;
+        const auto warm_until = Clock::now() + std::chrono::milliseconds(first_row ? 3000 : 1000);
+        first_row = false;
         for (int i = -1; i < std::max(frames, 1); ++i) {
           if (i == -1 && Clock::now() < warm_until) i = -2;
           const auto t0 = Clock::now();
@@ -104,8 +111,10 @@ inline void frame_table(const vk::Context& ctx, const std::vector<std::string>& 
           pieces = static_cast<double>(n_pieces) / std::max(certifier.breakpoint_count(), 1);
         }
         auto part = [&](int k) { return parts[k].empty() ? -1.0 : median(parts[k]); };
-        std::printf("| %s | %d | %s | %d | %.3f | %.3f | %.3f | %.3f | %.3f | %.3f | %.2f | %s |\n", v.name.c_str(), n,
-                    grid_eval.double_precision() ? "double" : "float", certifier.breakpoint_count(), pieces, part(0),
+        std::printf("| %s | %d | %s | %s | %d | %.3f | %.3f | %.3f | %.3f | %.3f | %.3f | %.2f | %s |\n", v.name.c_str(),
+                    n, grid_eval.double_precision() ? "double" : "float",
+                    renderer.rasterizer() == vk::Rasterizer::kCompute ? "compute" : "graphics",
+                    certifier.breakpoint_count(), pieces, part(0),
                     part(1), part(2), part(3), median(frame_dev), median(wall), certified ? "yes" : "no");
         std::fflush(stdout);
       }

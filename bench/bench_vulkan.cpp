@@ -204,6 +204,10 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   int msaa = 4;
   app.add_option("--msaa", msaa, "MSAA samples of the frame rows' drawing")->capture_default_str();
+  std::string raster = "both";
+  app.add_option("--raster", raster, "Rasterizer of the frame rows: graphics, compute, auto or both")
+      ->check(CLI::IsMember({"graphics", "compute", "auto", "both"}))
+      ->capture_default_str();
   int breakdown = 0;
   app.add_option("--eval-breakdown", breakdown, "Also time the grid evaluation's parts at this n (0: no)");
   bool probe = false;
@@ -282,7 +286,13 @@ int main(int argc, char** argv) {
   else if (certify_frames > 0)
     certification_table(*ctx, scenes, certify_frames, certify_samples);
   if (render_frames > 0) bench::render_table(*ctx, scenes, sizes, render_frames, use_float);
-  if (frame_frames > 0) bench::frame_table(*ctx, scenes, sizes, frame_frames, msaa);
+  if (frame_frames > 0) {
+    std::vector<vk::Rasterizer> rasterizers;
+    if (raster == "graphics" || raster == "both") rasterizers.push_back(vk::Rasterizer::kGraphics);
+    if (raster == "compute" || raster == "both") rasterizers.push_back(vk::Rasterizer::kCompute);
+    if (raster == "auto") rasterizers.push_back(vk::Rasterizer::kAuto);
+    bench::frame_table(*ctx, scenes, sizes, frame_frames, msaa, rasterizers);
+  }
   if (probe) probe_table(*ctx);
   if (breakdown > 0) eval_breakdown(*ctx, scenes, breakdown);
   std::printf("\nload average at the end: %s\n", load_average().c_str());

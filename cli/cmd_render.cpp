@@ -44,6 +44,7 @@ struct Opts {
   bool no_texture = false, no_sheet = false, no_labels = false, validation = false;
   int mesh_vertices = 20000, sheet_max = 24, sheet_columns = 0;
   std::string device;
+  std::string rasterizer = "auto";
 };
 
 // "all", or comma-separated indices and inclusive ranges a-b ("0,10,20-30").
@@ -249,12 +250,18 @@ void run_render(const Opts& o) {
   } catch (const vk::VulkanUnavailable& e) {
     throw std::runtime_error(std::string("hsi render needs a Vulkan device (a GPU, or lavapipe on the CPU): ") + e.what());
   }
-  vk::Renderer renderer(*ctx, W, H);
+  vk::RendererOptions ro;
+  ro.rasterizer = o.rasterizer == "graphics" ? vk::Rasterizer::kGraphics
+                  : o.rasterizer == "compute" ? vk::Rasterizer::kCompute
+                                              : vk::Rasterizer::kAuto;
+  vk::Renderer renderer(*ctx, W, H, ro);
   renderer.set_mesh(mesh, scene.handles);
   renderer.set_texture(texture, rect);
-  std::printf("rendering %zu of %zu frames at %d x %d on %s (%s, %s precision, %dx MSAA); mesh %d vertices, %d triangles\n",
+  std::printf("rendering %zu of %zu frames at %d x %d on %s (%s, %s precision, %dx MSAA, %s rasterizer); mesh %d "
+              "vertices, %d triangles\n",
               selected.size(), ff.frames.size(), W, H, ctx->info().name.c_str(), ctx->info().type_name().c_str(),
-              renderer.double_precision() ? "double" : "float", renderer.msaa_samples(), mesh.vertex_count(),
+              renderer.double_precision() ? "double" : "float", renderer.msaa_samples(),
+              renderer.rasterizer() == vk::Rasterizer::kCompute ? "compute" : "graphics", mesh.vertex_count(),
               mesh.triangle_count());
   if (legend) std::printf("distortion colour map over [%.3f, %.3f] (largest in these frames: %.4f)\n", lo, hi, kappa_max);
   std::fflush(stdout);
@@ -404,6 +411,11 @@ void register_render(CLI::App& app) {
   cmd->add_option("--mesh-vertices", o->mesh_vertices, "Vertices of the render mesh (about)")->capture_default_str()->check(CLI::Range(100, 5000000));
   cmd->add_option("--device", o->device, "Vulkan device name substring (default: HSI_VULKAN_DEVICE, else the best)");
   cmd->add_flag("--validation", o->validation, "Run with the Vulkan validation layer; fail on any message");
+  cmd->add_option("--rasterizer", o->rasterizer,
+                  "Triangles to pixels: auto (compute shaders on a GPU, the graphics pipeline on a CPU device), "
+                  "graphics or compute")
+      ->check(CLI::IsMember({"auto", "graphics", "compute"}))
+      ->capture_default_str();
   cmd->callback([o] { run_render(*o); });
 #else
   cmd->allow_extras();

@@ -6,6 +6,8 @@
 #ifndef HSI_RENDER_COMMON_GLSL
 #define HSI_RENDER_COMMON_GLSL
 
+#include "render_shade.glsl"
+
 #ifdef HSI_REAL_DOUBLE
 #if HSI_REAL_DOUBLE
 #define Real2 dvec2
@@ -15,11 +17,6 @@
 #define Real4 vec4
 #endif
 #endif
-
-// Push-constant flags.
-const uint kTextured = 1u;     // mesh: sample the texture (else fill with pc.color)
-const uint kDistortion = 2u;   // mesh: blend the distortion colour map over it
-const uint kUncertified = 4u;  // mesh: tint red (the frame could not be certified)
 
 layout(push_constant) uniform Push {
   vec4 color;           // straight RGBA: flat fill (mesh), line colour, disc fill
@@ -49,18 +46,5 @@ vec2 pixel_of(uint i) {
 #endif
 
 vec4 ndc_of(vec2 px) { return vec4(px / pc.viewport * 2.0 - 1.0, 0.0, 1.0); }
-
-// Viridis (perceptually uniform), polynomial fit; hsi::vk::colormap() mirrors it on the host.
-vec3 hsi_colormap(float t) {
-  t = clamp(t, 0.0, 1.0);
-  const vec3 c0 = vec3(0.2777273272234177, 0.005407344544966578, 0.3340998053353061);
-  const vec3 c1 = vec3(0.1050930431085774, 1.404613529898575, 1.384590162594685);
-  const vec3 c2 = vec3(-0.3308618287255563, 0.214847559468213, 0.09509516302823659);
-  const vec3 c3 = vec3(-4.634230498983486, -5.799100973351585, -19.33244095627987);
-  const vec3 c4 = vec3(6.228269936347081, 14.17993336680509, 56.69055260068105);
-  const vec3 c5 = vec3(4.776384997670288, -13.74514537774601, -65.35303263337234);
-  const vec3 c6 = vec3(-5.435455855934631, 4.645852612178535, 26.3124352495832);
-  return clamp(c0 + t * (c1 + t * (c2 + t * (c3 + t * (c4 + t * (c5 + t * c6))))), 0.0, 1.0);
-}
 
 #endif  // HSI_RENDER_COMMON_GLSL

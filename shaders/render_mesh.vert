@@ -13,7 +13,5 @@ void main() {
   const uint i = uint(gl_VertexIndex);
   gl_Position = ndc_of(pixel_of(i));
   uv = in_uv;
-  const float kappa = float(fields[i].z);
-  // A fold (sigma2 <= 0: kappa negative or infinite) or NaN saturates the map.
-  kappa_t = (kappa > 0.0 && kappa < 1e30) ? (kappa - pc.dist_lo) * pc.dist_inv : 1.0;
+  kappa_t = hsi_kappa_t(float(fields[i].z), pc.dist_lo, pc.dist_inv);
 }

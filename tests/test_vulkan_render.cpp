@@ -67,6 +67,21 @@ int max_channel_diff(const uint8_t* a, const uint8_t* b) {
   return d;
 }
 
+// Every pixel test runs with both rasterizers (renderer.h): they must draw the same picture.
+#define FOR_EACH_RASTERIZER()                                                                               \
+  const bool use_compute = GENERATE(false, true);                                                        \
+  const vk::Rasterizer rasterizer = use_compute ? vk::Rasterizer::kCompute : vk::Rasterizer::kGraphics; \
+  INFO("rasterizer: " << rasterizer_name(rasterizer))
+
+const char* rasterizer_name(vk::Rasterizer r) {
+  return r == vk::Rasterizer::kCompute ? "compute" : r == vk::Rasterizer::kGraphics ? "graphics" : "auto";
+}
+
+vk::RendererOptions with_rasterizer(vk::Rasterizer r, vk::RendererOptions o = {}) {
+  o.rasterizer = r;
+  return o;
+}
+
 struct Setup {
   Shape shape = framed_shape();
   Cage cage = build_cage(shape);
@@ -159,11 +174,12 @@ vk::View frame_view(const Shape& shape, const Cage& cage, const HarmonicMap& map
 }  // namespace
 
 TEST_CASE("render: the identity map shows the texture unchanged, clipped at the outline and the hole", "[vulkan][render]") {
-  with_vulkan([](vk::Context& ctx) {
+  FOR_EACH_RASTERIZER();
+  with_vulkan([&](vk::Context& ctx) {
     const Setup s;
     const int W = 256, H = 192;
     const vk::RgbaImage tex = gradient(W, H);
-    vk::Renderer r(ctx, W, H);
+    vk::Renderer r(ctx, W, H, with_rasterizer(rasterizer));
     CHECK(r.msaa_samples() >= 1);
     r.set_mesh(s.mesh);
     r.set_texture(tex, kRect);
@@ -196,13 +212,14 @@ TEST_CASE("render: the identity map shows the texture unchanged, clipped at the 
 }
 
 TEST_CASE("render: an affine map moves the texture with the shape, holes stay empty", "[vulkan][render]") {
-  with_vulkan([](vk::Context& ctx) {
+  FOR_EACH_RASTERIZER();
+  with_vulkan([&](vk::Context& ctx) {
     const Setup s;
     const int W = 240, H = 240;
     const vk::RgbaImage tex = gradient(200, 150);
     const cd a(0.8, 0.35), b(0.12, -0.05), c(0.3, -0.2);
     const HarmonicMap map = affine_map(s.cage, a, b, c);
-    vk::Renderer r(ctx, W, H);
+    vk::Renderer r(ctx, W, H, with_rasterizer(rasterizer));
     r.set_mesh(s.mesh);
     r.set_texture(tex, kRect);
     const vk::View view = frame_view(s.shape, s.cage, map, W, H, 10);
@@ -244,12 +261,13 @@ TEST_CASE("render: an affine map moves the texture with the shape, holes stay em
 }
 
 TEST_CASE("render: the distortion overlay shows sigma1/sigma2 through the colour map", "[vulkan][render]") {
-  with_vulkan([](vk::Context& ctx) {
+  FOR_EACH_RASTERIZER();
+  with_vulkan([&](vk::Context& ctx) {
     const Setup s(0.1);
     const cd a(1.1, 0.2), b(0.3, 0.1);
     const double kappa = (std::abs(a) + std::abs(b)) / (std::abs(a) - std::abs(b));
     const HarmonicMap map = affine_map(s.cage, a, b, 0);
-    vk::Renderer r(ctx, 160, 160);
+    vk::Renderer r(ctx, 160, 160, with_rasterizer(rasterizer));
     r.set_mesh(s.mesh);
     r.set_texture(gradient(64, 48), kRect);
     const vk::View view = frame_view(s.shape, s.cage, map, 160, 160, 8);
@@ -277,10 +295,11 @@ TEST_CASE("render: the distortion overlay shows sigma1/sigma2 through the colour
 }
 
 TEST_CASE("render: boundary lines, handle discs, and the red of an uncertified frame", "[vulkan][render]") {
-  with_vulkan([](vk::Context& ctx) {
+  FOR_EACH_RASTERIZER();
+  with_vulkan([&](vk::Context& ctx) {
     const Setup s;
     const int W = 200, H = 160;
-    vk::Renderer r(ctx, W, H);
+    vk::Renderer r(ctx, W, H, with_rasterizer(rasterizer));
     const std::vector<cd> handles = {{-0.6, 0.4}, {0.4, 0.5}};
     r.set_mesh(s.mesh, handles);
     const HarmonicMap id = identity_map(s.cage);
@@ -338,13 +357,15 @@ TEST_CASE("render: boundary lines, handle discs, and the red of an uncertified f
 }
 
 TEST_CASE("render: float precision, 1 sample, refusals", "[vulkan][render]") {
-  with_vulkan([](vk::Context& ctx) {
+  FOR_EACH_RASTERIZER();
+  with_vulkan([&](vk::Context& ctx) {
     const Setup s(0.1);
     vk::RendererOptions o;
     o.msaa_samples = 1;
     o.evaluation.precision = vk::Precision::kFloat;
-    vk::Renderer r(ctx, 96, 72, o);
+    vk::Renderer r(ctx, 96, 72, with_rasterizer(rasterizer, o));
     CHECK(r.msaa_samples() == 1);
+    CHECK(r.rasterizer() == rasterizer);
     CHECK(!r.double_precision());
     const vk::View view = vk::View::fit({{-1, -0.75}, {1, 0.75}}, 96, 72);
     CHECK_THROWS_WITH(r.render(s.cage, identity_map(s.cage), view, {}), Contains("no mesh"));
@@ -410,11 +431,12 @@ struct Bundled {
 }  // namespace
 
 TEST_CASE("render goldens: keyframes and interpolated frames of bundled scenes", "[vulkan][render][golden]") {
-  with_vulkan([](vk::Context& ctx) {
+  FOR_EACH_RASTERIZER();
+  with_vulkan([&](vk::Context& ctx) {
     SECTION("bar_holes: keyframe 1, interpolated t = 0.5 (distortion), uncertified marking") {
       const Bundled b("bar_holes");
       const std::vector<HarmonicMap> keys = b.keyframes();
-      vk::Renderer r(ctx, 256, 160);
+      vk::Renderer r(ctx, 256, 160, with_rasterizer(rasterizer));
       r.set_mesh(b.mesh, b.scene.handles);
       r.set_texture(b.texture, b.rect);
       vk::RenderStyle style;
@@ -445,7 +467,7 @@ TEST_CASE("render goldens: keyframes and interpolated frames of bundled scenes",
     SECTION("sprite_pretzel: the sprite's own alpha, on a transparent background") {
       const Bundled b("sprite_pretzel");
       const std::vector<HarmonicMap> keys = b.keyframes();
-      vk::Renderer r(ctx, 192, 192);
+      vk::Renderer r(ctx, 192, 192, with_rasterizer(rasterizer));
       r.set_mesh(b.mesh, b.scene.handles);
       r.set_texture(b.texture, b.rect);
       vk::RenderStyle style;
@@ -457,12 +479,13 @@ TEST_CASE("render goldens: keyframes and interpolated frames of bundled scenes",
 }
 
 TEST_CASE("render: given positions equal to f(vertices) draw the image of the map path", "[vulkan][render]") {
-  with_vulkan([](vk::Context& ctx) {
+  FOR_EACH_RASTERIZER();
+  with_vulkan([&](vk::Context& ctx) {
     // A bundled keyframe (a real harmonic map, not affine), every overlay on.
     const Bundled b("two_holes");
     const HarmonicMap key = b.keyframes().back();
     const int W = 256, H = 192;
-    vk::Renderer r(ctx, W, H);
+    vk::Renderer r(ctx, W, H, with_rasterizer(rasterizer));
     r.set_mesh(b.mesh, b.scene.handles);
     r.set_texture(b.texture, b.rect);
     const vk::View view = frame_view(b.scene.shape, b.cage, key, W, H, 8);
@@ -512,6 +535,7 @@ TEST_CASE("render: given positions equal to f(vertices) draw the image of the ma
 }
 
 TEST_CASE("render: an unwelded mesh shows per-triangle distortion flat", "[vulkan][render]") {
+  FOR_EACH_RASTERIZER();
   const Setup s(0.25);
   const vk::UnweldedMesh u = vk::unweld(s.mesh);
   REQUIRE(u.mesh.vertex_count() == 3 * s.mesh.triangle_count());
@@ -524,7 +548,7 @@ TEST_CASE("render: an unwelded mesh shows per-triangle distortion flat", "[vulka
   for (size_t v = 0; v < u.source.size(); ++v) CHECK(u.mesh.vertices[v] == s.mesh.vertices[static_cast<size_t>(u.source[v])]);
   with_vulkan([&](vk::Context& ctx) {
     const int W = 200, H = 150;
-    vk::Renderer r(ctx, W, H);
+    vk::Renderer r(ctx, W, H, with_rasterizer(rasterizer));
     r.set_mesh(u.mesh);
     const vk::View view = vk::View::fit({{-1, -0.75}, {1, 0.75}}, W, H);
     // Triangle t gets κ = 1 + (t mod 5) / 4 over the range [1, 2]: five colours.
@@ -558,11 +582,12 @@ TEST_CASE("render: an unwelded mesh shows per-triangle distortion flat", "[vulka
 
 TEST_CASE("render: a frame recorded into the caller's submission is render()'s image; marks time its parts",
           "[vulkan][render]") {
-  with_vulkan([](vk::Context& ctx) {
+  FOR_EACH_RASTERIZER();
+  with_vulkan([&](vk::Context& ctx) {
     const Bundled b("two_holes");
     const HarmonicMap key = b.keyframes().back();
     const int W = 160, H = 120;
-    vk::Renderer r(ctx, W, H);
+    vk::Renderer r(ctx, W, H, with_rasterizer(rasterizer));
     r.set_mesh(b.mesh, b.scene.handles);
     r.set_texture(b.texture, b.rect);
     const vk::View view = frame_view(b.scene.shape, b.cage, key, W, H, 8);
@@ -594,6 +619,147 @@ TEST_CASE("render: a frame recorded into the caller's submission is render()'s i
       CHECK(marks[0] >= 0);
       CHECK(marks[1] >= marks[0]);
       CHECK(ctx.last_device_ms() >= marks[1]);
+    }
+  });
+}
+
+TEST_CASE("render: the compute and graphics rasterizers draw the same frames of bundled scenes", "[vulkan][render]") {
+  with_vulkan([](vk::Context& ctx) {
+    vk::Renderer automatic(ctx, 16, 16);
+    // kAuto: compute on GPUs, graphics on CPU devices (lavapipe rasterizes faster there).
+    CHECK(automatic.rasterizer() == (ctx.info().is_cpu() ? vk::Rasterizer::kGraphics : vk::Rasterizer::kCompute));
+    // A visibility buffer beyond one storage buffer (16384² pixels × 8 samples × 4 bytes
+    // = 8 GiB) is refused before anything is allocated.
+    vk::RendererOptions huge;
+    huge.msaa_samples = 8;
+    CHECK_THROWS_WITH(vk::Renderer(ctx, 16384, 16384, with_rasterizer(vk::Rasterizer::kCompute, huge)),
+                      Contains("maxStorageBufferRange"));
+    for (const std::string name : {"two_holes", "sprite_pretzel"}) {
+      const Bundled b(name);
+      const int W = 224, H = 176;
+      for (const int samples : {1, 4, 8}) {
+        vk::RendererOptions o;
+        o.msaa_samples = samples;
+        vk::Renderer graphics(ctx, W, H, with_rasterizer(vk::Rasterizer::kGraphics, o));
+        vk::Renderer compute(ctx, W, H, with_rasterizer(vk::Rasterizer::kCompute, o));
+        if (graphics.msaa_samples() != samples) continue;  // the device's graphics path lacks this count
+        CHECK(compute.msaa_samples() == samples);
+        for (vk::Renderer* r : {&graphics, &compute}) {
+          r->set_mesh(b.mesh, b.scene.handles);
+          r->set_texture(b.texture, b.rect);
+        }
+        for (const HarmonicMap& key : b.keyframes()) {
+          vk::RenderStyle style;
+          style.overlays = vk::kOverlayDistortion | vk::kOverlayBoundary | vk::kOverlayHandles;
+          style.distortion_opacity = 0.5f;
+          style.distortion_hi = 1.5;
+          style.background = {0.2f, 0.3f, 0.4f, name == "sprite_pretzel" ? 0.0f : 1.0f};
+          const vk::View view = frame_view(b.scene.shape, b.cage, key, W, H, 8);
+          const vk::RgbaImage a = graphics.render(b.cage, key, view, style), c = compute.render(b.cage, key, view, style);
+          const Difference d = compare(c, a);
+          INFO(name << ", " << samples << " samples: mean abs diff " << d.mean_abs << "/255, pixels off by > 48: "
+                    << 100 * d.outlier_fraction << "%");
+          // Edges differ by the rasterizers' rules for samples on an edge and their
+          // rounding; with one sample a pixel is all one or all the other.
+          CHECK(d.mean_abs <= (samples == 1 ? 1.0 : 0.5));
+          CHECK(d.outlier_fraction <= (samples == 1 ? 0.01 : 0.002));
+          // The tolerance can fail: the same frame 2 px to the right is far off.
+          vk::View shifted = view;
+          shifted.pixel_center += 2.0;
+          CHECK(compare(c, graphics.render(b.cage, key, shifted, style)).mean_abs > 2);
+        }
+      }
+    }
+  });
+}
+
+namespace {
+
+// A regular grid of nx × ny squares over [x0, x1] × [y0, y1], each split into two
+// triangles along alternating diagonals; vertices jittered by up to `jitter` of a cell
+// (fixed seed) unless 0.
+TriMesh grid_mesh(int nx, int ny, double x0, double y0, double x1, double y1, double jitter) {
+  TriMesh m;
+  uint32_t state = 12345;
+  auto rnd = [&] {
+    state = state * 1664525u + 1013904223u;
+    return (state >> 8) / double(1u << 24) - 0.5;
+  };
+  const double dx = (x1 - x0) / nx, dy = (y1 - y0) / ny;
+  for (int j = 0; j <= ny; ++j)
+    for (int i = 0; i <= nx; ++i) {
+      const bool interior = i > 0 && i < nx && j > 0 && j < ny;
+      m.vertices.push_back({x0 + dx * (i + (interior ? jitter * rnd() : 0)), y0 + dy * (j + (interior ? jitter * rnd() : 0))});
+    }
+  auto v = [&](int i, int j) { return j * (nx + 1) + i; };
+  for (int j = 0; j < ny; ++j)
+    for (int i = 0; i < nx; ++i) {
+      if ((i + j) % 2 == 0) {
+        m.triangles.push_back({v(i, j), v(i + 1, j), v(i + 1, j + 1)});
+        m.triangles.push_back({v(i, j), v(i + 1, j + 1), v(i, j + 1)});
+      } else {
+        m.triangles.push_back({v(i, j), v(i + 1, j), v(i, j + 1)});
+        m.triangles.push_back({v(i + 1, j), v(i + 1, j + 1), v(i, j + 1)});
+      }
+    }
+  return m;
+}
+
+}  // namespace
+
+TEST_CASE("render: no cracks between triangles, large triangles, the last triangle on top", "[vulkan][render]") {
+  FOR_EACH_RASTERIZER();
+  with_vulkan([&](vk::Context& ctx) {
+    const int W = 256, H = 192;
+    const vk::View view = vk::View::fit({{-1, -0.75}, {1, 0.75}}, W, H);  // 128 px per unit
+    vk::RenderStyle style;
+    style.background = {0, 0, 0, 1};
+    style.fill = {1, 1, 1, 1};
+    for (const int samples : {1, 4}) {
+      vk::RendererOptions o;
+      o.msaa_samples = samples;
+      // Fine grids put samples exactly on edges and vertices (unjittered: vertices on
+      // pixel corners and centres) or anywhere (jittered); the coarse grid's triangles
+      // span thousands of pixels (the compute path's workgroup-per-triangle pass).
+      struct Case {
+        int nx, ny;
+        double jitter;
+      };
+      for (const Case c : {Case{128, 96, 0.0}, Case{101, 77, 0.45}, Case{4, 3, 0.3}}) {
+        // Inset by a quarter pixel: no sample lies on the outer edge.
+        const double inset = 0.25 / view.pixels_per_unit;
+        const TriMesh m = grid_mesh(c.nx, c.ny, -1 + inset, -0.75 + inset, 1 - inset, 0.75 - inset, c.jitter);
+        vk::Renderer r(ctx, W, H, with_rasterizer(rasterizer, o));
+        r.set_mesh(m);
+        const std::vector<double> kappa(m.vertices.size(), 1.0);
+        const vk::RgbaImage img = r.render(m.vertices, kappa, view, style);
+        // (With 4 samples, the image's outermost pixels have samples outside the inset.)
+        const int edge = samples == 1 ? 0 : 1;
+        int holes = 0;
+        for (int y = edge; y < H - edge; ++y)
+          for (int x = edge; x < W - edge; ++x) holes += img.at(x, y)[0] != 255 || img.at(x, y)[1] != 255;
+        INFO(samples << " samples, " << c.nx << " x " << c.ny << " grid, jitter " << c.jitter);
+        CHECK(holes == 0);
+      }
+    }
+    // Two overlapping triangles (given geometry, no texture): triangle 1 (κ = 2, the top
+    // of the colour map) is drawn after triangle 0 (κ = 1) and covers it where they overlap.
+    TriMesh two;
+    two.vertices = {{-0.8, -0.5}, {0.4, -0.5}, {-0.2, 0.6}, {-0.4, -0.6}, {0.8, -0.6}, {0.2, 0.5}};
+    two.triangles = {{0, 1, 2}, {3, 4, 5}};
+    vk::Renderer r(ctx, W, H, with_rasterizer(rasterizer));
+    r.set_mesh(two);
+    style.overlays = vk::kOverlayDistortion;
+    style.distortion_opacity = 1;
+    const vk::RgbaImage img = r.render(two.vertices, std::vector<double>{1, 1, 1, 2, 2, 2}, view, style);
+    auto at = [&](cd w) {
+      const cd q = view.to_pixel(w);
+      return img.at(static_cast<int>(q.real()), static_cast<int>(q.imag()));
+    };
+    const auto top = vk::colormap(1), below = vk::colormap(0);
+    for (const auto& [w, cm] : {std::pair{cd(0.0, 0.0), top}, std::pair{cd(-0.6, -0.3), below}, std::pair{cd(0.6, -0.4), top}}) {
+      INFO("at " << w);
+      for (size_t ch = 0; ch < 3; ++ch) CHECK(std::abs(at(w)[ch] - cm[ch] * 255) <= 2.5);
     }
   });
 }

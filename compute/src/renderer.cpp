@@ -1,9 +1,12 @@
-// Offscreen renderer (see renderer.h and shaders/render_*.{vert,frag}): a render
-// pass with a 4× MSAA colour attachment resolved into a single-sample image that is
-// copied to host-visible memory; three pipelines (textured mesh, boundary lines,
-// handle discs) over one descriptor set whose position and distortion buffers are
-// the dense evaluation's outputs. Colours are premultiplied throughout (texture,
-// blending, clear colour) and un-premultiplied on the way out.
+// Offscreen renderer (see renderer.h and shaders/render_*.{vert,frag}). Graphics
+// rasterizer: a render pass with a 4× MSAA colour attachment resolved into a
+// single-sample image that is copied to host-visible memory; three pipelines
+// (textured mesh, boundary lines, handle discs) over one descriptor set whose
+// position and distortion buffers are the dense evaluation's outputs. Compute
+// rasterizer (shaders/raster*.comp): the mesh's triangles into a visibility buffer,
+// then shaded and resolved straight into that single-sample image, on which a
+// single-sample render pass draws the lines and discs. Colours are premultiplied
+// throughout (texture, blending, clear colour) and un-premultiplied on the way out.
 #include "hsi/compute/renderer.h"
 
 #include <algorithm>
@@ -14,6 +17,10 @@
 #include <string>
 #include <unordered_map>
 
+#include "hsi/compute/spirv/raster_f32.h"
+#include "hsi/compute/spirv/raster_f64.h"
+#include "hsi/compute/spirv/raster_resolve_f32.h"
+#include "hsi/compute/spirv/raster_resolve_f64.h"
 #include "hsi/compute/spirv/render_disc_frag.h"
 #include "hsi/compute/spirv/render_disc_vert_f32.h"
 #include "hsi/compute/spirv/render_disc_vert_f64.h"
@@ -48,7 +55,41 @@ struct RenderPush {
   uint32_t first;
 };
 static_assert(sizeof(RenderPush) == 84);
+// Shading flags (shaders/render_shade.glsl).
 constexpr uint32_t kTextured = 1u, kDistortion = 2u, kUncertified = 4u;
+// Mirrors `Push` in shaders/raster_common.glsl (std430 offsets).
+struct RasterPush {
+  float background[4];
+  float border_color[4];
+  float fill[4];
+  float scale[2];
+  float offset[2];
+  uint32_t width, height, samples, triangles;
+  float dist_lo, dist_inv, overlay_alpha;
+  uint32_t flags, border_px, pass;
+};
+static_assert(sizeof(RasterPush) == 104);
+// The uncertified frame's border (opaque, so premultiplied as it is).
+constexpr float kBorderRed[4] = {0.86f, 0.04f, 0.04f, 1.0f};
+
+// What a frame's passes share: the view (world -> pixels), the colour map and the
+// shape's flags; the rest is per draw.
+RenderPush frame_push(const View& view, const RenderStyle& style, int width, int height, bool textured) {
+  RenderPush pc{};
+  const double s = view.pixels_per_unit;
+  pc.scale[0] = static_cast<float>(s);
+  pc.scale[1] = static_cast<float>(-s);
+  pc.offset[0] = static_cast<float>(view.pixel_center.real() - s * view.world_center.real());
+  pc.offset[1] = static_cast<float>(view.pixel_center.imag() + s * view.world_center.imag());
+  pc.viewport[0] = static_cast<float>(width);
+  pc.viewport[1] = static_cast<float>(height);
+  pc.dist_lo = static_cast<float>(style.distortion_lo);
+  pc.dist_inv = static_cast<float>(1.0 / (style.distortion_hi - style.distortion_lo));
+  pc.overlay_alpha = std::clamp(style.distortion_opacity, 0.0f, 1.0f);
+  pc.flags = (textured ? kTextured : 0u) | ((style.overlays & kOverlayDistortion) ? kDistortion : 0u) |
+             (style.uncertified ? kUncertified : 0u);
+  return pc;
+}
 constexpr VkShaderStageFlags kPushStages = VK_SHADER_STAGE_VERTEX_BIT | VK_SHADER_STAGE_FRAGMENT_BIT;
 
 template <class T>
@@ -287,8 +328,14 @@ struct Renderer::Impl {
   DeviceHandle<VkDescriptorPool> pool;
   VkDescriptorSet set = VK_NULL_HANDLE;
   DeviceHandle<VkPipelineLayout> layout;
-  DeviceHandle<VkPipeline> mesh, line, disc;
+  DeviceHandle<VkPipeline> mesh, line, disc;  // mesh: graphics rasterizer only
   Buffer uv, index, segments;
+  // Compute rasterizer: the visibility buffer (a triangle id per sample), the queue
+  // of large triangles (indirect dispatch arguments, count, indices), the two
+  // passes' pipelines and their descriptor sets (destroyed before the pipelines).
+  Buffer vis, large;
+  ComputePipeline raster, resolve_pass;
+  DescriptorSet raster_set, resolve_set;
   Buffer readback;
   // Given geometry (render(positions, kappa, ...)): the layouts of the evaluation's
   // f and fields outputs, host-written.
@@ -316,27 +363,52 @@ Renderer::Renderer(const Context& context, int width, int height, const Renderer
   }
   VkPhysicalDeviceProperties props;
   vkGetPhysicalDeviceProperties(context.physical_device(), &props);
-  const VkSampleCountFlags supported = props.limits.framebufferColorSampleCounts;
-  Impl& r = *impl_;
-  for (int s : {8, 4, 2, 1})
-    if (s <= options.msaa_samples && (supported & static_cast<VkSampleCountFlags>(s))) {
-      samples_ = s;
-      r.samples = static_cast<VkSampleCountFlagBits>(s);
-      break;
-    }
-  const bool msaa = samples_ > 1;
+  const auto pick_samples = [&](VkSampleCountFlags supported) {
+    for (int s : {8, 4, 2, 1})
+      if (s <= options.msaa_samples && (supported & static_cast<VkSampleCountFlags>(s))) return s;
+    return 1;
+  };
   const uint32_t w = static_cast<uint32_t>(width), h = static_cast<uint32_t>(height);
+  // The compute rasterizer takes any of 1, 2, 4, 8 samples; its visibility buffer
+  // must fit in one storage buffer.
+  const int compute_samples = pick_samples(VK_SAMPLE_COUNT_1_BIT | VK_SAMPLE_COUNT_2_BIT | VK_SAMPLE_COUNT_4_BIT |
+                                           VK_SAMPLE_COUNT_8_BIT);
+  const uint64_t vis_bytes = uint64_t{w} * h * static_cast<uint64_t>(compute_samples) * sizeof(uint32_t);
+  const bool vis_fits = vis_bytes <= props.limits.maxStorageBufferRange;
+  switch (options.rasterizer) {
+    case Rasterizer::kCompute:
+      if (!vis_fits)
+        throw VulkanError("renderer: the compute rasterizer's visibility buffer (" + std::to_string(width) + " x " +
+                          std::to_string(height) + " pixels x " + std::to_string(compute_samples) + " samples x 4 bytes = " +
+                          std::to_string(vis_bytes) + " bytes) exceeds " + context.info().name +
+                          "'s maxStorageBufferRange (" + std::to_string(props.limits.maxStorageBufferRange) +
+                          "); use fewer samples, a smaller image or the graphics rasterizer");
+      rasterizer_ = Rasterizer::kCompute;
+      break;
+    case Rasterizer::kGraphics: rasterizer_ = Rasterizer::kGraphics; break;
+    case Rasterizer::kAuto:
+      rasterizer_ = !context.info().is_cpu() && vis_fits ? Rasterizer::kCompute : Rasterizer::kGraphics;
+      break;
+  }
+  const bool compute = rasterizer_ == Rasterizer::kCompute;
+  Impl& r = *impl_;
+  samples_ = compute ? compute_samples : pick_samples(props.limits.framebufferColorSampleCounts);
+  // The graphics passes' sample count: the compute path draws its lines and discs
+  // into the resolved image.
+  r.samples = compute ? VK_SAMPLE_COUNT_1_BIT : static_cast<VkSampleCountFlagBits>(samples_);
+  const bool msaa = r.samples != VK_SAMPLE_COUNT_1_BIT;
 
   // --- render pass: MSAA colour, resolved into the image we read back ------------------
+  // (Compute rasterizer: the resolved image itself, as the compute passes left it.)
   std::vector<VkAttachmentDescription> attachments;
   VkAttachmentDescription color{};
   color.format = kColorFormat;
   color.samples = r.samples;
-  color.loadOp = VK_ATTACHMENT_LOAD_OP_CLEAR;
+  color.loadOp = compute ? VK_ATTACHMENT_LOAD_OP_LOAD : VK_ATTACHMENT_LOAD_OP_CLEAR;
   color.storeOp = msaa ? VK_ATTACHMENT_STORE_OP_DONT_CARE : VK_ATTACHMENT_STORE_OP_STORE;
   color.stencilLoadOp = VK_ATTACHMENT_LOAD_OP_DONT_CARE;
   color.stencilStoreOp = VK_ATTACHMENT_STORE_OP_DONT_CARE;
-  color.initialLayout = VK_IMAGE_LAYOUT_UNDEFINED;
+  color.initialLayout = compute ? VK_IMAGE_LAYOUT_GENERAL : VK_IMAGE_LAYOUT_UNDEFINED;
   color.finalLayout = msaa ? VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL : VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL;
   attachments.push_back(color);
   if (msaa) {
@@ -362,6 +434,10 @@ Renderer::Renderer(const Context& context, int width, int height, const Renderer
   deps[0].dstStageMask = VK_PIPELINE_STAGE_COLOR_ATTACHMENT_OUTPUT_BIT;
   deps[0].srcAccessMask = 0;
   deps[0].dstAccessMask = VK_ACCESS_COLOR_ATTACHMENT_WRITE_BIT | VK_ACCESS_COLOR_ATTACHMENT_READ_BIT;
+  if (compute) {  // the compute passes' writes of the image before the lines and discs blend onto it
+    deps[0].srcStageMask = VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT;
+    deps[0].srcAccessMask = VK_ACCESS_SHADER_WRITE_BIT;
+  }
   // The rendered (resolved) image before the copy to the host.
   deps[1].srcSubpass = 0;
   deps[1].dstSubpass = VK_SUBPASS_EXTERNAL;
@@ -381,7 +457,9 @@ Renderer::Renderer(const Context& context, int width, int height, const Renderer
   check(vkCreateRenderPass(dev, &rp, nullptr, &raw_rp), "vkCreateRenderPass");
   r.render_pass = own<VkRenderPass>(dev, raw_rp, [](VkDevice d, VkRenderPass p) { vkDestroyRenderPass(d, p, nullptr); });
 
-  r.resolve = make_image(context, w, h, VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT,
+  r.resolve = make_image(context, w, h,
+                         VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT |
+                             (compute ? VkImageUsageFlags{VK_IMAGE_USAGE_STORAGE_BIT} : VkImageUsageFlags{0}),
                          VK_SAMPLE_COUNT_1_BIT, 1);
   std::vector<VkImageView> views;
   if (msaa) {
@@ -533,9 +611,23 @@ Renderer::Renderer(const Context& context, int width, int height, const Renderer
     return own<VkPipeline>(dev, p, [](VkDevice d, VkPipeline q) { vkDestroyPipeline(d, q, nullptr); });
   };
   using S = std::span<const uint32_t>;
-  r.mesh = make_pipeline(f64 ? S(render_mesh_vert_f64) : S(render_mesh_vert_f32), S(render_mesh_frag), true);
+  if (!compute)
+    r.mesh = make_pipeline(f64 ? S(render_mesh_vert_f64) : S(render_mesh_vert_f32), S(render_mesh_frag), true);
   r.line = make_pipeline(f64 ? S(render_line_vert_f64) : S(render_line_vert_f32), S(render_line_frag), false);
   r.disc = make_pipeline(f64 ? S(render_disc_vert_f64) : S(render_disc_vert_f32), S(render_disc_frag), false);
+
+  if (compute) {
+    // Bindings of shaders/raster_common.glsl.
+    constexpr VkDescriptorType kSb = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
+    const VkDescriptorType types[8] = {kSb, kSb, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, kSb, kSb, kSb, kSb,
+                                       VK_DESCRIPTOR_TYPE_STORAGE_IMAGE};
+    r.raster = ComputePipeline(context, f64 ? S(raster_f64) : S(raster_f32), types, sizeof(RasterPush));
+    r.resolve_pass = ComputePipeline(context, f64 ? S(raster_resolve_f64) : S(raster_resolve_f32), types, sizeof(RasterPush));
+    r.raster_set = DescriptorSet(context, r.raster);
+    r.resolve_set = DescriptorSet(context, r.resolve_pass);
+    r.vis = Buffer(context, vis_bytes, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT,
+                   MemoryUse::kDeviceLocal);
+  }
 }
 
 void Renderer::set_mesh(const TriMesh& mesh, std::span<const cd> handles) {
@@ -565,7 +657,12 @@ void Renderer::set_mesh(const TriMesh& mesh, std::span<const cd> handles) {
     if (!std::isfinite(handles[k].real()) || !std::isfinite(handles[k].imag()))
       throw InputError("renderer: handle " + std::to_string(k) + " is not finite");
   Impl& r = *impl_;
-  r.index = static_buffer(*context_, VK_BUFFER_USAGE_INDEX_BUFFER_BIT, indices.data(), indices.size() * sizeof(uint32_t));
+  r.index = static_buffer(*context_, VK_BUFFER_USAGE_INDEX_BUFFER_BIT | VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, indices.data(),
+                          indices.size() * sizeof(uint32_t));
+  if (rasterizer_ == Rasterizer::kCompute)
+    r.large = Buffer(*context_, (4 + mesh.triangles.size()) * sizeof(uint32_t),
+                     VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_INDIRECT_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT,
+                     MemoryUse::kDeviceLocal);
   r.segments = static_buffer(*context_, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, segments.data(),
                              segments.size() * sizeof(uint32_t));
   rest_vertices_ = mesh.vertices;
@@ -606,7 +703,8 @@ void Renderer::upload_uv() {
     uv.push_back(static_cast<float>((p.real() - x0) / (x1 - x0)));
     uv.push_back(static_cast<float>((y1 - p.imag()) / (y1 - y0)));  // row 0 is the top (y1)
   }
-  impl_->uv = static_buffer(*context_, VK_BUFFER_USAGE_VERTEX_BUFFER_BIT, uv.data(), uv.size() * sizeof(float));
+  impl_->uv = static_buffer(*context_, VK_BUFFER_USAGE_VERTEX_BUFFER_BIT | VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, uv.data(),
+                            uv.size() * sizeof(float));
   uv_dirty_ = false;
 }
 
@@ -774,27 +872,18 @@ void Renderer::record_frame(VkCommandBuffer cmd, const Cage* cage, const Harmoni
   const auto t0 = Clock::now();
   if (uv_dirty_) upload_uv();
   const VkDevice dev = context_->device();
-  RenderPush pc{};
-  const double s = view.pixels_per_unit;
-  pc.scale[0] = static_cast<float>(s);
-  pc.scale[1] = static_cast<float>(-s);
-  pc.offset[0] = static_cast<float>(view.pixel_center.real() - s * view.world_center.real());
-  pc.offset[1] = static_cast<float>(view.pixel_center.imag() + s * view.world_center.imag());
-  pc.viewport[0] = static_cast<float>(width_);
-  pc.viewport[1] = static_cast<float>(height_);
-  pc.dist_lo = static_cast<float>(style.distortion_lo);
-  pc.dist_inv = static_cast<float>(1.0 / (style.distortion_hi - style.distortion_lo));
-  pc.overlay_alpha = std::clamp(style.distortion_opacity, 0.0f, 1.0f);
+  RenderPush pc = frame_push(view, style, width_, height_, has_texture_);
   const float border = style.border_px > 0 ? style.border_px : std::max(4.0f, static_cast<float>(std::min(width_, height_)) / 64);
   const uint32_t border_px = std::min(static_cast<uint32_t>(std::lround(border)), static_cast<uint32_t>(std::min(width_, height_) / 2));
   const uint32_t w = static_cast<uint32_t>(width_), h = static_cast<uint32_t>(height_);
 
   if (cage) {
-    // The previous frame's vertex shaders read the evaluation's outputs; this frame rewrites them.
-    memory_barrier(cmd, VK_PIPELINE_STAGE_VERTEX_SHADER_BIT, 0, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, 0);
+    // The previous frame's shaders read the evaluation's outputs; this frame rewrites them.
+    constexpr VkPipelineStageFlags kReaders = VK_PIPELINE_STAGE_VERTEX_SHADER_BIT | VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT;
+    memory_barrier(cmd, kReaders, 0, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, 0);
     eval_.record_points(cmd, *cage, *map, points_);
-    memory_barrier(cmd, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_WRITE_BIT,
-                   VK_PIPELINE_STAGE_VERTEX_SHADER_BIT, VK_ACCESS_SHADER_READ_BIT);
+    memory_barrier(cmd, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_WRITE_BIT, kReaders,
+                   VK_ACCESS_SHADER_READ_BIT);
     if (mark_evaluation) context_->mark(cmd);
   }
   // (Given geometry was written by the host before this submission, which makes it visible.)
@@ -823,6 +912,8 @@ void Renderer::record_frame(VkCommandBuffer cmd, const Cage* cage, const Harmoni
     }
   }
   vkUpdateDescriptorSets(dev, 4, writes, 0, nullptr);
+  const bool compute = rasterizer_ == Rasterizer::kCompute;
+  if (compute) record_compute_raster(cmd, f, fields, view, style, style.uncertified ? border_px : 0u);
 
   const std::array<float, 4> bg = premultiplied(style.background);
   VkClearValue clear{};
@@ -837,11 +928,11 @@ void Renderer::record_frame(VkCommandBuffer cmd, const Cage* cage, const Harmoni
   vkCmdBeginRenderPass(cmd, &begin, VK_SUBPASS_CONTENTS_INLINE);
   vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, r.layout.get(), 0, 1, &r.set, 0, nullptr);
 
-  if (style.uncertified && border_px > 0) {
+  if (!compute && style.uncertified && border_px > 0) {
     VkClearAttachment red{};
     red.aspectMask = VK_IMAGE_ASPECT_COLOR_BIT;
     red.colorAttachment = 0;
-    red.clearValue.color = {{0.86f, 0.04f, 0.04f, 1.0f}};
+    std::memcpy(red.clearValue.color.float32, kBorderRed, sizeof kBorderRed);
     const uint32_t b = border_px;
     const VkClearRect rects[4] = {{{{0, 0}, {w, b}}, 0, 1},
                                   {{{0, static_cast<int32_t>(h - b)}, {w, b}}, 0, 1},
@@ -850,17 +941,16 @@ void Renderer::record_frame(VkCommandBuffer cmd, const Cage* cage, const Harmoni
     vkCmdClearAttachments(cmd, 1, &red, h > 2 * b ? 4 : 2, rects);
   }
 
-  // The shape.
-  pc.flags = (has_texture_ ? kTextured : 0u) | ((style.overlays & kOverlayDistortion) ? kDistortion : 0u) |
-             (style.uncertified ? kUncertified : 0u);
-  std::memcpy(pc.color, style.fill.data(), sizeof pc.color);
-  vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, r.mesh.get());
-  vkCmdPushConstants(cmd, r.layout.get(), kPushStages, 0, sizeof pc, &pc);
-  const VkDeviceSize zero = 0;
-  const VkBuffer uv = r.uv.handle();
-  vkCmdBindVertexBuffers(cmd, 0, 1, &uv, &zero);
-  vkCmdBindIndexBuffer(cmd, r.index.handle(), 0, VK_INDEX_TYPE_UINT32);
-  vkCmdDrawIndexed(cmd, static_cast<uint32_t>(index_count_), 1, 0, 0, 0);
+  if (!compute) {  // the shape
+    std::memcpy(pc.color, style.fill.data(), sizeof pc.color);
+    vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, r.mesh.get());
+    vkCmdPushConstants(cmd, r.layout.get(), kPushStages, 0, sizeof pc, &pc);
+    const VkDeviceSize zero = 0;
+    const VkBuffer uv = r.uv.handle();
+    vkCmdBindVertexBuffers(cmd, 0, 1, &uv, &zero);
+    vkCmdBindIndexBuffer(cmd, r.index.handle(), 0, VK_INDEX_TYPE_UINT32);
+    vkCmdDrawIndexed(cmd, static_cast<uint32_t>(index_count_), 1, 0, 0, 0);
+  }
 
   if ((style.overlays & kOverlayBoundary) && segment_count_ > 0 && style.boundary_width_px > 0) {
     std::memcpy(pc.color, style.boundary_color.data(), sizeof pc.color);
@@ -883,6 +973,84 @@ void Renderer::record_frame(VkCommandBuffer cmd, const Cage* cage, const Harmoni
   drawn_ = true;
   if (copy_out) record_copy_out(cmd);
   stats_.upload_ms = ms_since(t0);
+}
+
+void Renderer::record_compute_raster(VkCommandBuffer cmd, const Buffer& f, const Buffer& fields, const View& view,
+                                     const RenderStyle& style, uint32_t border_px) {
+  Impl& r = *impl_;
+  const RenderPush g = frame_push(view, style, width_, height_, has_texture_);
+  for (DescriptorSet* set : {&r.raster_set, &r.resolve_set}) {
+    set->bind(0, f);
+    set->bind(1, fields);
+    set->bind(2, (has_texture_ ? r.texture : r.white).view.get(), VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL, r.sampler.get());
+    set->bind(3, r.index);
+    set->bind(4, r.uv);
+    set->bind(5, r.vis);
+    set->bind(6, r.large);
+    set->bind(7, r.resolve.view.get(), VK_IMAGE_LAYOUT_GENERAL);
+  }
+  RasterPush pc{};
+  const std::array<float, 4> bg = premultiplied(style.background);
+  std::memcpy(pc.background, bg.data(), sizeof pc.background);
+  std::memcpy(pc.border_color, kBorderRed, sizeof pc.border_color);
+  std::memcpy(pc.fill, style.fill.data(), sizeof pc.fill);
+  std::memcpy(pc.scale, g.scale, sizeof pc.scale);
+  std::memcpy(pc.offset, g.offset, sizeof pc.offset);
+  pc.width = static_cast<uint32_t>(width_);
+  pc.height = static_cast<uint32_t>(height_);
+  pc.samples = static_cast<uint32_t>(samples_);
+  pc.triangles = static_cast<uint32_t>(index_count_ / 3);
+  pc.dist_lo = g.dist_lo;
+  pc.dist_inv = g.dist_inv;
+  pc.overlay_alpha = g.overlay_alpha;
+  pc.flags = g.flags;
+  pc.border_px = border_px;
+
+  // The previous frame's passes (and its lines, discs and copy out of the image) before
+  // this frame rewrites the visibility buffer, the queue and the image.
+  memory_barrier(cmd, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT | VK_PIPELINE_STAGE_DRAW_INDIRECT_BIT,
+                 VK_ACCESS_SHADER_WRITE_BIT, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_ACCESS_TRANSFER_WRITE_BIT);
+  VkImageMemoryBarrier to_general{};
+  to_general.sType = VK_STRUCTURE_TYPE_IMAGE_MEMORY_BARRIER;
+  to_general.srcAccessMask = VK_ACCESS_COLOR_ATTACHMENT_WRITE_BIT;
+  to_general.dstAccessMask = VK_ACCESS_SHADER_WRITE_BIT;
+  to_general.oldLayout = VK_IMAGE_LAYOUT_UNDEFINED;  // every pixel is rewritten
+  to_general.newLayout = VK_IMAGE_LAYOUT_GENERAL;
+  to_general.srcQueueFamilyIndex = to_general.dstQueueFamilyIndex = VK_QUEUE_FAMILY_IGNORED;
+  to_general.image = r.resolve.image.get();
+  to_general.subresourceRange = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 1, 0, 1};
+  vkCmdPipelineBarrier(cmd, VK_PIPELINE_STAGE_COLOR_ATTACHMENT_OUTPUT_BIT | VK_PIPELINE_STAGE_TRANSFER_BIT,
+                       VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, 0, 0, nullptr, 0, nullptr, 1, &to_general);
+  vkCmdFillBuffer(cmd, r.vis.handle(), 0, VK_WHOLE_SIZE, 0);
+  const uint32_t queue_header[4] = {0, 1, 1, 0};  // no groups yet (x, y, z), none queued
+  vkCmdUpdateBuffer(cmd, r.large.handle(), 0, sizeof queue_header, queue_header);
+  memory_barrier(cmd, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_ACCESS_TRANSFER_WRITE_BIT, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT,
+                 VK_ACCESS_SHADER_READ_BIT | VK_ACCESS_SHADER_WRITE_BIT);
+
+  // Triangles into the visibility buffer: pass 0 one invocation per triangle, pass 1
+  // the large ones pass 0 queued, one workgroup each.
+  const VkDescriptorSet raster_set = r.raster_set.handle();
+  vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, r.raster.pipeline());
+  vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, r.raster.layout(), 0, 1, &raster_set, 0, nullptr);
+  pc.pass = 0;
+  vkCmdPushConstants(cmd, r.raster.layout(), VK_SHADER_STAGE_COMPUTE_BIT, 0, sizeof pc, &pc);
+  const auto [gx, gy] = split_dispatch(*context_, (uint64_t{pc.triangles} + 63) / 64);
+  vkCmdDispatch(cmd, gx, gy, 1);
+  memory_barrier(cmd, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_WRITE_BIT,
+                 VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT | VK_PIPELINE_STAGE_DRAW_INDIRECT_BIT,
+                 VK_ACCESS_SHADER_READ_BIT | VK_ACCESS_SHADER_WRITE_BIT | VK_ACCESS_INDIRECT_COMMAND_READ_BIT);
+  pc.pass = 1;
+  vkCmdPushConstants(cmd, r.raster.layout(), VK_SHADER_STAGE_COMPUTE_BIT, 0, sizeof pc, &pc);
+  vkCmdDispatchIndirect(cmd, r.large.handle(), 0);
+  memory_barrier(cmd, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_WRITE_BIT, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT,
+                 VK_ACCESS_SHADER_READ_BIT);
+
+  // Shade, blend over the background, average the samples, write the image.
+  const VkDescriptorSet resolve_set = r.resolve_set.handle();
+  vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, r.resolve_pass.pipeline());
+  vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, r.resolve_pass.layout(), 0, 1, &resolve_set, 0, nullptr);
+  vkCmdPushConstants(cmd, r.resolve_pass.layout(), VK_SHADER_STAGE_COMPUTE_BIT, 0, sizeof pc, &pc);
+  vkCmdDispatch(cmd, (pc.width + 7) / 8, (pc.height + 7) / 8, 1);
 }
 
 void Renderer::record_copy_out(VkCommandBuffer cmd) {

@@ -737,10 +737,30 @@ DescriptorSet::DescriptorSet(const Context& context, const ComputePipeline& pipe
   check(vkAllocateDescriptorSets(dev, &alloc, &set_), "vkAllocateDescriptorSets");
 }
 
-void DescriptorSet::bind(uint32_t binding, const Buffer& buffer) {
+void DescriptorSet::check_binding(uint32_t binding) const {
   if (binding >= bindings_.size())
     throw VulkanError("DescriptorSet::bind: binding " + std::to_string(binding) + " does not exist (the set has " +
                       std::to_string(bindings_.size()) + ")");
+}
+
+void DescriptorSet::bind(uint32_t binding, VkImageView view, VkImageLayout layout, VkSampler sampler) {
+  check_binding(binding);
+  const VkDescriptorType type = bindings_[binding];
+  if (type != VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER && type != VK_DESCRIPTOR_TYPE_STORAGE_IMAGE)
+    throw VulkanError("DescriptorSet::bind: binding " + std::to_string(binding) + " is not an image binding");
+  VkDescriptorImageInfo info{type == VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER ? sampler : VK_NULL_HANDLE, view, layout};
+  VkWriteDescriptorSet w{};
+  w.sType = VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET;
+  w.dstSet = set_;
+  w.dstBinding = binding;
+  w.descriptorCount = 1;
+  w.descriptorType = type;
+  w.pImageInfo = &info;
+  vkUpdateDescriptorSets(context_->device(), 1, &w, 0, nullptr);
+}
+
+void DescriptorSet::bind(uint32_t binding, const Buffer& buffer) {
+  check_binding(binding);
   VkDescriptorBufferInfo info{buffer.handle(), 0, VK_WHOLE_SIZE};
   VkWriteDescriptorSet w{};
   w.sType = VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET;

@@ -4,7 +4,8 @@
 // rectangle), so the outline and every hole clip exactly where the map sends them;
 // optional overlays: the conformal-distortion colour map, the boundary as lines,
 // handles as discs; an uncertified frame gets a red tint and a red border. 4× MSAA,
-// resolved, read back as an RGBA image.
+// resolved, read back as an RGBA image. The triangles are rasterized by the graphics
+// pipeline or by compute shaders (Rasterizer), to the same picture.
 //
 // One command buffer per frame: the dense evaluation (DenseEvaluator::record_points)
 // computes f and the distortion at the mesh vertices and handles on the GPU, and the
@@ -89,8 +90,28 @@ struct UnweldedMesh {
 };
 UnweldedMesh unweld(const TriMesh& mesh);
 
+// How the shape's triangles become pixels. Both give the same picture (the tests
+// hold them to the golden images' tolerance): the same sample locations, one shading
+// per pixel and triangle at the pixel's centre, the same colours, blended over the
+// background and averaged. Lines and handle discs are drawn by the graphics pipeline
+// either way (on top of the resolved image in the compute path: their edges are
+// anti-aliased by analytic coverage). One difference: where the image of the shape
+// overlaps itself (a map that is not globally injective), the graphics path blends
+// a translucent texel over the layer below it, the compute path shows the top layer only.
+enum class Rasterizer {
+  kAuto,      // kCompute, except on CPU devices (lavapipe, whose rasterizer is faster
+              // there) or where the visibility buffer would not fit (see kCompute)
+  kGraphics,  // the graphics pipeline: the mesh drawn into an MSAA image, resolved
+  kCompute,   // compute shaders (shaders/raster*.comp): a visibility buffer of
+              // width × height × samples triangle ids (4 bytes each; must fit in one
+              // storage buffer, else VulkanError), then a shading and resolve pass.
+              // On compute GPUs whose drawing runs on a few units (the H100 draws on 2
+              // of 66 TPCs) it is several times faster.
+};
+
 struct RendererOptions {
-  int msaa_samples = 4;  // 1, 2, 4 or 8; lowered to what the device supports
+  int msaa_samples = 4;  // 1, 2, 4 or 8; the graphics path lowers it to what the device supports
+  Rasterizer rasterizer = Rasterizer::kAuto;
   DenseEvalOptions evaluation;  // precision of the positions (double where the device has it)
 };
 
@@ -112,6 +133,7 @@ class Renderer {
   int width() const { return width_; }
   int height() const { return height_; }
   int msaa_samples() const { return samples_; }
+  Rasterizer rasterizer() const { return rasterizer_; }  // kGraphics or kCompute, as chosen
   bool double_precision() const { return eval_.double_precision(); }
 
   // The rest mesh and the handles (rest positions), fixed for a scene. Throws
@@ -166,9 +188,14 @@ class Renderer {
                     const RenderStyle& style, bool copy_out, bool mark_evaluation);
   RgbaImage read_image();
   void record_copy_out(VkCommandBuffer cmd);
+  // The compute rasterizer's passes (Rasterizer::kCompute), up to the resolved image;
+  // f and fields: the positions and distortion to draw (evaluated or given).
+  void record_compute_raster(VkCommandBuffer cmd, const Buffer& f, const Buffer& fields, const View& view,
+                             const RenderStyle& style, uint32_t border_px);
 
   const Context* context_;
   int width_, height_, samples_ = 1;
+  Rasterizer rasterizer_ = Rasterizer::kGraphics;
   DenseEvaluator eval_;
   std::vector<cd> points_;  // mesh vertices, then handles
   std::vector<cd> rest_vertices_;

@@ -295,9 +295,13 @@ class DescriptorSet {
 
   // Points binding `binding` at the whole buffer (its type is the pipeline's).
   void bind(uint32_t binding, const Buffer& buffer);
+  // Points an image binding (combined image sampler: with `sampler`; storage image:
+  // sampler ignored) at `view` in `layout`.
+  void bind(uint32_t binding, VkImageView view, VkImageLayout layout, VkSampler sampler = VK_NULL_HANDLE);
   VkDescriptorSet handle() const { return set_; }
 
  private:
+  void check_binding(uint32_t binding) const;
   const Context* context_ = nullptr;
   std::vector<VkDescriptorType> bindings_;
   DeviceHandle<VkDescriptorPool> pool_;  // owns set_
