@@ -416,18 +416,9 @@ void run_compare(const Opts& o) {
   const std::string vulkan_device = ctx->info().name + " (" + ctx->info().type_name() + ")";
 
   // Texture: the scene's, or a checkerboard.
-  vk::RgbaImage texture;
-  std::array<double, 4> rect{};
-  const BoundingBox rest_box = bounding_box(scene.shape);
-  if (!scene.texture.empty()) {
-    const std::filesystem::path tp = scene.texture_path();
-    if (!std::filesystem::exists(tp))
-      throw InputError(o.scene + ": the texture file " + tp.string() + " does not exist (fix \"texture\" in the scene)");
-    texture = vk::read_png(tp);
-    rect = scene.texture_rect_or_bounds();
-  } else {
-    texture = vk::checker_texture(rest_box, rect);
-  }
+  const vk::SceneTexture scene_tex = vk::scene_texture(scene, o.scene);
+  const vk::RgbaImage& texture = scene_tex.image;
+  const std::array<double, 4>& rect = scene_tex.rect;
 
   Outputs out(o.out);
   out.open();

@@ -161,20 +161,10 @@ void run_render(const Opts& o) {
     throw InputError("--distortion-range needs two numbers LO HI with HI > LO");
 
   // Texture: the scene's, or a checkerboard with --no-texture / when the scene has none.
-  vk::RgbaImage texture;
-  std::array<double, 4> rect{};
-  const BoundingBox rest_box = bounding_box(scene.shape);
-  if (!o.no_texture && !scene.texture.empty()) {
-    const std::filesystem::path tp = scene.texture_path();
-    if (!std::filesystem::exists(tp))
-      throw InputError(o.scene + ": the texture file " + tp.string() +
-                       " does not exist (fix \"texture\" in the scene, or render with --no-texture)");
-    texture = vk::read_png(tp);
-    rect = scene.texture_rect_or_bounds();
-  } else {
-    if (!o.no_texture) std::printf("scene %s has no texture: drawing a checkerboard instead\n", scene.name.c_str());
-    texture = vk::checker_texture(rest_box, rect);
-  }
+  const vk::SceneTexture st = vk::scene_texture(scene, o.scene, o.no_texture, true, "render with --no-texture");
+  const vk::RgbaImage& texture = st.image;
+  const std::array<double, 4>& rect = st.rect;
+  if (st.checker && !o.no_texture) std::printf("scene %s has no texture: drawing a checkerboard instead\n", scene.name.c_str());
 
   // The rest mesh: boundary vertices on the shape's edges, so the outline clips exactly.
   TriangulateOptions to;

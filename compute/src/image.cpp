@@ -93,4 +93,21 @@ RgbaImage checker_texture(const BoundingBox& box, std::array<double, 4>& rect, b
   return img;
 }
 
+SceneTexture scene_texture(const Scene& scene, const std::string& scene_file, bool use_checker, bool grid_lines,
+                           const std::string& alternative) {
+  SceneTexture t;
+  if (use_checker || scene.texture.empty()) {
+    t.image = checker_texture(bounding_box(scene.shape), t.rect, grid_lines);
+    t.checker = true;
+    return t;
+  }
+  const std::filesystem::path path = scene.texture_path();
+  if (!std::filesystem::exists(path))
+    throw InputError(scene_file + ": the texture file " + path.string() + " does not exist (fix \"texture\" in the scene" +
+                     (alternative.empty() ? "" : ", or " + alternative) + ")");
+  t.image = read_png(path);
+  t.rect = scene.texture_rect_or_bounds();
+  return t;
+}
+
 }  // namespace hsi::vk

@@ -292,15 +292,10 @@ void App::load() {
     throw InputError("--backend cuda: no CUDA device");
 
   // Texture (or a checkerboard), render mesh, picking mesh and probe points.
-  const BoundingBox rest = bounding_box(scene_.shape);
-  if (!scene_.texture.empty()) {
-    const std::filesystem::path tp = scene_.texture_path();
-    if (!std::filesystem::exists(tp))
-      throw InputError(o_.scene + ": the texture file " + tp.string() + " does not exist (fix \"texture\" in the scene)");
-    texture_ = vk::read_png(tp);
-    texture_rect_ = scene_.texture_rect_or_bounds();
-  } else {
-    texture_ = vk::checker_texture(rest, texture_rect_, false);
+  {
+    vk::SceneTexture st = vk::scene_texture(scene_, o_.scene, false, false);
+    texture_ = std::move(st.image);
+    texture_rect_ = st.rect;
   }
   TriangulateOptions to;
   to.max_edge = edge_for_vertex_count(scene_.shape, o_.mesh_vertices);
