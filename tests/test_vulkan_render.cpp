@@ -740,6 +740,15 @@ TEST_CASE("render: no cracks between triangles, large triangles, the last triang
           for (int x = edge; x < W - edge; ++x) holes += img.at(x, y)[0] != 255 || img.at(x, y)[1] != 255;
         INFO(samples << " samples, " << c.nx << " x " << c.ny << " grid, jitter " << c.jitter);
         CHECK(holes == 0);
+        // Zoomed in 3x: every triangle at the image's sides is cut by it, and the
+        // image lies inside the shape: all of it is the fill.
+        vk::View zoomed = view;
+        zoomed.pixels_per_unit *= 3;
+        const vk::RgbaImage z = r.render(m.vertices, kappa, zoomed, style);
+        int off = 0;
+        for (int y = 0; y < H; ++y)
+          for (int x = 0; x < W; ++x) off += z.at(x, y)[0] != 255 || z.at(x, y)[1] != 255;
+        CHECK(off == 0);
       }
     }
     // Two overlapping triangles (given geometry, no texture): triangle 1 (κ = 2, the top
