@@ -4,7 +4,7 @@
 //
 // GLSL has no double-precision log or atan (GLSL.std.450 Log/Atan2 are 32-bit
 // only), so the double build carries its own: ln by frexp + the atanh series, atan
-// by two half-angle reductions + the Taylor series, both to about 1e-16 relative.
+// by fdlibm's reduction and polynomial, both to about 1e-16 relative.
 #ifndef HSI_COMPLEX_GLSL
 #define HSI_COMPLEX_GLSL
 
@@ -44,25 +44,26 @@ double hsi_ln(double x) {
   return double(e) * kLn2 + 2.0lf * s * (1.0lf + s2 * p);
 }
 
-// atan(t) for |t| <= 1: atan t = 2 atan(t / (1 + sqrt(1 + t^2))) twice brings
-// |t| below tan(pi/16) ~ 0.199, then the alternating series to t^25.
+// atan(t) for 0 <= t <= 1, as fdlibm's s_atan.c (to 1 ulp): t >= 7/16 is reduced
+// about 1/2 or 1 (atan t = atan c + atan((t - c)/(1 + t c)), one division), then
+// an odd minimax polynomial of degree 23 in the reduced argument.
 double hsi_atan_unit(double t) {
-  t = t / (1.0lf + sqrt(1.0lf + t * t));
-  t = t / (1.0lf + sqrt(1.0lf + t * t));
-  const double t2 = t * t;
-  double p = -1.0lf / 25.0lf;
-  p = p * t2 + 1.0lf / 23.0lf;
-  p = p * t2 - 1.0lf / 21.0lf;
-  p = p * t2 + 1.0lf / 19.0lf;
-  p = p * t2 - 1.0lf / 17.0lf;
-  p = p * t2 + 1.0lf / 15.0lf;
-  p = p * t2 - 1.0lf / 13.0lf;
-  p = p * t2 + 1.0lf / 11.0lf;
-  p = p * t2 - 1.0lf / 9.0lf;
-  p = p * t2 + 1.0lf / 7.0lf;
-  p = p * t2 - 1.0lf / 5.0lf;
-  p = p * t2 + 1.0lf / 3.0lf;
-  return 4.0lf * t * (1.0lf - t2 * p);
+  const bool near_half = t >= 0.4375lf && t < 0.6875lf, near_one = t >= 0.6875lf;
+  double x = t;
+  if (near_half) x = (2.0lf * t - 1.0lf) / (2.0lf + t);
+  if (near_one) x = (t - 1.0lf) / (t + 1.0lf);
+  const double z = x * x, w = z * z;
+  const double s1 = z * (3.33333333333329318027e-01lf + w * (1.42857142725034663711e-01lf +
+                    w * (9.09088713343650656196e-02lf + w * (6.66107313738753120669e-02lf +
+                    w * (4.97687799461593236017e-02lf + w * 1.62858201153657823623e-02lf)))));
+  const double s2 = w * (-1.99999999998764832476e-01lf + w * (-1.11111104054623557880e-01lf +
+                    w * (-7.69187620504482999495e-02lf + w * (-5.83357013379057348645e-02lf +
+                    w * -3.65315727442169155270e-02lf))));
+  if (!near_half && !near_one) return x - x * (s1 + s2);
+  // atan(1/2) and atan(1) = pi/4, each as a double plus the rest.
+  const double hi = near_half ? 4.63647609000806093515e-01lf : 7.85398163397448278999e-01lf;
+  const double lo = near_half ? 2.26987774529616870924e-17lf : 3.06161699786838301793e-17lf;
+  return hi - ((x * (s1 + s2) - lo) - x);
 }
 
 // Principal argument in (-pi, pi], as std::arg (0 at the origin).
