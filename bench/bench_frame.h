@@ -19,6 +19,7 @@
 
 #include "bench_render.h"
 #include "hsi/compute/dense_certify.h"
+#include "hsi/compute/diagnostics.h"
 #include "hsi/samples.h"
 
 namespace hsi::bench {
@@ -41,10 +42,18 @@ inline void frame_table(const vk::Context& ctx, const std::vector<std::string>& 
               "distortion; masked, on the device) | certify (double, the scene's samples) | evaluate the render\n"
               "mesh (~n^2/50 vertices) | draw the frame at n x n pixels (textured, boundary, %dx MSAA). Medians over\n"
               "the frames of the GPU time of each part (timestamps between them) and of the whole submission\n"
-              "(frame dev), after 1 s of warm-up frames (3 s before the first row); frame wall: host time,\n"
-              "recording, submission and wait included. precision: of the evaluation shaders (grid and mesh). raster: how the frame's triangles became pixels (renderer.h:\n"
-              "graphics pipeline, or compute shaders with a visibility buffer). pieces: certificate pieces per\n"
-              "segment (1: no subdivision).\n\n", msaa);
+              "(frame dev), after 2 s of saturating FMA work (GPUs) and 1 s of warm-up frames per row; frame\n"
+              "wall: host time, recording, submission and wait included. precision: of the evaluation shaders\n"
+              "(grid and mesh). raster: how the frame's triangles became pixels (renderer.h: graphics pipeline,\n"
+              "or compute shaders with a visibility buffer). pieces: certificate pieces per segment (1: no\n"
+              "subdivision).\n\n", msaa);
+  // Raise the clocks first: the frames alone keep an H100 only about half busy (the
+  // host waits for each), and after the CPU tables before them its clocks start from
+  // idle; 1 s of frames then left the first rows up to 2.3× slow. (Not on a CPU
+  // device, which has no such clocks and would take minutes.)
+  if (!ctx.info().is_cpu())
+    for (const auto until = Clock::now() + std::chrono::milliseconds(2000); Clock::now() < until;)
+      vk::probe_fma_throughput(ctx, false, 65536, 4096);
   std::printf("| scene | n | precision | raster | segments | pieces | eval ms | certify ms | mesh ms | draw ms | "
               "frame dev ms | frame wall ms | certified |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
   for (const std::string& path : scenes) {
@@ -79,11 +88,7 @@ inline void frame_table(const vk::Context& ctx, const std::vector<std::string>& 
         // i < 0: warm-up, at least 1 s of frames: a GPU idle during the host's work
         // before (the CPU reference of the other tables) runs at a low clock until its
         // power management sees sustained load (on the H100, ~5.7x slower).
-        // The first row waits longer: its clocks start from idle (the rows' frames at
-        // 1024² measured up to 2.3× slow after only 1 s).
-        static bool first_row = true;
-        const auto warm_until = Clock::now() + std::chrono::milliseconds(first_row ? 3000 : 1000);
-        first_row = false;
+        const auto warm_until = Clock::now() + std::chrono::milliseconds(1000);
         for (int i = -1; i < std::max(frames, 1); ++i) {
           if (i == -1 && Clock::now() < warm_until) i = -2;
           const auto t0 = Clock::now();
