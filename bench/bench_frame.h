@@ -25,7 +25,7 @@
 namespace hsi::bench {
 
 inline void frame_table(const vk::Context& ctx, const std::vector<std::string>& scenes, const std::vector<int>& sizes,
-                        int frames, int msaa, const std::vector<vk::Rasterizer>& rasterizers) {
+                        int frames, int msaa, const std::vector<vk::Rasterizer>& rasterizers, bool boundary = true) {
   using Clock = std::chrono::steady_clock;
   auto ms_since = [](Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); };
   auto median = [](std::vector<double> v) {
@@ -40,13 +40,13 @@ inline void frame_table(const vk::Context& ctx, const std::vector<std::string>& 
   if (ctx.info().timestamp_valid_bits == 0) std::printf("\nFrames: %s has no timestamps; device columns are -1\n", ctx.info().name.c_str());
   std::printf("\nFrames: one submission per frame: evaluate an n x n grid over the shape (f, f_z, f_zbar,\n"
               "distortion; masked, on the device) | certify (double, the scene's samples) | evaluate the render\n"
-              "mesh (~n^2/50 vertices) | draw the frame at n x n pixels (textured, boundary, %dx MSAA). Medians over\n"
+              "mesh (~n^2/50 vertices) | draw the frame at n x n pixels (textured, %s, %dx MSAA). Medians over\n"
               "the frames of the GPU time of each part (timestamps between them) and of the whole submission\n"
               "(frame dev), after 2 s of saturating FMA work (GPUs) and 1 s of warm-up frames per row; frame\n"
               "wall: host time, recording, submission and wait included. precision: of the evaluation shaders\n"
               "(grid and mesh). raster: how the frame's triangles became pixels (renderer.h: graphics pipeline,\n"
               "or compute shaders with a visibility buffer). pieces: certificate pieces per segment (1: no\n"
-              "subdivision).\n\n", msaa);
+              "subdivision).\n\n", boundary ? "boundary" : "no overlays", msaa);
   // Raise the clocks first: the frames alone keep an H100 only about half busy (the
   // host waits for each), and after the CPU tables before them its clocks start from
   // idle; 1 s of frames then left the first rows up to 2.3× slow. (Not on a CPU
@@ -80,7 +80,7 @@ inline void frame_table(const vk::Context& ctx, const std::vector<std::string>& 
         renderer.set_mesh(mesh, scene.handles);
         renderer.set_texture(v.texture, v.rect);
         vk::RenderStyle style;
-        style.overlays = vk::kOverlayBoundary;
+        style.overlays = boundary ? vk::kOverlayBoundary : vk::kOverlayNone;
         const vk::Grid grid = vk::Grid::covering(bounding_box(scene.shape), n, n);
         std::vector<double> parts[4], frame_dev, wall;
         bool certified = true;

@@ -208,6 +208,8 @@ int main(int argc, char** argv) {
   app.add_option("--raster", raster, "Rasterizer of the frame rows: graphics, compute, auto or both")
       ->check(CLI::IsMember({"graphics", "compute", "auto", "both"}))
       ->capture_default_str();
+  bool no_boundary = false;
+  app.add_flag("--no-boundary", no_boundary, "Frame rows: draw no boundary lines (the textured shape only)");
   int breakdown = 0;
   app.add_option("--eval-breakdown", breakdown, "Also time the grid evaluation's parts at this n (0: no)");
   bool probe = false;
@@ -291,7 +293,7 @@ int main(int argc, char** argv) {
     if (raster == "graphics" || raster == "both") rasterizers.push_back(vk::Rasterizer::kGraphics);
     if (raster == "compute" || raster == "both") rasterizers.push_back(vk::Rasterizer::kCompute);
     if (raster == "auto") rasterizers.push_back(vk::Rasterizer::kAuto);
-    bench::frame_table(*ctx, scenes, sizes, frame_frames, msaa, rasterizers);
+    bench::frame_table(*ctx, scenes, sizes, frame_frames, msaa, rasterizers, !no_boundary);
   }
   if (probe) probe_table(*ctx);
   if (breakdown > 0) eval_breakdown(*ctx, scenes, breakdown);

@@ -5,10 +5,13 @@
 // raster_resolve.comp then shades once per pixel and triangle. Unlike the graphics
 // path, this runs on every SM of a compute GPU (the H100 draws on 2 of its 66 TPCs).
 //
-// pass 0: one invocation per triangle; a triangle whose bounding box spans more
-//         than kLargePixels pixels is queued for pass 1 instead.
-// pass 1: (dispatched indirectly, group count written by pass 0) one workgroup per
-//         queued triangle, its invocations striding over the bounding box.
+// pass 0: kLanes invocations per triangle, striding over its bounding box's pixels
+//         (the atomics' latency is hidden by more of them in flight); a triangle
+//         whose bounding box spans more than kLargePixels pixels is queued for
+//         pass 1 instead.
+// pass 1: a fixed number of workgroups (they return at once when nothing was
+//         queued) take the queued triangles in turn, each workgroup's invocations
+//         striding over a triangle's bounding box.
 #version 460
 #extension GL_GOOGLE_include_directive : require
 #include "raster_common.glsl"
@@ -16,7 +19,7 @@
 layout(local_size_x = 64) in;
 
 const uint kLargePixels = 256u;
-const uint kMaxGroups = 65535u;  // the minimum maxComputeWorkGroupCount[0]: pass 1 loops past it
+const uint kLanes = 4u;  // renderer.cpp's kRasterLanes
 
 // cross(b - a, s - a), with the edge's endpoints taken in a canonical order
 // (lexicographic by position) so that two triangles sharing an edge compute
@@ -64,26 +67,26 @@ void cover_pixel(const Triangle T, uint x, uint y, uint id) {
     const vec2 s = vec2(float(x), float(y)) + sample_location(pc.samples, k);
     const float e0 = edge_function(T.p0, T.p1, s), e1 = edge_function(T.p1, T.p2, s), e2 = edge_function(T.p2, T.p0, s);
     const bool inside = T.orientation > 0.0 ? (e0 >= 0.0 && e1 >= 0.0 && e2 >= 0.0) : (e0 <= 0.0 && e1 <= 0.0 && e2 <= 0.0);
-    // The plain read only skips atomics that could not change anything.
-    if (inside && vis[base + k] < id) atomicMax(vis[base + k], id);
+    // The result unused: a reduction the invocation does not wait for.
+    if (inside) atomicMax(vis[base + k], id);
   }
 }
 
 void main() {
   if (pc.pass == 0u) {
-    const uint t = (gl_WorkGroupID.y * gl_NumWorkGroups.x + gl_WorkGroupID.x) * gl_WorkGroupSize.x + gl_LocalInvocationID.x;
+    const uint invocation =
+        (gl_WorkGroupID.y * gl_NumWorkGroups.x + gl_WorkGroupID.x) * gl_WorkGroupSize.x + gl_LocalInvocationID.x;
+    const uint t = invocation / kLanes, lane = invocation % kLanes;
     if (t >= pc.triangles) return;
     const Triangle T = load(t);
     if (T.empty) return;
     const uvec2 extent = T.hi - T.lo + 1u;
-    if (extent.x * extent.y > kLargePixels) {
-      const uint slot = atomicAdd(large_count, 1u);
-      large[slot] = t;
-      if (slot < kMaxGroups) atomicMax(groups_x, slot + 1u);
+    const uint n = extent.x * extent.y;
+    if (n > kLargePixels) {
+      if (lane == 0u) large[atomicAdd(large_count, 1u)] = t;
       return;
     }
-    for (uint y = T.lo.y; y <= T.hi.y; ++y)
-      for (uint x = T.lo.x; x <= T.hi.x; ++x) cover_pixel(T, x, y, t + 1u);
+    for (uint i = lane; i < n; i += kLanes) cover_pixel(T, T.lo.x + i % extent.x, T.lo.y + i / extent.x, t + 1u);
     return;
   }
   for (uint q = gl_WorkGroupID.x; q < large_count; q += gl_NumWorkGroups.x) {

@@ -29,7 +29,7 @@ layout(push_constant) uniform Push {
   float dist_lo, dist_inv, overlay_alpha;
   uint flags;         // kTextured | kDistortion | kUncertified (render_shade.glsl)
   uint border_px;
-  uint pass;          // raster.comp: 0 one invocation per triangle, 1 one workgroup per large triangle
+  uint pass;          // raster.comp: 0 a few invocations per triangle, 1 workgroups over the large triangles
 } pc;
 
 layout(std430, set = 0, binding = 0) readonly buffer F { Real2 f[]; };
@@ -40,9 +40,9 @@ layout(std430, set = 0, binding = 4) readonly buffer Uv { vec2 uv[]; };         
 // Per sample (pixel-major: (y * width + x) * samples + k): 1 + the index of the
 // last triangle covering it in drawing order (atomicMax), 0 for none.
 layout(std430, set = 0, binding = 5) buffer Visibility { uint vis[]; };
-// Triangles too large for one invocation: an indirect dispatch's group counts, then
-// how many were queued, then their indices.
-layout(std430, set = 0, binding = 6) buffer Large { uint groups_x, groups_y, groups_z, large_count, large[]; };
+// Triangles too large for one invocation: how many raster.comp's pass 0 queued, then
+// their indices.
+layout(std430, set = 0, binding = 6) buffer Large { uint large_count; uint large[]; };
 layout(set = 0, binding = 7, rgba8) uniform writeonly image2D out_image;
 
 // Pixel position (x right, y down from the top-left corner) of f[i]: render_common.glsl's pixel_of.

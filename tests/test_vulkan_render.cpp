@@ -725,12 +725,12 @@ TEST_CASE("render: no cracks between triangles, large triangles, the last triang
         int nx, ny;
         double jitter;
       };
+      vk::Renderer r(ctx, W, H, with_rasterizer(rasterizer, o));
       for (const Case c : {Case{128, 96, 0.0}, Case{101, 77, 0.45}, Case{4, 3, 0.3}}) {
         // Inset by a quarter pixel: no sample lies on the outer edge.
         const double inset = 0.25 / view.pixels_per_unit;
         const TriMesh m = grid_mesh(c.nx, c.ny, -1 + inset, -0.75 + inset, 1 - inset, 0.75 - inset, c.jitter);
-        vk::Renderer r(ctx, W, H, with_rasterizer(rasterizer, o));
-        r.set_mesh(m);
+        r.set_mesh(m);  // a new mesh for a renderer that has drawn others
         const std::vector<double> kappa(m.vertices.size(), 1.0);
         const vk::RgbaImage img = r.render(m.vertices, kappa, view, style);
         // (With 4 samples, the image's outermost pixels have samples outside the inset.)

@@ -69,6 +69,8 @@ struct RasterPush {
   uint32_t flags, border_px, pass;
 };
 static_assert(sizeof(RasterPush) == 104);
+// Invocations per triangle in raster.comp's pass 0 (kLanes there).
+constexpr uint32_t kRasterLanes = 4;
 // The uncertified frame's border (opaque, so premultiplied as it is).
 constexpr float kBorderRed[4] = {0.86f, 0.04f, 0.04f, 1.0f};
 
@@ -331,8 +333,8 @@ struct Renderer::Impl {
   DeviceHandle<VkPipeline> mesh, line, disc;  // mesh: graphics rasterizer only
   Buffer uv, index, segments;
   // Compute rasterizer: the visibility buffer (a triangle id per sample), the queue
-  // of large triangles (indirect dispatch arguments, count, indices), the two
-  // passes' pipelines and their descriptor sets (destroyed before the pipelines).
+  // of large triangles (count, indices), the two passes' pipelines and their
+  // descriptor sets (destroyed before the pipelines).
   Buffer vis, large;
   ComputePipeline raster, resolve_pass;
   DescriptorSet raster_set, resolve_set;
@@ -659,10 +661,10 @@ void Renderer::set_mesh(const TriMesh& mesh, std::span<const cd> handles) {
   Impl& r = *impl_;
   r.index = static_buffer(*context_, VK_BUFFER_USAGE_INDEX_BUFFER_BIT | VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, indices.data(),
                           indices.size() * sizeof(uint32_t));
-  if (rasterizer_ == Rasterizer::kCompute)
-    r.large = Buffer(*context_, (4 + mesh.triangles.size()) * sizeof(uint32_t),
-                     VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_INDIRECT_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT,
-                     MemoryUse::kDeviceLocal);
+  if (rasterizer_ == Rasterizer::kCompute) {
+    r.large = Buffer(*context_, (1 + mesh.triangles.size()) * sizeof(uint32_t),
+                     VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT, MemoryUse::kDeviceLocal);
+  }
   r.segments = static_buffer(*context_, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, segments.data(),
                              segments.size() * sizeof(uint32_t));
   rest_vertices_ = mesh.vertices;
@@ -913,7 +915,28 @@ void Renderer::record_frame(VkCommandBuffer cmd, const Cage* cage, const Harmoni
   }
   vkUpdateDescriptorSets(dev, 4, writes, 0, nullptr);
   const bool compute = rasterizer_ == Rasterizer::kCompute;
-  if (compute) record_compute_raster(cmd, f, fields, view, style, style.uncertified ? border_px : 0u);
+  const bool lines = (style.overlays & kOverlayBoundary) && segment_count_ > 0 && style.boundary_width_px > 0;
+  const bool discs = (style.overlays & kOverlayHandles) && handles > 0 && style.handle_radius_px > 0;
+  if (compute) {
+    record_compute_raster(cmd, f, fields, view, style, style.uncertified ? border_px : 0u);
+    if (!lines && !discs) {  // nothing to draw over it: no render pass, just the layout the copy out expects
+      VkImageMemoryBarrier to_src{};
+      to_src.sType = VK_STRUCTURE_TYPE_IMAGE_MEMORY_BARRIER;
+      to_src.srcAccessMask = VK_ACCESS_SHADER_WRITE_BIT;
+      to_src.dstAccessMask = VK_ACCESS_TRANSFER_READ_BIT;
+      to_src.oldLayout = VK_IMAGE_LAYOUT_GENERAL;
+      to_src.newLayout = VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL;
+      to_src.srcQueueFamilyIndex = to_src.dstQueueFamilyIndex = VK_QUEUE_FAMILY_IGNORED;
+      to_src.image = r.resolve.image.get();
+      to_src.subresourceRange = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 1, 0, 1};
+      vkCmdPipelineBarrier(cmd, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_PIPELINE_STAGE_TRANSFER_BIT, 0, 0, nullptr, 0,
+                           nullptr, 1, &to_src);
+      drawn_ = true;
+      if (copy_out) record_copy_out(cmd);
+      stats_.upload_ms = ms_since(t0);
+      return;
+    }
+  }
 
   const std::array<float, 4> bg = premultiplied(style.background);
   VkClearValue clear{};
@@ -952,14 +975,14 @@ void Renderer::record_frame(VkCommandBuffer cmd, const Cage* cage, const Harmoni
     vkCmdDrawIndexed(cmd, static_cast<uint32_t>(index_count_), 1, 0, 0, 0);
   }
 
-  if ((style.overlays & kOverlayBoundary) && segment_count_ > 0 && style.boundary_width_px > 0) {
+  if (lines) {
     std::memcpy(pc.color, style.boundary_color.data(), sizeof pc.color);
     pc.size_px = style.boundary_width_px;
     vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, r.line.get());
     vkCmdPushConstants(cmd, r.layout.get(), kPushStages, 0, sizeof pc, &pc);
     vkCmdDraw(cmd, 6, static_cast<uint32_t>(segment_count_), 0, 0);
   }
-  if ((style.overlays & kOverlayHandles) && handles > 0 && style.handle_radius_px > 0) {
+  if (discs) {
     std::memcpy(pc.color, style.handle_color.data(), sizeof pc.color);
     std::memcpy(pc.color2, style.handle_outline.data(), sizeof pc.color2);
     pc.size_px = style.handle_radius_px;
@@ -1008,8 +1031,12 @@ void Renderer::record_compute_raster(VkCommandBuffer cmd, const Buffer& f, const
 
   // The previous frame's passes (and its lines, discs and copy out of the image) before
   // this frame rewrites the visibility buffer, the queue and the image.
-  memory_barrier(cmd, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT | VK_PIPELINE_STAGE_DRAW_INDIRECT_BIT,
-                 VK_ACCESS_SHADER_WRITE_BIT, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_ACCESS_TRANSFER_WRITE_BIT);
+  memory_barrier(cmd, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_WRITE_BIT, VK_PIPELINE_STAGE_TRANSFER_BIT,
+                 VK_ACCESS_TRANSFER_WRITE_BIT);
+  vkCmdFillBuffer(cmd, r.vis.handle(), 0, VK_WHOLE_SIZE, 0);
+  vkCmdFillBuffer(cmd, r.large.handle(), 0, sizeof(uint32_t), 0);  // none queued
+  memory_barrier(cmd, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_ACCESS_TRANSFER_WRITE_BIT, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT,
+                 VK_ACCESS_SHADER_READ_BIT | VK_ACCESS_SHADER_WRITE_BIT);
   VkImageMemoryBarrier to_general{};
   to_general.sType = VK_STRUCTURE_TYPE_IMAGE_MEMORY_BARRIER;
   to_general.srcAccessMask = VK_ACCESS_COLOR_ATTACHMENT_WRITE_BIT;
@@ -1021,29 +1048,25 @@ void Renderer::record_compute_raster(VkCommandBuffer cmd, const Buffer& f, const
   to_general.subresourceRange = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 1, 0, 1};
   vkCmdPipelineBarrier(cmd, VK_PIPELINE_STAGE_COLOR_ATTACHMENT_OUTPUT_BIT | VK_PIPELINE_STAGE_TRANSFER_BIT,
                        VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, 0, 0, nullptr, 0, nullptr, 1, &to_general);
-  vkCmdFillBuffer(cmd, r.vis.handle(), 0, VK_WHOLE_SIZE, 0);
-  const uint32_t queue_header[4] = {0, 1, 1, 0};  // no groups yet (x, y, z), none queued
-  vkCmdUpdateBuffer(cmd, r.large.handle(), 0, sizeof queue_header, queue_header);
-  memory_barrier(cmd, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_ACCESS_TRANSFER_WRITE_BIT, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT,
-                 VK_ACCESS_SHADER_READ_BIT | VK_ACCESS_SHADER_WRITE_BIT);
 
   // Triangles into the visibility buffer: pass 0 one invocation per triangle, pass 1
-  // the large ones pass 0 queued, one workgroup each.
+  // the large ones pass 0 queued, a workgroup each in turn (a fixed dispatch, not an
+  // indirect one: most frames queue none, and its groups then return at once).
   const VkDescriptorSet raster_set = r.raster_set.handle();
   vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, r.raster.pipeline());
   vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, r.raster.layout(), 0, 1, &raster_set, 0, nullptr);
   pc.pass = 0;
   vkCmdPushConstants(cmd, r.raster.layout(), VK_SHADER_STAGE_COMPUTE_BIT, 0, sizeof pc, &pc);
-  const auto [gx, gy] = split_dispatch(*context_, (uint64_t{pc.triangles} + 63) / 64);
+  const auto [gx, gy] = split_dispatch(*context_, (uint64_t{pc.triangles} * kRasterLanes + 63) / 64);
   vkCmdDispatch(cmd, gx, gy, 1);
-  memory_barrier(cmd, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_WRITE_BIT,
-                 VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT | VK_PIPELINE_STAGE_DRAW_INDIRECT_BIT,
-                 VK_ACCESS_SHADER_READ_BIT | VK_ACCESS_SHADER_WRITE_BIT | VK_ACCESS_INDIRECT_COMMAND_READ_BIT);
+  constexpr VkAccessFlags kReadWrite = VK_ACCESS_SHADER_READ_BIT | VK_ACCESS_SHADER_WRITE_BIT;
+  memory_barrier(cmd, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_WRITE_BIT, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT,
+                 kReadWrite);
   pc.pass = 1;
   vkCmdPushConstants(cmd, r.raster.layout(), VK_SHADER_STAGE_COMPUTE_BIT, 0, sizeof pc, &pc);
-  vkCmdDispatchIndirect(cmd, r.large.handle(), 0);
+  vkCmdDispatch(cmd, std::min(pc.triangles, 1024u), 1, 1);
   memory_barrier(cmd, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_WRITE_BIT, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT,
-                 VK_ACCESS_SHADER_READ_BIT);
+                 kReadWrite);
 
   // Shade, blend over the background, average the samples, write the image.
   const VkDescriptorSet resolve_set = r.resolve_set.handle();
@@ -1054,7 +1077,8 @@ void Renderer::record_compute_raster(VkCommandBuffer cmd, const Buffer& f, const
 }
 
 void Renderer::record_copy_out(VkCommandBuffer cmd) {
-  // The render pass's dependency to VK_SUBPASS_EXTERNAL orders the resolve before this.
+  // The render pass's dependency to VK_SUBPASS_EXTERNAL (or, with nothing drawn over a compute-rasterized
+  // image, its layout barrier) orders the image's writes before this.
   VkBufferImageCopy copy{};
   copy.imageSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, 1};
   copy.imageExtent = {static_cast<uint32_t>(width_), static_cast<uint32_t>(height_), 1};

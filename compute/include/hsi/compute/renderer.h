@@ -101,7 +101,7 @@ UnweldedMesh unweld(const TriMesh& mesh);
 enum class Rasterizer {
   kAuto,      // kCompute, except on CPU devices (lavapipe, whose rasterizer is faster
               // there) or where the visibility buffer would not fit (see kCompute).
-              // Measured on an H100 only: 2-4x faster from 1024² up, slower at 256²
+              // Measured on an H100 only: 5-9x faster from 1024² up, close at 256²
   kGraphics,  // the graphics pipeline: the mesh drawn into an MSAA image, resolved
   kCompute,   // compute shaders (shaders/raster*.comp): a visibility buffer of
               // width × height × samples triangle ids (4 bytes each; must fit in one
