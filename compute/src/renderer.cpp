@@ -195,22 +195,6 @@ Buffer static_buffer(const Context& ctx, VkBufferUsageFlags usage, const void* d
   return b;
 }
 
-void image_barrier(VkCommandBuffer cmd, VkImage image, uint32_t mip, uint32_t count, VkImageLayout from,
-                   VkImageLayout to, VkAccessFlags src_access, VkAccessFlags dst_access, VkPipelineStageFlags src_stage,
-                   VkPipelineStageFlags dst_stage) {
-  VkImageMemoryBarrier b{};
-  b.sType = VK_STRUCTURE_TYPE_IMAGE_MEMORY_BARRIER;
-  b.srcAccessMask = src_access;
-  b.dstAccessMask = dst_access;
-  b.oldLayout = from;
-  b.newLayout = to;
-  b.srcQueueFamilyIndex = VK_QUEUE_FAMILY_IGNORED;
-  b.dstQueueFamilyIndex = VK_QUEUE_FAMILY_IGNORED;
-  b.image = image;
-  b.subresourceRange = {VK_IMAGE_ASPECT_COLOR_BIT, mip, count, 0, 1};
-  vkCmdPipelineBarrier(cmd, src_stage, dst_stage, 0, 0, nullptr, 0, nullptr, 1, &b);
-}
-
 // A sampled, mipmapped texture from straight-alpha RGBA (premultiplied on upload,
 // mip levels by linear blits of the premultiplied colours).
 Image make_texture(const Context& ctx, const RgbaImage& src) {
@@ -230,17 +214,17 @@ Image make_texture(const Context& ctx, const RgbaImage& src) {
   staging.write(pre.data(), pre.size());
   const VkImage image = tex.image.get();
   ctx.submit_and_wait([&](VkCommandBuffer cmd) {
-    image_barrier(cmd, image, 0, mips, VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, 0,
-                  VK_ACCESS_TRANSFER_WRITE_BIT, VK_PIPELINE_STAGE_TOP_OF_PIPE_BIT, VK_PIPELINE_STAGE_TRANSFER_BIT);
+    image_barrier(cmd, image, VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, 0,
+                  VK_ACCESS_TRANSFER_WRITE_BIT, VK_PIPELINE_STAGE_TOP_OF_PIPE_BIT, VK_PIPELINE_STAGE_TRANSFER_BIT, 0, mips);
     VkBufferImageCopy copy{};
     copy.imageSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, 1};
     copy.imageExtent = {w, h, 1};
     vkCmdCopyBufferToImage(cmd, staging.handle(), image, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, 1, &copy);
     int32_t mw = static_cast<int32_t>(w), mh = static_cast<int32_t>(h);
     for (uint32_t level = 1; level < mips; ++level) {
-      image_barrier(cmd, image, level - 1, 1, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL,
+      image_barrier(cmd, image, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL,
                     VK_ACCESS_TRANSFER_WRITE_BIT, VK_ACCESS_TRANSFER_READ_BIT, VK_PIPELINE_STAGE_TRANSFER_BIT,
-                    VK_PIPELINE_STAGE_TRANSFER_BIT);
+                    VK_PIPELINE_STAGE_TRANSFER_BIT, level - 1, 1);
       const int32_t nw = std::max(1, mw / 2), nh = std::max(1, mh / 2);
       VkImageBlit blit{};
       blit.srcSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, level - 1, 0, 1};
@@ -253,12 +237,12 @@ Image make_texture(const Context& ctx, const RgbaImage& src) {
       mh = nh;
     }
     if (mips > 1)
-      image_barrier(cmd, image, 0, mips - 1, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL,
-                    VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL, VK_ACCESS_TRANSFER_READ_BIT, VK_ACCESS_SHADER_READ_BIT,
-                    VK_PIPELINE_STAGE_TRANSFER_BIT, VK_PIPELINE_STAGE_FRAGMENT_SHADER_BIT);
-    image_barrier(cmd, image, mips - 1, 1, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL,
+      image_barrier(cmd, image, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL,
+                    VK_ACCESS_TRANSFER_READ_BIT, VK_ACCESS_SHADER_READ_BIT, VK_PIPELINE_STAGE_TRANSFER_BIT,
+                    VK_PIPELINE_STAGE_FRAGMENT_SHADER_BIT, 0, mips - 1);
+    image_barrier(cmd, image, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL,
                   VK_ACCESS_TRANSFER_WRITE_BIT, VK_ACCESS_SHADER_READ_BIT, VK_PIPELINE_STAGE_TRANSFER_BIT,
-                  VK_PIPELINE_STAGE_FRAGMENT_SHADER_BIT);
+                  VK_PIPELINE_STAGE_FRAGMENT_SHADER_BIT, mips - 1, 1);
   });
   return tex;
 }
@@ -920,17 +904,9 @@ void Renderer::record_frame(VkCommandBuffer cmd, const Cage* cage, const Harmoni
   if (compute) {
     record_compute_raster(cmd, f, fields, view, style, style.uncertified ? border_px : 0u);
     if (!lines && !discs) {  // nothing to draw over it: no render pass, just the layout the copy out expects
-      VkImageMemoryBarrier to_src{};
-      to_src.sType = VK_STRUCTURE_TYPE_IMAGE_MEMORY_BARRIER;
-      to_src.srcAccessMask = VK_ACCESS_SHADER_WRITE_BIT;
-      to_src.dstAccessMask = VK_ACCESS_TRANSFER_READ_BIT;
-      to_src.oldLayout = VK_IMAGE_LAYOUT_GENERAL;
-      to_src.newLayout = VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL;
-      to_src.srcQueueFamilyIndex = to_src.dstQueueFamilyIndex = VK_QUEUE_FAMILY_IGNORED;
-      to_src.image = r.resolve.image.get();
-      to_src.subresourceRange = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 1, 0, 1};
-      vkCmdPipelineBarrier(cmd, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_PIPELINE_STAGE_TRANSFER_BIT, 0, 0, nullptr, 0,
-                           nullptr, 1, &to_src);
+      image_barrier(cmd, r.resolve.image.get(), VK_IMAGE_LAYOUT_GENERAL, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL,
+                    VK_ACCESS_SHADER_WRITE_BIT, VK_ACCESS_TRANSFER_READ_BIT, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT,
+                    VK_PIPELINE_STAGE_TRANSFER_BIT);
       drawn_ = true;
       if (copy_out) record_copy_out(cmd);
       stats_.upload_ms = ms_since(t0);
@@ -1037,17 +1013,11 @@ void Renderer::record_compute_raster(VkCommandBuffer cmd, const Buffer& f, const
   vkCmdFillBuffer(cmd, r.large.handle(), 0, sizeof(uint32_t), 0);  // none queued
   memory_barrier(cmd, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_ACCESS_TRANSFER_WRITE_BIT, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT,
                  VK_ACCESS_SHADER_READ_BIT | VK_ACCESS_SHADER_WRITE_BIT);
-  VkImageMemoryBarrier to_general{};
-  to_general.sType = VK_STRUCTURE_TYPE_IMAGE_MEMORY_BARRIER;
-  to_general.srcAccessMask = VK_ACCESS_COLOR_ATTACHMENT_WRITE_BIT;
-  to_general.dstAccessMask = VK_ACCESS_SHADER_WRITE_BIT;
-  to_general.oldLayout = VK_IMAGE_LAYOUT_UNDEFINED;  // every pixel is rewritten
-  to_general.newLayout = VK_IMAGE_LAYOUT_GENERAL;
-  to_general.srcQueueFamilyIndex = to_general.dstQueueFamilyIndex = VK_QUEUE_FAMILY_IGNORED;
-  to_general.image = r.resolve.image.get();
-  to_general.subresourceRange = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 1, 0, 1};
-  vkCmdPipelineBarrier(cmd, VK_PIPELINE_STAGE_COLOR_ATTACHMENT_OUTPUT_BIT | VK_PIPELINE_STAGE_TRANSFER_BIT,
-                       VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, 0, 0, nullptr, 0, nullptr, 1, &to_general);
+  // From UNDEFINED: every pixel is rewritten.
+  image_barrier(cmd, r.resolve.image.get(), VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_GENERAL,
+                VK_ACCESS_COLOR_ATTACHMENT_WRITE_BIT, VK_ACCESS_SHADER_WRITE_BIT,
+                VK_PIPELINE_STAGE_COLOR_ATTACHMENT_OUTPUT_BIT | VK_PIPELINE_STAGE_TRANSFER_BIT,
+                VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT);
 
   // Triangles into the visibility buffer: pass 0 one invocation per triangle, pass 1
   // the large ones pass 0 queued, a workgroup each in turn (a fixed dispatch, not an

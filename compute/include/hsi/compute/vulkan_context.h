@@ -315,5 +315,10 @@ std::pair<uint32_t, uint32_t> split_dispatch(const Context& context, uint64_t gr
 // A global memory barrier: `src_access` by `src_stage` before `dst_access` by `dst_stage`.
 void memory_barrier(VkCommandBuffer cmd, VkPipelineStageFlags src_stage, VkAccessFlags src_access,
                     VkPipelineStageFlags dst_stage, VkAccessFlags dst_access);
+// A colour image's barrier and layout transition `from` -> `to` over mip levels
+// [first_mip, first_mip + mips): `src_access` by `src_stage` before `dst_access` by `dst_stage`.
+void image_barrier(VkCommandBuffer cmd, VkImage image, VkImageLayout from, VkImageLayout to, VkAccessFlags src_access,
+                   VkAccessFlags dst_access, VkPipelineStageFlags src_stage, VkPipelineStageFlags dst_stage,
+                   uint32_t first_mip = 0, uint32_t mips = 1);
 
 }  // namespace hsi::vk
