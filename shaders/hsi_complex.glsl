@@ -8,10 +8,9 @@
 #ifndef HSI_COMPLEX_GLSL
 #define HSI_COMPLEX_GLSL
 
+#include "hsi_real.glsl"
+
 #if HSI_REAL_DOUBLE
-#define Real double
-#define Real2 dvec2
-#define Real4 dvec4
 const double kPi = 3.14159265358979323846264338328lf;
 const double kHalfPi = 1.57079632679489661923132169164lf;
 const double kInv2Pi = 0.159154943091895335768883763373lf;
@@ -76,9 +75,6 @@ double hsi_atan2(double y, double x) {
   return y < 0.0lf ? -a : a;
 }
 #else
-#define Real float
-#define Real2 vec2
-#define Real4 vec4
 const float kPi = 3.14159265358979323846;
 const float kHalfPi = 1.57079632679489661923;
 const float kInv2Pi = 0.159154943091895335769;

@@ -7,15 +7,8 @@
 #ifndef HSI_RASTER_COMMON_GLSL
 #define HSI_RASTER_COMMON_GLSL
 
+#include "hsi_real.glsl"
 #include "render_shade.glsl"
-
-#if HSI_REAL_DOUBLE
-#define Real2 dvec2
-#define Real4 dvec4
-#else
-#define Real2 vec2
-#define Real4 vec4
-#endif
 
 layout(push_constant) uniform Push {
   vec4 background;    // premultiplied: where no triangle covers a sample

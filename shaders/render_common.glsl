@@ -6,17 +6,8 @@
 #ifndef HSI_RENDER_COMMON_GLSL
 #define HSI_RENDER_COMMON_GLSL
 
+#include "hsi_real.glsl"
 #include "render_shade.glsl"
-
-#ifdef HSI_REAL_DOUBLE
-#if HSI_REAL_DOUBLE
-#define Real2 dvec2
-#define Real4 dvec4
-#else
-#define Real2 vec2
-#define Real4 vec4
-#endif
-#endif
 
 layout(push_constant) uniform Push {
   vec4 color;           // straight RGBA: flat fill (mesh), line colour, disc fill
