@@ -152,10 +152,8 @@ DenseCertifier::DenseCertifier(const Context& context, const Shape& shape, const
   pc.holes_at = static_cast<uint32_t>(cage.vertex_count());
   const auto [gx, gy] = split_dispatch(context, (entries + kWorkgroupSize - 1) / kWorkgroupSize);
   context.submit_and_wait([&](VkCommandBuffer cmd) {
-    vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, pipeline_.pipeline());
-    const VkDescriptorSet set = set_.handle();
-    vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, pipeline_.layout(), 0, 1, &set, 0, nullptr);
-    vkCmdPushConstants(cmd, pipeline_.layout(), VK_SHADER_STAGE_COMPUTE_BIT, 0, sizeof(pc), &pc);
+    pipeline_.bind(cmd, set_);
+    pipeline_.push(cmd, &pc, sizeof(pc));
     vkCmdDispatch(cmd, gx, gy, 1);
   });
 }
@@ -271,12 +269,10 @@ void DenseCertifier::record(VkCommandBuffer cmd, const HarmonicMap& map, const C
     vkCmdFillBuffer(cmd, control_.handle(), 0, VK_WHOLE_SIZE, 0u);
     memory_barrier(cmd, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_ACCESS_TRANSFER_WRITE_BIT,
                    VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_READ_BIT | VK_ACCESS_SHADER_WRITE_BIT);
-    vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, pipeline_.pipeline());
-    const VkDescriptorSet set = set_.handle();
-    vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, pipeline_.layout(), 0, 1, &set, 0, nullptr);
+    pipeline_.bind(cmd, set_);
     PushConstants p = pc;
     p.mode = basis_ ? kModeBasisValues : kModeValues;
-    vkCmdPushConstants(cmd, pipeline_.layout(), VK_SHADER_STAGE_COMPUTE_BIT, 0, sizeof(p), &p);
+    pipeline_.push(cmd, &p, sizeof(p));
     if (basis_)
       vkCmdDispatch(cmd, vx, vy, 1);
     else
@@ -284,7 +280,7 @@ void DenseCertifier::record(VkCommandBuffer cmd, const HarmonicMap& map, const C
     memory_barrier(cmd, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_WRITE_BIT,
                    VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_READ_BIT | VK_ACCESS_SHADER_WRITE_BIT);
     p.mode = kModeSegments;
-    vkCmdPushConstants(cmd, pipeline_.layout(), VK_SHADER_STAGE_COMPUTE_BIT, 0, sizeof(p), &p);
+    pipeline_.push(cmd, &p, sizeof(p));
     vkCmdDispatch(cmd, gx, gy, 1);
     if (readback_) {
       memory_barrier(cmd, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_WRITE_BIT,

@@ -302,21 +302,19 @@ DenseField DenseEvaluator::run(const Job& job) {
 
   // first: also the row pass (the rows serve every pass of the grid).
   auto record_dispatch = [&](VkCommandBuffer cmd, uint32_t n, bool first) {
-    vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, pipeline_.pipeline());
-    const VkDescriptorSet set = set_.handle();
-    vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, pipeline_.layout(), 0, 1, &set, 0, nullptr);
+    pipeline_.bind(cmd, set_);
     if (row_mask && first) {
       PushConstants rp = pc;
       rp.flags |= kRowPass;
       rp.count = rows;
-      vkCmdPushConstants(cmd, pipeline_.layout(), VK_SHADER_STAGE_COMPUTE_BIT, 0, sizeof(rp), &rp);
+      pipeline_.push(cmd, &rp, sizeof(rp));
       const auto [rx, ry] = split_dispatch(ctx, (rows + kWorkgroupSize - 1) / kWorkgroupSize);
       vkCmdDispatch(cmd, rx, ry, 1);
       memory_barrier(cmd, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_WRITE_BIT,
                      VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_READ_BIT);
     }
     const auto [gx, gy] = split_dispatch(ctx, (n + kWorkgroupSize - 1) / kWorkgroupSize);
-    vkCmdPushConstants(cmd, pipeline_.layout(), VK_SHADER_STAGE_COMPUTE_BIT, 0, sizeof(pc), &pc);
+    pipeline_.push(cmd, &pc, sizeof(pc));
     vkCmdDispatch(cmd, gx, gy, 1);
   };
   if (job.record_into) {

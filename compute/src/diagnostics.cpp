@@ -30,10 +30,8 @@ ThroughputProbe probe_fma_throughput(const Context& context, bool double_precisi
   for (int pass = 0; pass < 2; ++pass) {
     const auto t0 = std::chrono::steady_clock::now();
     context.submit_and_wait([&](VkCommandBuffer cmd) {
-      vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, pipeline.pipeline());
-      const VkDescriptorSet s = set.handle();
-      vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, pipeline.layout(), 0, 1, &s, 0, nullptr);
-      vkCmdPushConstants(cmd, pipeline.layout(), VK_SHADER_STAGE_COMPUTE_BIT, 0, sizeof(uint32_t), &iterations);
+      pipeline.bind(cmd, set);
+      pipeline.push(cmd, &iterations, sizeof(uint32_t));
       vkCmdDispatch(cmd, gx, gy, 1);
     });
     const double wall = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();

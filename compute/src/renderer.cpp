@@ -874,9 +874,25 @@ void Renderer::record_frame(VkCommandBuffer cmd, const Cage* cage, const Harmoni
   }
   // (Given geometry was written by the host before this submission, which makes it visible.)
 
-  // The set is not bound in any pending command buffer: point it at this frame's buffers.
   const Buffer& f = cage ? eval_.device_output(0) : r.given_f;
   const Buffer& fields = cage ? eval_.device_output(3) : r.given_fields;
+  const bool compute = rasterizer_ == Rasterizer::kCompute;
+  const bool lines = (style.overlays & kOverlayBoundary) && segment_count_ > 0 && style.boundary_width_px > 0;
+  const bool discs = (style.overlays & kOverlayHandles) && handles > 0 && style.handle_radius_px > 0;
+  if (compute) {
+    record_compute_raster(cmd, f, fields, view, style, style.uncertified ? border_px : 0u);
+    if (!lines && !discs) {  // nothing to draw over it: no render pass, just the layout the copy out expects
+      image_barrier(cmd, r.resolve.image.get(), VK_IMAGE_LAYOUT_GENERAL, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL,
+                    VK_ACCESS_SHADER_WRITE_BIT, VK_ACCESS_TRANSFER_READ_BIT, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT,
+                    VK_PIPELINE_STAGE_TRANSFER_BIT);
+      drawn_ = true;
+      if (copy_out) record_copy_out(cmd);
+      stats_.upload_ms = ms_since(t0);
+      return;
+    }
+  }
+
+  // The graphics set is not bound in any pending command buffer: point it at this frame's buffers.
   const VkDescriptorBufferInfo infos[3] = {{f.handle(), 0, VK_WHOLE_SIZE},
                                            {fields.handle(), 0, VK_WHOLE_SIZE},
                                            {r.segments.handle(), 0, VK_WHOLE_SIZE}};
@@ -898,21 +914,6 @@ void Renderer::record_frame(VkCommandBuffer cmd, const Cage* cage, const Harmoni
     }
   }
   vkUpdateDescriptorSets(dev, 4, writes, 0, nullptr);
-  const bool compute = rasterizer_ == Rasterizer::kCompute;
-  const bool lines = (style.overlays & kOverlayBoundary) && segment_count_ > 0 && style.boundary_width_px > 0;
-  const bool discs = (style.overlays & kOverlayHandles) && handles > 0 && style.handle_radius_px > 0;
-  if (compute) {
-    record_compute_raster(cmd, f, fields, view, style, style.uncertified ? border_px : 0u);
-    if (!lines && !discs) {  // nothing to draw over it: no render pass, just the layout the copy out expects
-      image_barrier(cmd, r.resolve.image.get(), VK_IMAGE_LAYOUT_GENERAL, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL,
-                    VK_ACCESS_SHADER_WRITE_BIT, VK_ACCESS_TRANSFER_READ_BIT, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT,
-                    VK_PIPELINE_STAGE_TRANSFER_BIT);
-      drawn_ = true;
-      if (copy_out) record_copy_out(cmd);
-      stats_.upload_ms = ms_since(t0);
-      return;
-    }
-  }
 
   const std::array<float, 4> bg = premultiplied(style.background);
   VkClearValue clear{};
@@ -1019,30 +1020,26 @@ void Renderer::record_compute_raster(VkCommandBuffer cmd, const Buffer& f, const
                 VK_PIPELINE_STAGE_COLOR_ATTACHMENT_OUTPUT_BIT | VK_PIPELINE_STAGE_TRANSFER_BIT,
                 VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT);
 
-  // Triangles into the visibility buffer: pass 0 one invocation per triangle, pass 1
-  // the large ones pass 0 queued, a workgroup each in turn (a fixed dispatch, not an
-  // indirect one: most frames queue none, and its groups then return at once).
-  const VkDescriptorSet raster_set = r.raster_set.handle();
-  vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, r.raster.pipeline());
-  vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, r.raster.layout(), 0, 1, &raster_set, 0, nullptr);
+  // Triangles into the visibility buffer: pass 0 kRasterLanes invocations per triangle,
+  // pass 1 the large ones pass 0 queued, a workgroup each in turn (a fixed dispatch,
+  // not an indirect one: most frames queue none, and its groups then return at once).
+  r.raster.bind(cmd, r.raster_set);
   pc.pass = 0;
-  vkCmdPushConstants(cmd, r.raster.layout(), VK_SHADER_STAGE_COMPUTE_BIT, 0, sizeof pc, &pc);
+  r.raster.push(cmd, &pc, sizeof pc);
   const auto [gx, gy] = split_dispatch(*context_, (uint64_t{pc.triangles} * kRasterLanes + 63) / 64);
   vkCmdDispatch(cmd, gx, gy, 1);
   constexpr VkAccessFlags kReadWrite = VK_ACCESS_SHADER_READ_BIT | VK_ACCESS_SHADER_WRITE_BIT;
   memory_barrier(cmd, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_WRITE_BIT, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT,
                  kReadWrite);
   pc.pass = 1;
-  vkCmdPushConstants(cmd, r.raster.layout(), VK_SHADER_STAGE_COMPUTE_BIT, 0, sizeof pc, &pc);
+  r.raster.push(cmd, &pc, sizeof pc);
   vkCmdDispatch(cmd, std::min(pc.triangles, 1024u), 1, 1);
   memory_barrier(cmd, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_WRITE_BIT, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT,
                  kReadWrite);
 
   // Shade, blend over the background, average the samples, write the image.
-  const VkDescriptorSet resolve_set = r.resolve_set.handle();
-  vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, r.resolve_pass.pipeline());
-  vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, r.resolve_pass.layout(), 0, 1, &resolve_set, 0, nullptr);
-  vkCmdPushConstants(cmd, r.resolve_pass.layout(), VK_SHADER_STAGE_COMPUTE_BIT, 0, sizeof pc, &pc);
+  r.resolve_pass.bind(cmd, r.resolve_set);
+  r.resolve_pass.push(cmd, &pc, sizeof pc);
   vkCmdDispatch(cmd, (pc.width + 7) / 8, (pc.height + 7) / 8, 1);
 }
 

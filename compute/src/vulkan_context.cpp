@@ -725,6 +725,16 @@ ComputePipeline::ComputePipeline(const Context& context, std::span<const uint32_
 
 // --- descriptor set -------------------------------------------------------------------
 
+void ComputePipeline::bind(VkCommandBuffer cmd, const DescriptorSet& set) const {
+  vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, pipeline_.get());
+  const VkDescriptorSet s = set.handle();
+  vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, layout_.get(), 0, 1, &s, 0, nullptr);
+}
+
+void ComputePipeline::push(VkCommandBuffer cmd, const void* data, uint32_t bytes) const {
+  vkCmdPushConstants(cmd, layout_.get(), VK_SHADER_STAGE_COMPUTE_BIT, 0, bytes, data);
+}
+
 DescriptorSet::DescriptorSet(const Context& context, const ComputePipeline& pipeline)
     : context_(&context), bindings_(pipeline.bindings()) {
   const VkDevice dev = context.device();

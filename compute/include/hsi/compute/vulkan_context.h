@@ -254,6 +254,8 @@ class Buffer {
   VkDeviceSize size_ = 0;
 };
 
+class DescriptorSet;
+
 // A compute pipeline whose descriptor set 0 has one binding per entry of
 // `bindings` (binding i has type bindings[i]), with an optional push-constant
 // range of push_constant_bytes at offset 0.
@@ -267,6 +269,11 @@ class ComputePipeline {
   VkPipelineLayout layout() const { return layout_.get(); }
   VkDescriptorSetLayout set_layout() const { return set_layout_.get(); }
   const std::vector<VkDescriptorType>& bindings() const { return bindings_; }
+
+  // Records binding this pipeline with `set` as its set 0, for the dispatches after.
+  void bind(VkCommandBuffer cmd, const DescriptorSet& set) const;
+  // Records pushing `bytes` of push constants at offset 0.
+  void push(VkCommandBuffer cmd, const void* data, uint32_t bytes) const;
 
  private:
   DeviceHandle<VkDescriptorSetLayout> set_layout_;
