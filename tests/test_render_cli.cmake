@@ -2,7 +2,8 @@
 # (few frames, few samples, small images) under the Vulkan validation layer: the
 # numbered PNGs and the contact sheet are written, PNGs of the requested size, and
 # bad input (no frames file, frames of another scene, a missing texture) fails with
-# exit code 2 and a message naming the problem.
+# exit code 2 and a message naming the problem; --rasterizer picks each path, and an
+# unknown one is refused (CLI11's exit code 105).
 # -D: HSI_CLI, HSI_SCENE, HSI_OTHER_SCENE, HSI_WORK_DIR
 file(REMOVE_RECURSE ${HSI_WORK_DIR})
 file(MAKE_DIRECTORY ${HSI_WORK_DIR})
@@ -25,6 +26,17 @@ endif()
 run(0 ${HSI_CLI} render ${HSI_SCENE} ${frames} -o ${HSI_WORK_DIR}/one --frames 3 --no-contact-sheet --no-texture --size 96)
 if(EXISTS ${HSI_WORK_DIR}/one/contact_sheet.png OR NOT EXISTS ${HSI_WORK_DIR}/one/frame_0003.png)
   message(FATAL_ERROR "--frames 3 --no-contact-sheet wrote the wrong files")
+endif()
+
+# Each rasterizer by name (lavapipe picks graphics by itself), under validation.
+run(0 ${HSI_CLI} render ${HSI_SCENE} ${frames} -o ${HSI_WORK_DIR}/compute --frames 1 --no-contact-sheet --size 96
+    --rasterizer compute --validation)
+if(NOT RUN_OUTPUT MATCHES "compute rasterizer" OR NOT EXISTS ${HSI_WORK_DIR}/compute/frame_0001.png)
+  message(FATAL_ERROR "--rasterizer compute did not render with the compute rasterizer")
+endif()
+run(105 ${HSI_CLI} render ${HSI_SCENE} ${frames} -o ${HSI_WORK_DIR}/bad --rasterizer fast)
+if(NOT RUN_OUTPUT MATCHES "--rasterizer: fast not in")
+  message(FATAL_ERROR "an unknown rasterizer was not refused by name")
 endif()
 
 run(2 ${HSI_CLI} render ${HSI_SCENE} ${HSI_WORK_DIR} -o ${HSI_WORK_DIR}/bad)
