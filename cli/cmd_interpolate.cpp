@@ -21,9 +21,10 @@ void register_interpolate(CLI::App& app) {
   struct Opts {
     std::string scene, out = "out";
     int frames = 500, samples = 0, png_count = 16, max_iterations = 100;
-    double ratio = 0, tolerance = 1e-7;
+    double ratio = 0, tolerance = 5e-8;
     std::string projection = "partproj";
     std::string backend = "auto";
+    bool projected_only = false, gauged_rotation = false;
   };
   auto o = std::make_shared<Opts>();
   CLI::App* cmd = app.add_subcommand(
@@ -37,9 +38,13 @@ void register_interpolate(CLI::App& app) {
   cmd->add_option("--frames", o->frames, "Number of frames over the keyframes' time range")->capture_default_str()->check(CLI::Range(2, 1000000));
   cmd->add_option("--samples", o->samples, "Boundary samples |G| (default: the scene's, 10000)")->check(CLI::Range(100, 10000000));
   cmd->add_option("--ratio", o->ratio, "Hessian sample ratio r (default: the scene's, 0.2)")->check(CLI::Range(1e-6, 1.0));
-  cmd->add_option("--tolerance", o->tolerance, "Stop a frame when its energy decreases by less than this")->capture_default_str();
+  cmd->add_option("--tolerance", o->tolerance, "Stop a frame when its energy decreases by less than this fraction of itself (and not in a slow linear crawl)")->capture_default_str();
   cmd->add_option("--max-iterations", o->max_iterations, "Newton iterations per frame at most")->capture_default_str();
   cmd->add_option("--projection", o->projection, "Hessian PSD projection: partproj, fullproj or delete")->capture_default_str();
+  cmd->add_flag("--projected-only", o->projected_only,
+                "Always use the projected Hessian (the paper's method), not the exact one where it is positive definite");
+  cmd->add_flag("--gauged-rotation", o->gauged_rotation,
+                "Keep the global rotation pinned by its gauge in projected systems instead of solving for it (the paper's method)");
   cmd->add_option("--backend", o->backend, "Newton core: cpu, cuda, or auto (CUDA when a device is present)")
       ->capture_default_str()
       ->check(CLI::IsMember({"cpu", "cuda", "auto"}));
@@ -67,6 +72,8 @@ void register_interpolate(CLI::App& app) {
     io.tolerance = o->tolerance;
     io.max_iterations = o->max_iterations;
     io.projection = parse_projection(o->projection);
+    io.exact_hessian_when_definite = !o->projected_only;
+    io.free_rotation = !o->gauged_rotation;
     // The Newton core: the CUDA twin where asked for (or, with auto, where a device
     // is present), the CPU reference otherwise.
     std::unique_ptr<NewtonCore> core;

@@ -60,21 +60,25 @@ inline size_t sz(int v) { return static_cast<size_t>(v); }
 
 // The reduced space's matrices and the device loop's buffers (one per MapSpace the
 // core has solved in).
+class DeviceStepper;
+
+// Vectors of the reduced space have room for one more unknown, the freed rotation θ
+// (HessianChoice::free_rotation): m = dim + 1.
 struct DeviceSpace {
-  int dim = 0, n4 = 0, M4 = 0;
-  DeviceArray<double> T;    // 4n × dim, v layout (Re φ, Im φ, Re ψ, Im ψ): the Hessian's
-  DeviceArray<double> Tc;   // 4n × dim, rows in complex order: Tc x = [φ_a | ψ_a] as double2
+  int dim = 0, n4 = 0, M4 = 0, rotation_vertex = 0;
+  DeviceArray<double> Ta;   // 4n × m, v layout (Re φ, Im φ, Re ψ, Im ψ): [T | u], the Hessian's
+  DeviceArray<double> Tca;  // 4n × m, rows in complex order: Tc x = [φ_a | ψ_a] as double2, then u
+  DeviceArray<double> RT, RTc;  // the rotation generator times T and Tc: u = RT x
   DeviceArray<double> X;    // 4M × dim: the full coefficients [φ | ψ] (double2) per unit x
   DeviceArray<double> X0;   // 4M: expand(0)
-  DeviceArray<double> x, xn, g, d, Hr, Hr0, Y, work, full, Q, c;
+  DeviceArray<int> primary; // MapSpace::primary_rows
+  DeviceArray<double> xa, xna, z, g, d, tmp, v, Hr, Hr0, Y, work, full, Q, c;  // xa = [x; 0], xna the trial
   DeviceArray<int> info;
   DeviceArray<double> sc;
   PinnedArray<double> sc_down;
-  PinnedArray<double> d_down;
   PinnedArray<int> info_down;
   PinnedArray<double> x_up;
   int lwork = 0;
-  const QuadraticTerm* quad_uploaded = nullptr;
 };
 
 class CudaNewtonCore final : public NewtonCore {
@@ -189,9 +193,10 @@ class CudaNewtonCore final : public NewtonCore {
     return out;
   }
 
-  // The whole certified iteration on the device (device_newton.cpp).
-  bool solve(const MapSpace& space, const Certifier* certifier, const QuadraticTerm* quad, const Eigen::VectorXd& x0,
-             const NewtonOptions& options, NewtonResult* out) override;
+  // newton_solve's reduced-space work on the device for the setup's spaces and
+  // certifier (device_newton.cpp); null otherwise.
+  std::unique_ptr<NewtonStepper> make_stepper(const MapSpace& space, const Certifier* certifier,
+                                              const QuadraticTerm* quad) override;
 
   double max_safe_step() override {
     HSI_CUDA_CHECK(kernels::max_safe_step(G_, ab_.get(), dab_.get(), part_sum_.get(), scalar_.get(), stream_));
@@ -199,6 +204,7 @@ class CudaNewtonCore final : public NewtonCore {
   }
 
  private:
+  friend class DeviceStepper;
   static constexpr cuDoubleComplex kOne{1, 0}, kZero{0, 0};
 
   // a = D φ, b = D ψ (or da, db) from v = (Re φ, Im φ, Re ψ, Im ψ): one GEMM D [φ | ψ].
@@ -251,7 +257,7 @@ class CudaNewtonCore final : public NewtonCore {
   PinnedArray<double> scalar_down_;
   PinnedArray<double2> coef_down_;
 
-  // The device loop (solve()): what it needs beyond the per-call interface.
+  // The device stepper (make_stepper()): what it needs beyond the per-call interface.
   DeviceSpace& device_space(const MapSpace& space);
   const ShapeSetup* setup_ = nullptr;
   SolverHandle solver_{stream_};

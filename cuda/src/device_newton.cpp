@@ -1,14 +1,10 @@
-// CudaNewtonCore::solve: engine/src/newton.cpp's newton_solve with every step on the
-// device. Per iteration: gradient (cuBLAS), the PSD Hessian (kernels + ZGEMM), the
-// reduced system Tᵀ H T and its Cholesky factor and solve (cuSOLVER), the direction
-// and the maximal safe step; then the Armijo trials, a batch of step sizes per launch;
-// then the certificate of the trial map (certify_kernels.cu). The host sees three small
-// downloads per iteration: {slope, |g|², s_max, diag, info} with the direction d
-// (dim doubles), the trial energies, and the certificate's summary.
-//
-// Same arithmetic and decisions as the host loop, so the two agree to round-off (the
-// tests compare them frame by frame).
-#include <chrono>
+// DeviceStepper: newton_solve's reduced-space work (engine/src/newton.cpp) with every
+// vector on the GPU. The loop and all its decisions are the engine's; this file only
+// computes. Per linearize: the gradient (cuBLAS), the Hessian as asked (kernels +
+// ZGEMM), the reduced system [T u]ᵀ Hv [T u]; per solve: the Cholesky factor and solve
+// (cuSOLVER), the direction in the samples and the maximal safe step, one download of
+// a few scalars; trial energies a batch of steps per download; the certificate of a
+// trial map (certify_kernels.cu). x, d and the system never leave the device.
 #include <cmath>
 #include <limits>
 
@@ -17,14 +13,39 @@
 
 namespace hsi::cuda {
 
-using Clock = std::chrono::steady_clock;
 namespace {
-double ms_since(Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); }
-constexpr int kBatch = 4;  // Armijo trial steps evaluated per launch
+constexpr int kBatch = 4;  // trial energies per download (NewtonStepper asks for up to this many)
 // Scalar slots of DeviceSpace::sc.
-enum Slot { kSlope = 0, kGradNorm2 = 1, kSafeStep = 2, kDiagMax = 3, kEnergy0 = 4, kTrials = 5, kSlots = kTrials + kBatch };
-}  // namespace
+enum Slot {
+  kSlope = 0,
+  kGradNorm2 = 1,
+  kSafeStep = 2,
+  kDiagMax = 3,
+  kEnergy0 = 4,
+  kQuad0 = 5,  // ½xᵀQx + cᵀx (host adds k)
+  kQuad1 = 6,  // (Q x + c)ᵀ d
+  kQuad2 = 7,  // dᵀ Q d
+  kScratch = 8,
+  kTrials = 9,
+  kSlots = kTrials + kBatch
+};
 
+// The rotation generator applied to rows: in v layout (Re φ, Im φ, Re ψ, Im ψ blocks of n)
+// u = (−Im φ, Re φ, Im ψ, −Re ψ); in complex order (Re φ_j, Im φ_j at 2j, 2j+1; ψ at 2n+2j…)
+// the same per pair. R·A for a matrix A with 4n rows in either layout.
+Eigen::MatrixXd rotate_rows(const Eigen::MatrixXd& A, int n, bool complex_order) {
+  Eigen::MatrixXd out(A.rows(), A.cols());
+  for (int j = 0; j < n; ++j) {
+    const int rp = complex_order ? 2 * j : j, ip = complex_order ? 2 * j + 1 : n + j;
+    const int rq = complex_order ? 2 * n + 2 * j : 2 * n + j, iq = complex_order ? 2 * n + 2 * j + 1 : 3 * n + j;
+    out.row(rp) = -A.row(ip);
+    out.row(ip) = A.row(rp);
+    out.row(rq) = A.row(iq);
+    out.row(iq) = -A.row(rq);
+  }
+  return out;
+}
+}  // namespace
 
 CudaNewtonCore::~CudaNewtonCore() { cudaStreamSynchronize(stream_); }
 
@@ -35,9 +56,11 @@ DeviceSpace& CudaNewtonCore::device_space(const MapSpace& space) {
   const int dim = space.dim(), n = n_;
   if (space.n() != n) throw InputError("hsi::cuda: the map space has " + std::to_string(space.n()) + " active columns, the core " + std::to_string(n));
   const int M = space.full_size();
+  const int m = dim + 1;  // room for the freed rotation
   ds->dim = dim;
   ds->n4 = 4 * n;
   ds->M4 = 4 * M;
+  ds->rotation_vertex = space.rotation_vertex();
   const Eigen::MatrixXd T = Eigen::MatrixXd(space.T());
   // Tc: row 2j ← Re φ_j (row j of T), 2j+1 ← Im φ_j (n + j), 2n+2j ← Re ψ_j, 2n+2j+1 ← Im ψ_j.
   Eigen::MatrixXd Tc(4 * n, dim);
@@ -47,6 +70,12 @@ DeviceSpace& CudaNewtonCore::device_space(const MapSpace& space) {
     Tc.row(2 * n + 2 * j) = T.row(2 * n + j);
     Tc.row(2 * n + 2 * j + 1) = T.row(3 * n + j);
   }
+  // Ta = [T | u], Tca = [Tc | u in complex order]; the last columns are rewritten by
+  // linearize() when the rotation is freed (u = R T x).
+  Eigen::MatrixXd Ta = Eigen::MatrixXd::Zero(4 * n, m), Tca = Eigen::MatrixXd::Zero(4 * n, m);
+  Ta.leftCols(dim) = T;
+  Tca.leftCols(dim) = Tc;
+  const Eigen::MatrixXd RT = rotate_rows(T, n, false), RTc = rotate_rows(Tc, n, true);
   // expand() is affine in x: probe it at 0 and at each unit vector.
   auto flat = [&](const HarmonicMap& h) {
     Eigen::VectorXd v(4 * M);
@@ -70,15 +99,22 @@ DeviceSpace& CudaNewtonCore::device_space(const MapSpace& space) {
     dst = DeviceArray<double>(count);
     HSI_CUDA_CHECK(cudaMemcpy(dst.get(), src, count * sizeof(double), cudaMemcpyHostToDevice));
   };
-  upload(ds->T, T.data(), static_cast<size_t>(T.size()));
-  upload(ds->Tc, Tc.data(), static_cast<size_t>(Tc.size()));
+  upload(ds->Ta, Ta.data(), static_cast<size_t>(Ta.size()));
+  upload(ds->Tca, Tca.data(), static_cast<size_t>(Tca.size()));
+  upload(ds->RT, RT.data(), static_cast<size_t>(RT.size()));
+  upload(ds->RTc, RTc.data(), static_cast<size_t>(RTc.size()));
   upload(ds->X, X.data(), static_cast<size_t>(X.size()));
   upload(ds->X0, x0.data(), static_cast<size_t>(x0.size()));
-  const size_t D = sz(dim);
-  ds->x = DeviceArray<double>(D);
-  ds->xn = DeviceArray<double>(D);
+  ds->primary = DeviceArray<int>(sz(dim));
+  HSI_CUDA_CHECK(cudaMemcpy(ds->primary.get(), space.primary_rows().data(), ds->primary.bytes(), cudaMemcpyHostToDevice));
+  const size_t D = sz(m);
+  ds->xa = DeviceArray<double>(D);  // [x; 0]
+  ds->xna = DeviceArray<double>(D);
+  ds->z = DeviceArray<double>(D);
   ds->g = DeviceArray<double>(D);
   ds->d = DeviceArray<double>(D);
+  ds->tmp = DeviceArray<double>(D);
+  ds->v = DeviceArray<double>(4 * sz(n));
   ds->Hr = DeviceArray<double>(D * D);
   ds->Hr0 = DeviceArray<double>(D * D);
   ds->Y = DeviceArray<double>(4 * sz(n) * D);
@@ -86,275 +122,220 @@ DeviceSpace& CudaNewtonCore::device_space(const MapSpace& space) {
   ds->info = DeviceArray<int>(1);
   ds->sc = DeviceArray<double>(kSlots);
   ds->sc_down = PinnedArray<double>(kSlots);
-  ds->d_down = PinnedArray<double>(D);
   ds->info_down = PinnedArray<int>(1);
   ds->x_up = PinnedArray<double>(D);
-  HSI_CUDA_CHECK(cusolverDnDpotrf_bufferSize(solver_, CUBLAS_FILL_MODE_LOWER, dim, ds->Hr.get(), dim, &ds->lwork));
+  HSI_CUDA_CHECK(cudaMemsetAsync(ds->xa.get(), 0, ds->xa.bytes(), stream_));
+  HSI_CUDA_CHECK(cudaMemsetAsync(ds->xna.get(), 0, ds->xna.bytes(), stream_));
+  HSI_CUDA_CHECK(cusolverDnDpotrf_bufferSize(solver_, CUBLAS_FILL_MODE_LOWER, m, ds->Hr.get(), m, &ds->lwork));
   ds->work = DeviceArray<double>(sz(std::max(1, ds->lwork)));
+  HSI_CUDA_CHECK(cudaStreamSynchronize(stream_));
   slot = std::move(ds);
   return *slot;
 }
 
-bool CudaNewtonCore::solve(const MapSpace& space, const Certifier* certifier, const QuadraticTerm* quad,
-                           const Eigen::VectorXd& x0, const NewtonOptions& opt, NewtonResult* out) {
-  // Only for the setup this core was made with: its certifier is the one on the device.
-  if (!setup_ || (certifier && certifier != &setup_->certifier)) return false;
-  if (&space != &setup_->map_space && &space != &setup_->metric_space) return false;
-  const auto t_start = Clock::now();
-  DeviceSpace& S = device_space(space);
-  const int dim = S.dim;
-  if (x0.size() != dim) throw InputError("hsi::cuda: the start vector has " + std::to_string(x0.size()) + " entries, the space " + std::to_string(dim));
-  const cudaStream_t st = stream_;
-  const bool certify = opt.certify && certifier;
-  const double one = 1, zero = 0, minus_one = -1;
-  const double count = static_cast<double>(G_);
-
-  if (quad) {
-    if (quad->Q.rows() != dim || quad->Q.cols() != dim || quad->c.size() != dim)
-      throw InputError("hsi::cuda: the quadratic term does not match the space");
-    if (S.Q.size() != sz(dim) * sz(dim)) {
-      S.Q = DeviceArray<double>(sz(dim) * sz(dim));
-      S.c = DeviceArray<double>(sz(dim));
+class DeviceStepper final : public NewtonStepper {
+ public:
+  DeviceStepper(CudaNewtonCore& core, DeviceSpace& S, const QuadraticTerm* quad, bool certify)
+      : c_(core), S_(S), quad_(quad), certify_(certify) {
+    if (quad_) {
+      const int dim = S_.dim;
+      if (quad_->Q.rows() != dim || quad_->Q.cols() != dim || quad_->c.size() != dim)
+        throw InputError("hsi::cuda: the quadratic term does not match the space");
+      if (S_.Q.size() != sz(dim) * sz(dim)) {
+        S_.Q = DeviceArray<double>(sz(dim) * sz(dim));
+        S_.c = DeviceArray<double>(sz(dim));
+      }
+      HSI_CUDA_CHECK(cudaMemcpyAsync(S_.Q.get(), quad_->Q.data(), S_.Q.bytes(), cudaMemcpyHostToDevice, st()));
+      HSI_CUDA_CHECK(cudaMemcpyAsync(S_.c.get(), quad_->c.data(), S_.c.bytes(), cudaMemcpyHostToDevice, st()));
     }
-    HSI_CUDA_CHECK(cudaMemcpyAsync(S.Q.get(), quad->Q.data(), S.Q.bytes(), cudaMemcpyHostToDevice, st));
-    HSI_CUDA_CHECK(cudaMemcpyAsync(S.c.get(), quad->c.data(), S.c.bytes(), cudaMemcpyHostToDevice, st));
-  }
-  auto quad_value = [&](const Eigen::VectorXd& x) { return quad ? quad->value(x) : 0.0; };
-
-  NewtonResult res;
-  res.x = x0;
-  // ab = D · (Tc x) for the device's current x.
-  auto set_coefficients = [&](const double* x) {
-    HSI_CUDA_CHECK(cublasDgemv(blas_, CUBLAS_OP_N, 4 * n_, dim, &one, S.Tc.get(), 4 * n_, x, 1, &zero,
-                               reinterpret_cast<double*>(coef_.get()), 1));
-    HSI_CUDA_CHECK(cublasZgemm(blas_, CUBLAS_OP_N, CUBLAS_OP_N, G_, 2, n_, &kOne, D_.get(), G_, coef_.get(), n_, &kZero,
-                               ab_.get(), G_));
-  };
-  // Full coefficients of x (device) into S.full, then the certificate.
-  CertificateOptions fast;
-  fast.stop_at_first_failure = true;
-  CertificateResult last_pass;
-  bool last_pass_is_x = false;  // last_pass certifies the current res.x
-  auto certify_device = [&](const double* x, bool full) {
-    const auto t0 = Clock::now();
-    HSI_CUDA_CHECK(cudaMemcpyAsync(S.full.get(), S.X0.get(), S.full.bytes(), cudaMemcpyDeviceToDevice, st));
-    HSI_CUDA_CHECK(cublasDgemv(blas_, CUBLAS_OP_N, S.M4, dim, &one, S.X.get(), S.M4, x, 1, &one, S.full.get(), 1));
-    certifier_->enqueue(reinterpret_cast<const double2*>(S.full.get()), full ? CertificateOptions{} : fast);
-    CertificateResult c = certifier_->fetch();
-    res.timing.certificate += ms_since(t0);
-    return c;
-  };
-
-  auto t0 = Clock::now();
-  std::copy(x0.data(), x0.data() + dim, S.x_up.get());
-  HSI_CUDA_CHECK(cudaMemcpyAsync(S.x.get(), S.x_up.get(), S.x.bytes(), cudaMemcpyHostToDevice, st));
-  set_coefficients(S.x.get());
-  HSI_CUDA_CHECK(kernels::mean_energy(G_, g_.get(), ab_.get(), dab_.get(), 0.0, part_sum_.get(), part_bad_.get(),
-                                      S.sc.get() + kEnergy0, st));
-  HSI_CUDA_CHECK(cudaMemcpyAsync(S.sc_down.get() + kEnergy0, S.sc.get() + kEnergy0, sizeof(double), cudaMemcpyDeviceToHost, st));
-  HSI_CUDA_CHECK(cudaStreamSynchronize(st));
-  double E = S.sc_down[kEnergy0] + quad_value(res.x);
-  res.timing.energy_gradient += ms_since(t0);
-  auto finish = [&]() {
-    res.energy = E;
-    res.ms = ms_since(t_start);
-    *out = std::move(res);
-    return true;
-  };
-  if (!std::isfinite(E)) {
-    res.message = "the starting map folds or degenerates at a sample (infinite energy)";
-    return finish();
-  }
-  if (certify) {
-    res.certificate = opt.start_certificate && opt.start_certificate->certified ? *opt.start_certificate
-                                                                                : certify_device(S.x.get(), true);
-    if (!res.certificate.certified) {
-      res.message = "the starting map is not certified: " + res.certificate.reason;
-      return finish();
-    }
-    last_pass = res.certificate;
-    last_pass_is_x = true;
   }
 
-  Event ev[5] = {Event(true), Event(true), Event(true), Event(true), Event(true)};
-  for (int it = 0; it < opt.max_iterations; ++it) {
-    const auto t_it = Clock::now();
-    NewtonIteration log;
-    t0 = Clock::now();
-    HSI_CUDA_CHECK(cudaEventRecord(ev[0], st));
-    // Gradient: [gφ | gψ] = Dᴴ [ga | gb], then g = Tcᵀ (·) / |G| (+ Q x + c).
-    HSI_CUDA_CHECK(kernels::gradient_samples(G_, g_.get(), ab_.get(), gab_.get(), st));
-    HSI_CUDA_CHECK(cublasZgemm(blas_, CUBLAS_OP_C, CUBLAS_OP_N, n_, 2, G_, &kOne, D_.get(), G_, gab_.get(), G_, &kZero,
-                               coef_.get(), n_));
-    const double inv_count = 1 / count;
-    HSI_CUDA_CHECK(cublasDgemv(blas_, CUBLAS_OP_T, 4 * n_, dim, &inv_count, S.Tc.get(), 4 * n_,
-                               reinterpret_cast<const double*>(coef_.get()), 1, &zero, S.g.get(), 1));
-    if (quad) {
-      HSI_CUDA_CHECK(cublasDgemv(blas_, CUBLAS_OP_N, dim, dim, &one, S.Q.get(), dim, S.x.get(), 1, &one, S.g.get(), 1));
-      HSI_CUDA_CHECK(cublasDaxpy(blas_, dim, &one, S.c.get(), 1, S.g.get(), 1));
+  double start(const Eigen::VectorXd& x0) override {
+    const int dim = S_.dim;
+    if (x0.size() != dim) throw InputError("hsi::cuda: the start vector has " + std::to_string(x0.size()) + " entries, the space " + std::to_string(dim));
+    std::copy(x0.data(), x0.data() + dim, S_.x_up.get());
+    HSI_CUDA_CHECK(cudaMemcpyAsync(S_.xa.get(), S_.x_up.get(), sz(dim) * sizeof(double), cudaMemcpyHostToDevice, st()));
+    set_coefficients();
+    HSI_CUDA_CHECK(kernels::mean_energy(c_.G_, c_.g_.get(), c_.ab_.get(), c_.dab_.get(), 0.0, c_.part_sum_.get(),
+                                        c_.part_bad_.get(), S_.sc.get() + kEnergy0, st()));
+    HSI_CUDA_CHECK(cudaMemcpyAsync(S_.sc_down.get() + kEnergy0, S_.sc.get() + kEnergy0, sizeof(double), cudaMemcpyDeviceToHost, st()));
+    HSI_CUDA_CHECK(cudaStreamSynchronize(st()));
+    trial_step_ = std::numeric_limits<double>::quiet_NaN();
+    return S_.sc_down[kEnergy0] + (quad_ ? quad_->value(x0) : 0.0);
+  }
+
+  void linearize(const HessianChoice& choice) override {
+    const int n = c_.n_, dim = S_.dim;
+    m_ = choice.free_rotation ? dim + 1 : dim;
+    rotation_ = choice.free_rotation;
+    if (rotation_) {  // u = R T x in both layouts, as the last columns of Ta and Tca
+      HSI_CUDA_CHECK(cublasDgemv(c_.blas_, CUBLAS_OP_N, 4 * n, dim, &kOneD, S_.RT.get(), 4 * n, S_.xa.get(), 1, &kZeroD,
+                                 S_.Ta.get() + sz(4 * n) * sz(dim), 1));
+      HSI_CUDA_CHECK(cublasDgemv(c_.blas_, CUBLAS_OP_N, 4 * n, dim, &kOneD, S_.RTc.get(), 4 * n, S_.xa.get(), 1, &kZeroD,
+                                 S_.Tca.get() + sz(4 * n) * sz(dim), 1));
     }
-    HSI_CUDA_CHECK(cudaEventRecord(ev[1], st));
-    // Hessian: Hv (4n × 4n) as in hessian(), then Hr = Tᵀ Hv T (+ Q).
-    HSI_CUDA_CHECK(kernels::weighted_rows(G_, h_, n_, H_.get(), g_.get(), ab_.get(), to_device(opt.projection), false,
-                                          DH_.get(), W_.get(), Wt_.get(), st));
-    HSI_CUDA_CHECK(cublasZgemm(blas_, CUBLAS_OP_C, CUBLAS_OP_N, n_, 6 * n_, h_, &kOne, DH_.get(), h_, Wt_.get(), h_, &kZero,
-                               R_.get(), n_));
-    HSI_CUDA_CHECK(kernels::real_hessian(n_, R_.get(), static_cast<double>(h_), Hv_.get(), st));
-    HSI_CUDA_CHECK(cublasDgemm(blas_, CUBLAS_OP_N, CUBLAS_OP_N, 4 * n_, dim, 4 * n_, &one, Hv_.get(), 4 * n_, S.T.get(), 4 * n_,
-                               &zero, S.Y.get(), 4 * n_));
-    HSI_CUDA_CHECK(cublasDgemm(blas_, CUBLAS_OP_T, CUBLAS_OP_N, dim, dim, 4 * n_, &one, S.T.get(), 4 * n_, S.Y.get(), 4 * n_,
-                               &zero, S.Hr0.get(), dim));
-    if (quad)
-      HSI_CUDA_CHECK(cublasDgeam(blas_, CUBLAS_OP_N, CUBLAS_OP_N, dim, dim, &one, S.Hr0.get(), dim, &one, S.Q.get(), dim,
-                                 S.Hr0.get(), dim));
-    HSI_CUDA_CHECK(kernels::diag_abs_max(dim, S.Hr0.get(), S.sc.get() + kDiagMax, st));
-    HSI_CUDA_CHECK(cudaEventRecord(ev[2], st));
-    // Cholesky of the reduced system; a ridge only when it fails (as on the host).
-    double ridge = 0, scale = 0;
-    bool solved = false;
-    float ms_grad = 0, ms_hess = 0, ms_solve = 0, ms_dir = 0;
-    for (int attempt = 0; attempt < 12 && !solved; ++attempt) {
-      if (attempt > 0) HSI_CUDA_CHECK(cudaEventRecord(ev[2], st));
-      HSI_CUDA_CHECK(kernels::add_ridge(dim, S.Hr0.get(), ridge, S.Hr.get(), st));
-      HSI_CUDA_CHECK(cusolverDnDpotrf(solver_, CUBLAS_FILL_MODE_LOWER, dim, S.Hr.get(), dim, S.work.get(), S.lwork, S.info.get()));
-      // d = −g, solved in place; potrs after a failed potrf gives garbage that info flags.
-      HSI_CUDA_CHECK(cudaMemcpyAsync(S.d.get(), S.g.get(), S.d.bytes(), cudaMemcpyDeviceToDevice, st));
-      HSI_CUDA_CHECK(cublasDscal(blas_, dim, &minus_one, S.d.get(), 1));
-      HSI_CUDA_CHECK(cusolverDnDpotrs(solver_, CUBLAS_FILL_MODE_LOWER, dim, 1, S.Hr.get(), dim, S.d.get(), dim, S.info.get() + 0));
-      HSI_CUDA_CHECK(kernels::dot(dim, S.g.get(), S.d.get(), S.sc.get() + kSlope, st));
-      HSI_CUDA_CHECK(kernels::dot(dim, S.g.get(), S.g.get(), S.sc.get() + kGradNorm2, st));
-      HSI_CUDA_CHECK(cudaEventRecord(ev[3], st));
-      // Direction in the samples and the largest safe step along it.
-      HSI_CUDA_CHECK(cublasDgemv(blas_, CUBLAS_OP_N, 4 * n_, dim, &one, S.Tc.get(), 4 * n_, S.d.get(), 1, &zero,
-                                 reinterpret_cast<double*>(coef_.get()), 1));
-      HSI_CUDA_CHECK(cublasZgemm(blas_, CUBLAS_OP_N, CUBLAS_OP_N, G_, 2, n_, &kOne, D_.get(), G_, coef_.get(), n_, &kZero,
-                                 dab_.get(), G_));
-      HSI_CUDA_CHECK(kernels::max_safe_step(G_, ab_.get(), dab_.get(), part_sum_.get(), S.sc.get() + kSafeStep, st));
-      HSI_CUDA_CHECK(cudaEventRecord(ev[4], st));
-      HSI_CUDA_CHECK(cudaMemcpyAsync(S.sc_down.get(), S.sc.get(), kSlots * sizeof(double), cudaMemcpyDeviceToHost, st));
-      HSI_CUDA_CHECK(cudaMemcpyAsync(S.info_down.get(), S.info.get(), sizeof(int), cudaMemcpyDeviceToHost, st));
-      HSI_CUDA_CHECK(cudaMemcpyAsync(S.d_down.get(), S.d.get(), S.d.bytes(), cudaMemcpyDeviceToHost, st));
-      HSI_CUDA_CHECK(cudaStreamSynchronize(st));
-      if (attempt == 0) {
-        HSI_CUDA_CHECK(cudaEventElapsedTime(&ms_grad, ev[0], ev[1]));
-        HSI_CUDA_CHECK(cudaEventElapsedTime(&ms_hess, ev[1], ev[2]));
-      }
-      float a = 0, b = 0;
-      HSI_CUDA_CHECK(cudaEventElapsedTime(&a, ev[2], ev[3]));
-      HSI_CUDA_CHECK(cudaEventElapsedTime(&b, ev[3], ev[4]));
-      ms_solve += a;
-      ms_dir += b;
-      solved = S.info_down[0] == 0 && std::isfinite(S.sc_down[kSlope]);
-      if (!solved) {
-        scale = std::max(S.sc_down[kDiagMax], 1e-300);
-        ridge = ridge == 0 ? 1e-12 * scale : ridge * 10;
-      }
+    // Gradient: [gφ | gψ] = Dᴴ [ga | gb], then g = Tcaᵀ (·) / |G| (+ Q x + c).
+    HSI_CUDA_CHECK(kernels::gradient_samples(c_.G_, c_.g_.get(), c_.ab_.get(), c_.gab_.get(), st()));
+    HSI_CUDA_CHECK(cublasZgemm(c_.blas_, CUBLAS_OP_C, CUBLAS_OP_N, n, 2, c_.G_, &CudaNewtonCore::kOne, c_.D_.get(), c_.G_,
+                               c_.gab_.get(), c_.G_, &CudaNewtonCore::kZero, c_.coef_.get(), n));
+    const double inv_count = 1 / static_cast<double>(c_.G_);
+    HSI_CUDA_CHECK(cublasDgemv(c_.blas_, CUBLAS_OP_T, 4 * n, m_, &inv_count, S_.Tca.get(), 4 * n,
+                               reinterpret_cast<const double*>(c_.coef_.get()), 1, &kZeroD, S_.g.get(), 1));
+    if (quad_) {
+      HSI_CUDA_CHECK(cublasDgemv(c_.blas_, CUBLAS_OP_N, dim, dim, &kOneD, S_.Q.get(), dim, S_.xa.get(), 1, &kOneD, S_.g.get(), 1));
+      HSI_CUDA_CHECK(cublasDaxpy(c_.blas_, dim, &kOneD, S_.c.get(), 1, S_.g.get(), 1));
     }
-    res.timing.energy_gradient += ms_grad;
-    res.timing.hessian += ms_hess;
-    res.timing.solve += ms_solve;
-    res.timing.line_search += ms_dir;
-    if (!solved) {
-      res.message = "the Newton system could not be factored";
-      break;
+    // Hessian: Hv (4n × 4n) as CudaNewtonCore::hessian(), then Hr = Taᵀ Hv Ta (+ Q).
+    HSI_CUDA_CHECK(kernels::weighted_rows(c_.G_, c_.h_, n, c_.H_.get(), c_.g_.get(), c_.ab_.get(), to_device(choice.projection),
+                                          choice.exact, c_.DH_.get(), c_.W_.get(), c_.Wt_.get(), st()));
+    HSI_CUDA_CHECK(cublasZgemm(c_.blas_, CUBLAS_OP_C, CUBLAS_OP_N, n, 6 * n, c_.h_, &CudaNewtonCore::kOne, c_.DH_.get(), c_.h_,
+                               c_.Wt_.get(), c_.h_, &CudaNewtonCore::kZero, c_.R_.get(), n));
+    HSI_CUDA_CHECK(kernels::real_hessian(n, c_.R_.get(), static_cast<double>(c_.h_), c_.Hv_.get(), st()));
+    HSI_CUDA_CHECK(cublasDgemm(c_.blas_, CUBLAS_OP_N, CUBLAS_OP_N, 4 * n, m_, 4 * n, &kOneD, c_.Hv_.get(), 4 * n, S_.Ta.get(),
+                               4 * n, &kZeroD, S_.Y.get(), 4 * n));
+    HSI_CUDA_CHECK(cublasDgemm(c_.blas_, CUBLAS_OP_T, CUBLAS_OP_N, m_, m_, 4 * n, &kOneD, S_.Ta.get(), 4 * n, S_.Y.get(), 4 * n,
+                               &kZeroD, S_.Hr0.get(), m_));
+    if (quad_)  // m_ = dim here: the quadratic term never frees the rotation
+      HSI_CUDA_CHECK(cublasDgeam(c_.blas_, CUBLAS_OP_N, CUBLAS_OP_N, dim, dim, &kOneD, S_.Hr0.get(), dim, &kOneD, S_.Q.get(), dim,
+                                 S_.Hr0.get(), dim));
+    HSI_CUDA_CHECK(kernels::diag_abs_max(m_, S_.Hr0.get(), S_.sc.get() + kDiagMax, st()));
+    // Host timing attributes the work to this call.
+    HSI_CUDA_CHECK(cudaStreamSynchronize(st()));
+  }
+
+  NewtonSystem solve(double ridge) override {
+    const int n = c_.n_, dim = S_.dim, m = m_;
+    HSI_CUDA_CHECK(kernels::add_ridge(m, S_.Hr0.get(), ridge, S_.Hr.get(), st()));
+    HSI_CUDA_CHECK(cusolverDnDpotrf(c_.solver_, CUBLAS_FILL_MODE_LOWER, m, S_.Hr.get(), m, S_.work.get(), S_.lwork, S_.info.get()));
+    // d = −g, solved in place; potrs after a failed potrf gives garbage that info flags.
+    HSI_CUDA_CHECK(cudaMemcpyAsync(S_.d.get(), S_.g.get(), sz(m) * sizeof(double), cudaMemcpyDeviceToDevice, st()));
+    HSI_CUDA_CHECK(cublasDscal(c_.blas_, m, &kMinusOneD, S_.d.get(), 1));
+    HSI_CUDA_CHECK(cusolverDnDpotrs(c_.solver_, CUBLAS_FILL_MODE_LOWER, m, 1, S_.Hr.get(), m, S_.d.get(), m, S_.info.get()));
+    HSI_CUDA_CHECK(kernels::dot(m, S_.g.get(), S_.d.get(), S_.sc.get() + kSlope, st()));
+    HSI_CUDA_CHECK(kernels::dot(dim, S_.g.get(), S_.g.get(), S_.sc.get() + kGradNorm2, st()));
+    if (quad_) {  // the quadratic term along d: q(x + s d) = q0 + s q1 + ½ s² q2
+      HSI_CUDA_CHECK(cublasDgemv(c_.blas_, CUBLAS_OP_N, dim, dim, &kOneD, S_.Q.get(), dim, S_.xa.get(), 1, &kZeroD, S_.tmp.get(), 1));
+      HSI_CUDA_CHECK(kernels::dot(dim, S_.xa.get(), S_.tmp.get(), S_.sc.get() + kQuad0, st()));
+      HSI_CUDA_CHECK(kernels::dot(dim, S_.c.get(), S_.xa.get(), S_.sc.get() + kScratch, st()));
+      HSI_CUDA_CHECK(cublasDaxpy(c_.blas_, dim, &kOneD, S_.c.get(), 1, S_.tmp.get(), 1));
+      HSI_CUDA_CHECK(kernels::dot(dim, S_.tmp.get(), S_.d.get(), S_.sc.get() + kQuad1, st()));
+      HSI_CUDA_CHECK(cublasDgemv(c_.blas_, CUBLAS_OP_N, dim, dim, &kOneD, S_.Q.get(), dim, S_.d.get(), 1, &kZeroD, S_.tmp.get(), 1));
+      HSI_CUDA_CHECK(kernels::dot(dim, S_.d.get(), S_.tmp.get(), S_.sc.get() + kQuad2, st()));
     }
-    log.gradient_norm = std::sqrt(S.sc_down[kGradNorm2]);
-    const double slope = S.sc_down[kSlope];
-    if (!(slope < -1e-14 * std::max(1.0, std::abs(E)))) {
-      res.converged = true;
-      res.message = "no descent direction left (gradient at round-off level)";
-      break;
+    // Direction in the samples, [dφ | dψ] = Tca d, and the largest safe step along it.
+    HSI_CUDA_CHECK(cublasDgemv(c_.blas_, CUBLAS_OP_N, 4 * n, m, &kOneD, S_.Tca.get(), 4 * n, S_.d.get(), 1, &kZeroD,
+                               reinterpret_cast<double*>(c_.coef_.get()), 1));
+    HSI_CUDA_CHECK(cublasZgemm(c_.blas_, CUBLAS_OP_N, CUBLAS_OP_N, c_.G_, 2, n, &CudaNewtonCore::kOne, c_.D_.get(), c_.G_,
+                               c_.coef_.get(), n, &CudaNewtonCore::kZero, c_.dab_.get(), c_.G_));
+    HSI_CUDA_CHECK(kernels::max_safe_step(c_.G_, c_.ab_.get(), c_.dab_.get(), c_.part_sum_.get(), S_.sc.get() + kSafeStep, st()));
+    HSI_CUDA_CHECK(cudaMemcpyAsync(S_.sc_down.get(), S_.sc.get(), kTrials * sizeof(double), cudaMemcpyDeviceToHost, st()));
+    HSI_CUDA_CHECK(cudaMemcpyAsync(S_.info_down.get(), S_.info.get(), sizeof(int), cudaMemcpyDeviceToHost, st()));
+    HSI_CUDA_CHECK(cudaStreamSynchronize(st()));
+    trial_step_ = std::numeric_limits<double>::quiet_NaN();
+    NewtonSystem sys;
+    sys.diagonal_max = S_.sc_down[kDiagMax];
+    sys.gradient_norm = std::sqrt(S_.sc_down[kGradNorm2]);
+    sys.slope = S_.sc_down[kSlope];
+    sys.max_safe_step = S_.sc_down[kSafeStep];
+    sys.factored = S_.info_down[0] == 0 && std::isfinite(sys.slope);
+    if (quad_) {
+      q0_ = 0.5 * S_.sc_down[kQuad0] + S_.sc_down[kScratch] + quad_->k;
+      q1_ = S_.sc_down[kQuad1];
+      q2_ = S_.sc_down[kQuad2];
     }
-    const Eigen::Map<const Eigen::VectorXd> d(S.d_down.get(), dim);
-    log.max_safe_step = S.sc_down[kSafeStep];
-    double s = std::min(1.0, opt.safe_fraction * log.max_safe_step);
-    double E_new = E;
-    bool accepted = false;
-    // Trial steps s, s·shrink, …: their energies a batch at a time, then the first
-    // that passes Armijo is certified (on failure the backtracking goes on).
-    int bt = 0;
-    int batch_begin = 0, batch_size = 0;
-    t0 = Clock::now();
-    for (; bt <= opt.max_backtracks; ++bt, s *= opt.shrink) {
-      if (bt >= batch_begin + batch_size) {
-        batch_begin = bt;
-        batch_size = std::min(kBatch, opt.max_backtracks + 1 - bt);
-        double sj = s;
-        for (int j = 0; j < batch_size; ++j, sj *= opt.shrink) {
-          HSI_CUDA_CHECK(kernels::mean_energy(G_, g_.get(), ab_.get(), dab_.get(), sj, part_sum_.get(), part_bad_.get(),
-                                              S.sc.get() + kTrials + j, st));
-        }
-        HSI_CUDA_CHECK(cudaMemcpyAsync(S.sc_down.get() + kTrials, S.sc.get() + kTrials, sz(batch_size) * sizeof(double),
-                                       cudaMemcpyDeviceToHost, st));
-        HSI_CUDA_CHECK(cudaStreamSynchronize(st));
+    return sys;
+  }
+
+  void trial_energies(std::span<const double> steps, std::span<double> energies) override {
+    for (size_t begin = 0; begin < steps.size(); begin += kBatch) {
+      const size_t count = std::min<size_t>(kBatch, steps.size() - begin);
+      for (size_t j = 0; j < count; ++j)
+        HSI_CUDA_CHECK(kernels::mean_energy(c_.G_, c_.g_.get(), c_.ab_.get(), c_.dab_.get(), steps[begin + j], c_.part_sum_.get(),
+                                            c_.part_bad_.get(), S_.sc.get() + kTrials + j, st()));
+      HSI_CUDA_CHECK(cudaMemcpyAsync(S_.sc_down.get() + kTrials, S_.sc.get() + kTrials, count * sizeof(double),
+                                     cudaMemcpyDeviceToHost, st()));
+      HSI_CUDA_CHECK(cudaStreamSynchronize(st()));
+      for (size_t j = 0; j < count; ++j) {
+        const double s = steps[begin + j];
+        energies[begin + j] = S_.sc_down[kTrials + j] + (quad_ ? q0_ + s * q1_ + 0.5 * s * s * q2_ : 0.0);
       }
-      const int j = bt - batch_begin;
-      const Eigen::VectorXd x_new = res.x + s * d;
-      E_new = S.sc_down[kTrials + j] + quad_value(x_new);
-      if (!(E_new <= E + opt.armijo * s * slope)) {
-        log.backtracks++;
-        continue;
-      }
-      // x_new on the device: xn = x + s d.
-      HSI_CUDA_CHECK(cudaMemcpyAsync(S.xn.get(), S.x.get(), S.x.bytes(), cudaMemcpyDeviceToDevice, st));
-      HSI_CUDA_CHECK(cublasDaxpy(blas_, dim, &s, S.d.get(), 1, S.xn.get(), 1));
-      res.timing.line_search += ms_since(t0);
-      bool ok = true;
-      if (certify) {
-        CertificateResult c = certify_device(S.xn.get(), false);
-        ok = c.certified;
-        if (ok) last_pass = std::move(c);
-      }
-      t0 = Clock::now();
-      if (!ok) {
-        log.backtracks++;
-        log.certificate_rejections++;
-        continue;
-      }
-      accepted = true;
-      break;
-    }
-    res.timing.line_search += ms_since(t0);
-    if (!accepted) {
-      res.converged = std::abs(slope) < 1e-12 * std::max(1.0, std::abs(E));
-      res.message = res.converged ? "converged (no further decrease at round-off level)" : "line search found no certified decrease";
-      break;
-    }
-    res.x += s * d;
-    std::swap(S.x, S.xn);
-    last_pass_is_x = certify;
-    t0 = Clock::now();
-    set_coefficients(S.x.get());
-    res.timing.energy_gradient += ms_since(t0);
-    const double dE = E - E_new;
-    E = E_new;
-    log.energy = E;
-    log.step = s;
-    log.ms = ms_since(t_it);
-    res.log.push_back(log);
-    res.iterations++;
-    if (dE < opt.tolerance) {
-      res.converged = true;
-      res.message = "converged (energy decrease below tolerance)";
-      break;
     }
   }
-  if (res.message.empty()) res.message = "stopped at the iteration limit";
-  if (certify) {
-    if (last_pass_is_x) {
-      res.certificate = last_pass;
+
+  CertificateResult certify(double step, bool full) override {
+    if (!certify_) throw InputError("hsi::cuda: no certifier to certify with");
+    const double* x = S_.xa.get();
+    if (step != 0) {
+      make_trial(step);
+      x = S_.xna.get();
+    }
+    // Full coefficients of x into S.full, then the certificate.
+    HSI_CUDA_CHECK(cudaMemcpyAsync(S_.full.get(), S_.X0.get(), S_.full.bytes(), cudaMemcpyDeviceToDevice, st()));
+    HSI_CUDA_CHECK(cublasDgemv(c_.blas_, CUBLAS_OP_N, S_.M4, S_.dim, &kOneD, S_.X.get(), S_.M4, x, 1, &kOneD, S_.full.get(), 1));
+    CertificateOptions o;
+    o.stop_at_first_failure = !full;
+    c_.certifier_->enqueue(reinterpret_cast<const double2*>(S_.full.get()), o);
+    return c_.certifier_->fetch();
+  }
+
+  void accept(double step) override {
+    if (!(step == trial_step_)) make_trial(step);  // the very point certify() looked at, else made alike
+    std::swap(S_.xa, S_.xna);
+    trial_step_ = std::numeric_limits<double>::quiet_NaN();
+    set_coefficients();
+  }
+
+  Eigen::VectorXd x() override {
+    const int dim = S_.dim;
+    HSI_CUDA_CHECK(cudaMemcpyAsync(S_.x_up.get(), S_.xa.get(), sz(dim) * sizeof(double), cudaMemcpyDeviceToHost, st()));
+    HSI_CUDA_CHECK(cudaStreamSynchronize(st()));
+    return Eigen::Map<const Eigen::VectorXd>(S_.x_up.get(), dim);
+  }
+
+ private:
+  cudaStream_t st() const { return c_.stream_; }
+
+  // ab = D · (Tc x) at the device's current x.
+  void set_coefficients() {
+    HSI_CUDA_CHECK(cublasDgemv(c_.blas_, CUBLAS_OP_N, 4 * c_.n_, S_.dim, &kOneD, S_.Tca.get(), 4 * c_.n_, S_.xa.get(), 1, &kZeroD,
+                               reinterpret_cast<double*>(c_.coef_.get()), 1));
+    HSI_CUDA_CHECK(cublasZgemm(c_.blas_, CUBLAS_OP_N, CUBLAS_OP_N, c_.G_, 2, c_.n_, &CudaNewtonCore::kOne, c_.D_.get(), c_.G_,
+                               c_.coef_.get(), c_.n_, &CudaNewtonCore::kZero, c_.ab_.get(), c_.G_));
+  }
+
+  // xna = x ⊕ step·d: x + s d, or regauge(Ta ([x; 0] + s d)) with the rotation freed.
+  void make_trial(double step) {
+    const int dim = S_.dim;
+    if (!rotation_) {
+      HSI_CUDA_CHECK(cudaMemcpyAsync(S_.xna.get(), S_.xa.get(), sz(dim) * sizeof(double), cudaMemcpyDeviceToDevice, st()));
+      HSI_CUDA_CHECK(cublasDaxpy(c_.blas_, dim, &step, S_.d.get(), 1, S_.xna.get(), 1));
     } else {
-      res.certificate = certify_device(S.x.get(), true);
+      const int n = c_.n_, m = dim + 1;
+      HSI_CUDA_CHECK(cudaMemcpyAsync(S_.z.get(), S_.xa.get(), sz(m) * sizeof(double), cudaMemcpyDeviceToDevice, st()));
+      HSI_CUDA_CHECK(cublasDaxpy(c_.blas_, m, &step, S_.d.get(), 1, S_.z.get(), 1));
+      HSI_CUDA_CHECK(cublasDgemv(c_.blas_, CUBLAS_OP_N, 4 * n, m, &kOneD, S_.Ta.get(), 4 * n, S_.z.get(), 1, &kZeroD, S_.v.get(), 1));
+      HSI_CUDA_CHECK(kernels::regauge(dim, n, S_.rotation_vertex, S_.primary.get(), S_.v.get(), S_.xna.get(), st()));
     }
-    res.certified = res.certificate.certified;
+    trial_step_ = step;
   }
-  // The certificate is of the device's x (its own x + s d sums): hand back that one.
-  if (res.iterations > 0) {
-    HSI_CUDA_CHECK(cudaMemcpyAsync(S.x_up.get(), S.x.get(), S.x.bytes(), cudaMemcpyDeviceToHost, st));
-    HSI_CUDA_CHECK(cudaStreamSynchronize(st));
-    std::copy(S.x_up.get(), S.x_up.get() + dim, res.x.data());
-  }
-  return finish();
+
+  static constexpr double kOneD = 1, kZeroD = 0, kMinusOneD = -1;
+  CudaNewtonCore& c_;
+  DeviceSpace& S_;
+  const QuadraticTerm* quad_;
+  bool certify_;
+  int m_ = 0;
+  bool rotation_ = false;
+  double trial_step_ = std::numeric_limits<double>::quiet_NaN();  // the step xna holds
+  double q0_ = 0, q1_ = 0, q2_ = 0;
+};
+
+std::unique_ptr<NewtonStepper> CudaNewtonCore::make_stepper(const MapSpace& space, const Certifier* certifier,
+                                                            const QuadraticTerm* quad) {
+  // Only for the setup this core was made with: its certifier is the one on the device.
+  if (!setup_ || (certifier && certifier != &setup_->certifier)) return nullptr;
+  if (&space != &setup_->map_space && &space != &setup_->metric_space) return nullptr;
+  return std::make_unique<DeviceStepper>(*this, device_space(space), quad, certifier != nullptr);
 }
 
 }  // namespace hsi::cuda

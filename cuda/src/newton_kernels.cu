@@ -237,7 +237,37 @@ __global__ void add_ridge_kernel(int n, const double* __restrict__ A0, double ri
     A[t] = A0[t] + (t % (static_cast<size_t>(n) + 1) == 0 ? ridge : 0.0);
 }
 
+// MapSpace::regauge on the device: rotate the image so that φ_r lies on the positive
+// imaginary axis, then read x off the primary rows (same arithmetic as the host).
+__global__ void regauge_kernel(int dim, int n, int r, const int* __restrict__ primary, const double* __restrict__ v,
+                               double* __restrict__ x) {
+  const int c = blockIdx.x * blockDim.x + threadIdx.x;
+  if (c >= dim) return;
+  const double px = v[r], py = v[n + r];
+  const double len = hypot(px, py);
+  const double rx = len > 0 ? py / len : 1.0, ry = len > 0 ? px / len : 0.0;  // r = i conj(p) / |p|
+  const int row = primary[c], a = row % n, part = row / n;
+  double zx, zy;
+  if (part < 2) {
+    const double ux = v[a], uy = v[n + a];
+    zx = rx * ux - ry * uy;
+    zy = rx * uy + ry * ux;
+  } else {  // conj(r) ψ
+    const double ux = v[2 * n + a], uy = v[3 * n + a];
+    zx = rx * ux + ry * uy;
+    zy = rx * uy - ry * ux;
+  }
+  x[c] = part % 2 == 0 ? zx : zy;
+}
+
 }  // namespace
+
+cudaError_t regauge(int dim, int n, int rotation_vertex, const int* primary_rows, const double* v, double* x,
+                    cudaStream_t stream) {
+  regauge_kernel<<<static_cast<unsigned>((dim + kBlock - 1) / kBlock), kBlock, 0, stream>>>(dim, n, rotation_vertex,
+                                                                                            primary_rows, v, x);
+  return cudaGetLastError();
+}
 
 unsigned reduction_blocks(int count) { return blocks_for(count, kBlock, kMaxPartials); }
 

@@ -51,5 +51,8 @@ cudaError_t max_safe_step(int G, const double2* ab, const double2* dab, double* 
 cudaError_t dot(int n, const double* a, const double* b, double* out, cudaStream_t stream);
 cudaError_t diag_abs_max(int n, const double* A, double* out, cudaStream_t stream);
 cudaError_t add_ridge(int n, const double* A0, double ridge, double* A, cudaStream_t stream);
+// x = MapSpace::regauge(v) for v (4n, active coefficients) into x (dim).
+cudaError_t regauge(int dim, int n, int rotation_vertex, const int* primary_rows, const double* v, double* x,
+                    cudaStream_t stream);
 
 }  // namespace hsi::cuda::kernels

@@ -125,6 +125,8 @@ FrameResult Interpolator::frame(double t, const Eigen::VectorXd& warm_start, con
   no.tolerance = options_.tolerance;
   no.max_iterations = options_.max_iterations;
   no.projection = options_.projection;
+  no.exact_hessian_when_definite = options_.exact_hessian_when_definite;
+  no.free_rotation = options_.free_rotation;
   const Eigen::VectorXd& x0 = warm_start.size() ? warm_start : key_x_[static_cast<size_t>(k)];
   if (warm_start.size() && warm_certificate && warm_certificate->certified) no.start_certificate = warm_certificate;
   const NewtonResult n = newton_solve(*core_, setup_.metric_space, &setup_.certifier, nullptr, x0, no);

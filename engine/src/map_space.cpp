@@ -56,6 +56,32 @@ MapSpace::MapSpace(const Cage& cage, Gauge gauge) : gauge_(gauge) {
     for (int a = 1; a < n - N; ++a) t.emplace_back(part * n + a, col++, 1.0);
   T_.resize(4 * n, col);
   T_.setFromTriplets(t.begin(), t.end());
+  primary_rows_.resize(static_cast<size_t>(col));
+  for (int c = 0; c < col; ++c) primary_rows_[static_cast<size_t>(c)] = static_cast<int>(Eigen::SparseMatrix<double>::InnerIterator(T_, c).row());
+}
+
+Eigen::VectorXd MapSpace::rotation_generator(const Eigen::VectorXd& v) const {
+  const Eigen::Index n = this->n();
+  if (v.size() != 4 * n) throw InputError("rotation_generator: expected " + std::to_string(4 * n) + " active coefficients");
+  Eigen::VectorXd u(4 * n);
+  u << -v.segment(n, n), v.segment(0, n), v.segment(3 * n, n), -v.segment(2 * n, n);
+  return u;
+}
+
+Eigen::VectorXd MapSpace::regauge(const Eigen::VectorXd& v) const {
+  const Eigen::Index n = this->n();
+  if (gauge_ != Gauge::ModuloRigid) throw InputError("regauge: only the ModuloRigid space has a rotation gauge");
+  if (v.size() != 4 * n) throw InputError("regauge: expected " + std::to_string(4 * n) + " active coefficients");
+  // φ_r ↦ r φ_r ∈ i R+ with |r| = 1: r = i conj(φ_r) / |φ_r| (as reduce() does).
+  const cd p(v(rotation_vertex_), v(n + rotation_vertex_));
+  const cd r = std::abs(p) > 0 ? cd(0, 1) * std::conj(p) / std::abs(p) : cd(1);
+  Eigen::VectorXd x(dim());
+  for (int c = 0; c < dim(); ++c) {
+    const Eigen::Index row = primary_rows_[static_cast<size_t>(c)], a = row % n, part = row / n;
+    const cd z = part < 2 ? r * cd(v(a), v(n + a)) : std::conj(r) * cd(v(2 * n + a), v(3 * n + a));
+    x(c) = part % 2 == 0 ? z.real() : z.imag();
+  }
+  return x;
 }
 
 MatrixXcd MapSpace::restrict_columns(const MatrixXcd& full_rows) const {
@@ -133,10 +159,7 @@ MapSpace::Canonical MapSpace::reduce(const HarmonicMap& input) const {
   }
   // x is read off each column's primary row (its first, +1 entry).
   out.x.resize(dim());
-  for (int c = 0; c < dim(); ++c) {
-    Eigen::SparseMatrix<double>::InnerIterator it(T_, c);
-    out.x(c) = v(it.row());
-  }
+  for (int c = 0; c < dim(); ++c) out.x(c) = v(primary_rows_[static_cast<size_t>(c)]);
   return out;
 }
 

@@ -3,6 +3,9 @@
 
 #include <Eigen/Cholesky>
 #include <cmath>
+#include <algorithm>
+#include <array>
+#include <cstdio>
 #include <limits>
 
 namespace hsi {
@@ -164,134 +167,255 @@ std::unique_ptr<NewtonCore> make_cpu_newton_core(MatrixXcd D, std::vector<int> H
   return std::make_unique<CpuNewtonCore>(std::move(D), std::move(H));
 }
 
+namespace {
+
+// x ⊕ s·d over the core's per-call interface, the reduced algebra with Eigen.
+class HostStepper final : public NewtonStepper {
+ public:
+  HostStepper(NewtonCore& core, const MapSpace& space, const Certifier* certifier, const QuadraticTerm* quad)
+      : core_(core), space_(space), certifier_(certifier), quad_(quad), T_(space.T()) {
+    if (quad_ && (quad_->Q.rows() != space.dim() || quad_->c.size() != space.dim()))
+      throw InputError("the quadratic term does not match the map space");
+  }
+
+  double start(const Eigen::VectorXd& x0) override {
+    if (x0.size() != space_.dim())
+      throw InputError("the start vector has " + std::to_string(x0.size()) + " entries, the space " + std::to_string(space_.dim()));
+    x_ = x0;
+    core_.set_coefficients(T_ * x_);
+    gradient_valid_ = false;
+    return core_.energy() + quad_value(x_);
+  }
+
+  void linearize(const HessianChoice& choice) override {
+    if (!gradient_valid_) {
+      gv_ = core_.gradient();
+      gradient_valid_ = true;
+    }
+    const Eigen::VectorXd& gv = gv_;
+    const Eigen::MatrixXd Hv = core_.hessian(choice.projection, choice.exact);
+    Eigen::VectorXd g = T_.transpose() * gv;
+    Eigen::MatrixXd H = T_.transpose() * Hv * T_;
+    if (quad_) {
+      g += quad_->Q * x_ + quad_->c;
+      H += quad_->Q;
+    }
+    rotation_ = choice.free_rotation;
+    if (rotation_) {  // one more unknown along the rotation u: [T u]ᵀ Hv [T u], [T u]ᵀ gv
+      u_ = space_.rotation_generator(T_ * x_);
+      const Eigen::VectorXd w = Hv * u_;
+      const Eigen::Index m = H.rows();
+      H.conservativeResize(m + 1, m + 1);
+      H.col(m).head(m) = T_.transpose() * w;
+      H.row(m).head(m) = H.col(m).head(m).transpose();
+      H(m, m) = u_.dot(w);
+      g.conservativeResize(m + 1);
+      g(m) = u_.dot(gv);
+    }
+    g_ = std::move(g);
+    H_ = std::move(H);
+  }
+
+  NewtonSystem solve(double ridge) override {
+    NewtonSystem sys;
+    sys.diagonal_max = H_.diagonal().cwiseAbs().maxCoeff();
+    sys.gradient_norm = g_.head(space_.dim()).norm();
+    Eigen::LLT<Eigen::MatrixXd> llt(H_ + ridge * Eigen::MatrixXd::Identity(H_.rows(), H_.cols()));
+    if (llt.info() != Eigen::Success) return sys;
+    d_ = llt.solve(-g_);
+    if (!d_.allFinite()) return sys;
+    sys.factored = true;
+    sys.slope = g_.dot(d_);
+    dv_ = T_ * d_.head(space_.dim());
+    if (rotation_) dv_ += d_(space_.dim()) * u_;
+    core_.set_direction(dv_);
+    sys.max_safe_step = core_.max_safe_step();
+    return sys;
+  }
+
+  void trial_energies(std::span<const double> steps, std::span<double> energies) override {
+    for (size_t j = 0; j < steps.size(); ++j) {
+      energies[j] = core_.energy_at(steps[j]);
+      if (quad_) energies[j] += quad_value(trial(steps[j]));
+    }
+  }
+
+  CertificateResult certify(double step, bool full) override {
+    if (!certifier_) throw InputError("newton: no certifier to certify with");
+    CertificateOptions o;
+    o.stop_at_first_failure = !full;
+    return certifier_->certify(space_.expand(step == 0 ? x_ : trial(step)), o);
+  }
+
+  void accept(double step) override {
+    x_ = trial(step);
+    core_.set_coefficients(T_ * x_);
+    gradient_valid_ = false;
+  }
+
+  Eigen::VectorXd x() override { return x_; }
+
+ private:
+  double quad_value(const Eigen::VectorXd& x) const { return quad_ ? quad_->value(x) : 0.0; }
+  Eigen::VectorXd trial(double step) const {
+    if (!rotation_) return x_ + step * d_;
+    return space_.regauge(T_ * x_ + step * dv_);
+  }
+
+  NewtonCore& core_;
+  const MapSpace& space_;
+  const Certifier* certifier_;
+  const QuadraticTerm* quad_;
+  const Eigen::SparseMatrix<double>& T_;
+  Eigen::VectorXd x_, g_, d_, dv_, u_, gv_;
+  Eigen::MatrixXd H_;
+  bool rotation_ = false;
+  bool gradient_valid_ = false;  // gv_ is the core's gradient at x_
+};
+
+constexpr int kTrialBatch = 4;  // Armijo trial energies asked for at a time
+
+}  // namespace
+
+std::unique_ptr<NewtonStepper> make_host_stepper(NewtonCore& core, const MapSpace& space, const Certifier* certifier,
+                                                 const QuadraticTerm* quad) {
+  return std::make_unique<HostStepper>(core, space, certifier, quad);
+}
+
 NewtonResult newton_solve(NewtonCore& core, const MapSpace& space, const Certifier* certifier, const QuadraticTerm* quad,
                           const Eigen::VectorXd& x0, const NewtonOptions& opt) {
-  if (opt.device_loop) {
-    NewtonResult on_device;
-    if (core.solve(space, certifier, quad, x0, opt, &on_device)) return on_device;
-  }
-  const auto t_start = Clock::now();
-  const Eigen::SparseMatrix<double>& T = space.T();
-  NewtonResult res;
-  res.x = x0;
-  auto total = [&](const Eigen::VectorXd& x, double sample_energy) {
-    return sample_energy + (quad ? quad->value(x) : 0.0);
-  };
-  CertificateOptions fast;
-  fast.stop_at_first_failure = true;
-  // A certificate that passes has looked at every segment, so the line search's
-  // verdict on the accepted step is also the final report: keep it.
-  CertificateResult last_pass;
-  Eigen::VectorXd last_pass_x;
-  auto certified = [&](const Eigen::VectorXd& x, CertificateResult* full) {
-    if (!opt.certify || !certifier) return true;
-    if (full && last_pass_x.size() == x.size() && last_pass_x == x) {
-      *full = last_pass;
-      return true;
-    }
-    const auto t0 = Clock::now();
-    CertificateResult c = certifier->certify(space.expand(x), full ? CertificateOptions{} : fast);
-    res.timing.certificate += ms_since(t0);
-    if (c.certified) {
-      last_pass = c;
-      last_pass_x = x;
-    }
-    if (full) *full = c;
-    return c.certified;
-  };
+  std::unique_ptr<NewtonStepper> stepper = core.make_stepper(space, certifier, quad);
+  if (!stepper) stepper = make_host_stepper(core, space, certifier, quad);
+  const bool rotation_invariant = space.gauge() == Gauge::ModuloRigid && !quad;
+  return newton_run(*stepper, opt.certify && certifier, rotation_invariant, x0, opt);
+}
 
+NewtonResult newton_run(NewtonStepper& st, bool certify, bool rotation_invariant, const Eigen::VectorXd& x0,
+                        const NewtonOptions& opt) {
+  const auto t_start = Clock::now();
+  NewtonResult res;
+  auto finish = [&](double E) {
+    res.energy = E;
+    res.x = st.x();
+    res.ms = ms_since(t_start);
+    return res;
+  };
   auto t0 = Clock::now();
-  core.set_coefficients(T * res.x);
-  double E = total(res.x, core.energy());
+  double E = st.start(x0);
   res.timing.energy_gradient += ms_since(t0);
   if (!std::isfinite(E)) {
     res.message = "the starting map folds or degenerates at a sample (infinite energy)";
-    res.energy = E;
-    return res;
+    return finish(E);
   }
-  if (opt.certify && certifier && opt.start_certificate && opt.start_certificate->certified) {
-    res.certificate = last_pass = *opt.start_certificate;
-    last_pass_x = res.x;
-  } else if (opt.certify && certifier && !certified(res.x, &res.certificate)) {
-    res.message = "the starting map is not certified: " + res.certificate.reason;
-    res.energy = E;
-    return res;
+  auto timed_certify = [&](double step, bool full) {
+    const auto tc = Clock::now();
+    CertificateResult c = st.certify(step, full);
+    res.timing.certificate += ms_since(tc);
+    return c;
+  };
+  if (certify) {
+    res.certificate = opt.start_certificate && opt.start_certificate->certified ? *opt.start_certificate : timed_certify(0, true);
+    if (!res.certificate.certified) {
+      res.message = "the starting map is not certified: " + res.certificate.reason;
+      return finish(E);
+    }
   }
+  // A certificate that passes has looked at every segment, so the line search's verdict
+  // on the accepted step is the final map's full certificate: res.certificate follows x.
+  double dE_prev = -1;  // the previous step's decrease (none yet)
+  int crawling = 0;     // accepted steps in a row at a linear rate ≥ stagnation_rate
 
   for (int it = 0; it < opt.max_iterations; ++it) {
     const auto t_it = Clock::now();
     NewtonIteration log;
-    t0 = Clock::now();
-    Eigen::VectorXd g = T.transpose() * core.gradient();
-    if (quad) g += quad->Q * res.x + quad->c;
-    res.timing.energy_gradient += ms_since(t0);
-
-    t0 = Clock::now();
-    Eigen::MatrixXd Hr = T.transpose() * core.hessian(opt.projection) * T;
-    if (quad) Hr += quad->Q;
-    res.timing.hessian += ms_since(t0);
-
-    t0 = Clock::now();
-    // Cholesky of the reduced SPD system; a tiny ridge if round-off (or a free
-    // direction such as the rotation with a single handle) makes it singular.
-    Eigen::VectorXd d;
-    double ridge = 0;
-    const double scale = std::max(Hr.diagonal().cwiseAbs().maxCoeff(), 1e-300);
-    for (int attempt = 0; attempt < 12; ++attempt) {
-      Eigen::LLT<Eigen::MatrixXd> llt(Hr + ridge * Eigen::MatrixXd::Identity(Hr.rows(), Hr.cols()));
-      if (llt.info() == Eigen::Success) {
-        d = llt.solve(-g);
-        if (d.allFinite()) break;
-      }
-      ridge = ridge == 0 ? 1e-12 * scale : ridge * 10;
-      d.resize(0);
+    const double scale = std::max(1.0, std::abs(E));
+    // 1. The system: the exact Hessian where it is positive definite, else the projection
+    //    (with the rotation freed), with a ridge when round-off makes it singular.
+    NewtonSystem sys;
+    auto build = [&](const HessianChoice& choice) {
+      t0 = Clock::now();
+      st.linearize(choice);
+      res.timing.hessian += ms_since(t0);
+    };
+    auto factor = [&](double ridge) {
+      t0 = Clock::now();
+      sys = st.solve(ridge);
+      res.timing.solve += ms_since(t0);
+    };
+    // The exact Hessian is tried once Newton takes full steps (near the solution, where
+    // it is definite and converges quadratically); a first iteration seldom gets there.
+    if (opt.exact_hessian_when_definite && !res.log.empty() && res.log.back().step == 1.0) {
+      build({true, opt.projection, false});
+      factor(0);
+      log.exact_hessian = sys.factored;
     }
-    res.timing.solve += ms_since(t0);
-    if (d.size() == 0) {
+    if (!sys.factored) {
+      build({false, opt.projection, rotation_invariant && opt.free_rotation && opt.projection != HessianProjection::Delete});
+      double ridge = 0;
+      for (int attempt = 0; attempt < opt.max_ridge_attempts; ++attempt) {
+        factor(ridge);
+        if (sys.factored) break;
+        ridge = ridge == 0 ? 1e-12 * std::max(sys.diagonal_max, 1e-300) : ridge * 10;
+      }
+    }
+    if (!sys.factored) {
       res.message = "the Newton system could not be factored";
       break;
     }
-    log.gradient_norm = g.norm();
-    const double slope = g.dot(d);
-    if (!(slope < -1e-14 * std::max(1.0, std::abs(E)))) {
+    log.gradient_norm = sys.gradient_norm;
+    log.decrement2 = -sys.slope;
+    log.max_safe_step = sys.max_safe_step;
+    const double slope = sys.slope;
+    if (!(slope < -opt.descent_slope * scale)) {
       res.converged = true;
-      res.message = "no descent direction left (gradient at round-off level)";
+      res.message = "converged (no descent direction left: gradient at round-off level)";
       break;
     }
 
+    // 2. Armijo backtracking from min(1, safe_fraction · s_max); a step is taken only if
+    //    the certificate passes at the new map.
     t0 = Clock::now();
-    core.set_direction(T * d);
-    log.max_safe_step = core.max_safe_step();
-    double s = std::min(1.0, opt.safe_fraction * log.max_safe_step);
+    double s = std::min(1.0, opt.safe_fraction * sys.max_safe_step);
     double E_new = E;
     bool accepted = false;
+    std::array<double, kTrialBatch> steps{}, energies{};
+    int batch_begin = 0, batch_size = 0;
     for (int bt = 0; bt <= opt.max_backtracks; ++bt, s *= opt.shrink) {
-      const Eigen::VectorXd x_new = res.x + s * d;
-      E_new = total(x_new, core.energy_at(s));
+      if (bt >= batch_begin + batch_size) {
+        batch_begin = bt;
+        batch_size = std::min(kTrialBatch, opt.max_backtracks + 1 - bt);
+        double sj = s;
+        for (int j = 0; j < batch_size; ++j, sj *= opt.shrink) steps[static_cast<size_t>(j)] = sj;
+        st.trial_energies(std::span<const double>(steps.data(), static_cast<size_t>(batch_size)),
+                          std::span<double>(energies.data(), static_cast<size_t>(batch_size)));
+      }
+      E_new = energies[static_cast<size_t>(bt - batch_begin)];
       if (!(E_new <= E + opt.armijo * s * slope)) {
         log.backtracks++;
         continue;
       }
       res.timing.line_search += ms_since(t0);
-      const bool ok = certified(x_new, nullptr);
-      t0 = Clock::now();
-      if (!ok) {
-        log.backtracks++;
-        log.certificate_rejections++;
-        continue;
+      if (certify) {
+        CertificateResult c = timed_certify(s, false);
+        t0 = Clock::now();
+        if (!c.certified) {
+          log.backtracks++;
+          log.certificate_rejections++;
+          continue;
+        }
+        res.certificate = std::move(c);
       }
       accepted = true;
       break;
     }
     res.timing.line_search += ms_since(t0);
     if (!accepted) {
-      res.converged = std::abs(slope) < 1e-12 * std::max(1.0, std::abs(E));
+      res.converged = std::abs(slope) < 1e-12 * scale;
       res.message = res.converged ? "converged (no further decrease at round-off level)" : "line search found no certified decrease";
       break;
     }
-    res.x += s * d;
     t0 = Clock::now();
-    core.set_coefficients(T * res.x);
+    st.accept(s);
     res.timing.energy_gradient += ms_since(t0);
     const double dE = E - E_new;
     E = E_new;
@@ -300,17 +424,33 @@ NewtonResult newton_solve(NewtonCore& core, const MapSpace& space, const Certifi
     log.ms = ms_since(t_it);
     res.log.push_back(log);
     res.iterations++;
-    if (dE < opt.tolerance) {
+
+    // 3. Stopping: a small decrease that is not a slow linear crawl (the decrease still
+    //    to come at rate ρ is ΔE ρ/(1 − ρ)); a long crawl is stagnation.
+    const double rate = dE_prev > 0 ? std::clamp(dE / dE_prev, 0.0, 1.0) : 0.0;
+    dE_prev = dE;
+    const double to_come = rate < 1 ? dE * rate / (1 - rate) : std::numeric_limits<double>::infinity();
+    const double tol = opt.tolerance * std::max(std::abs(E), 1e-300);
+    if (dE + to_come < tol || dE <= 0) {
       res.converged = true;
       res.message = "converged (energy decrease below tolerance)";
       break;
     }
+    crawling = rate >= opt.stagnation_rate ? crawling + 1 : 0;
+    if (crawling >= opt.stagnation_steps) {
+      res.stagnated = true;
+      char why[200];
+      std::snprintf(why, sizeof why, "stagnated: %d steps in a row each lowered the energy at a linear rate >= %.2f (last decrease %.3g)",
+                    crawling, opt.stagnation_rate, dE);
+      res.message = why;
+      break;
+    }
   }
   if (res.message.empty()) res.message = "stopped at the iteration limit";
-  res.energy = E;
-  if (opt.certify && certifier) res.certified = certified(res.x, &res.certificate);
-  res.ms = ms_since(t_start);
-  return res;
+  if (certify) {
+    res.certified = res.certificate.certified;
+  }
+  return finish(E);
 }
 
 }  // namespace hsi

@@ -155,7 +155,7 @@ HSI_API hsi_status hsi_scene_save_file(hsi_scene* scene, const char* path);
 typedef enum hsi_projection { HSI_PROJECTION_PARTPROJ = 0, HSI_PROJECTION_FULLPROJ = 1, HSI_PROJECTION_DELETE = 2 } hsi_projection;
 
 typedef struct hsi_interpolation_options {
-  double tolerance;        /* stop a frame when E_k - E_k+1 < tolerance; default 1e-7 */
+  double tolerance;        /* stop a frame when E_k - E_k+1 < tolerance * E_k (relative); default 5e-8 */
   int max_iterations;      /* Newton iterations per frame; default 100 */
   hsi_projection projection; /* default HSI_PROJECTION_PARTPROJ */
 } hsi_interpolation_options;

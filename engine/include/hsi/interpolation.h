@@ -15,9 +15,13 @@
 namespace hsi {
 
 struct InterpolationOptions {
-  double tolerance = 1e-7;    // stop when E_k − E_{k+1} < tolerance (paper: 1e-7)
+  double tolerance = 5e-8;    // relative: NewtonOptions::tolerance (the paper's absolute 1e-7 at E = 2)
   int max_iterations = 100;
   HessianProjection projection = HessianProjection::PartProj;
+  // NewtonOptions::exact_hessian_when_definite and free_rotation: both off is the
+  // paper's plain projected Newton (which crawls on some inputs, issue #20).
+  bool exact_hessian_when_definite = true;
+  bool free_rotation = true;
 };
 
 // Pose of a map: the centroid of the boundary's image (by arc length) and the

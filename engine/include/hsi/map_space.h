@@ -55,6 +55,19 @@ class MapSpace {
   // Throws InputError if ψ_log ≠ conj φ_log beyond a relative 1e-9.
   Canonical reduce(const HarmonicMap& map) const;
 
+  // The global rotation of the image, φ → e^{iθ}φ, ψ → e^{−iθ}ψ, differentiated at
+  // θ = 0, at active coefficients v = T x (4n): (−Im φ, Re φ, Im ψ, −Re ψ). It keeps
+  // every constraint of the space but the rotation gauge Re φ_r = 0, and the
+  // interpolation energy and the certificate are invariant along the rotation.
+  Eigen::VectorXd rotation_generator(const Eigen::VectorXd& v) const;
+  // ModuloRigid only: active coefficients v that satisfy every constraint but the
+  // rotation gauge (v = T x + c·rotation_generator(T x), say) turned back into the gauge
+  // by the exact rotation of the image that puts φ_r on the positive imaginary axis,
+  // and read off as x. The map changes by that rigid rotation alone.
+  Eigen::VectorXd regauge(const Eigen::VectorXd& v) const;
+  // Row of T holding each column's free variable (its first, +1 entry): x(c) = v(row).
+  const std::vector<int>& primary_rows() const { return primary_rows_; }
+
  private:
   Gauge gauge_;
   int full_size_ = 0;
@@ -66,6 +79,7 @@ class MapSpace {
   std::vector<int> log_columns_;              // active indices of the hole columns
   Eigen::SparseMatrix<double> T_;
   std::vector<cd> cage_vertices_;
+  std::vector<int> primary_rows_;
 };
 
 }  // namespace hsi

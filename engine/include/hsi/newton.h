@@ -3,14 +3,22 @@
 // (f_z, conj f_zbar) against a target metric per sample", plus an optional
 // quadratic term (positional constraints when authoring keyframes).
 //
-// The hot loops live behind NewtonCore: energy and gradient over G, the PSD
-// Hessian over H, and the line-search evaluations. The CPU core here is the
-// readable reference; cuda/ provides a twin with the same interface.
+// One loop, newton_solve, makes every decision (which Hessian, ridge retries, the
+// descent test, Armijo backtracking, certificate rejections, convergence and
+// stagnation) for every backend. The arithmetic sits behind two interfaces:
+//   NewtonCore     per-sample work (energy and gradient over G, the PSD Hessian over
+//                  H, line-search evaluations): the CPU core here, the readable
+//                  reference, and its CUDA twin in cuda/;
+//   NewtonStepper  one solve's reduced-space work (the system, its factorisation, the
+//                  trial points, the certificate): a host stepper over any NewtonCore
+//                  (newton.cpp), or a core's own (the CUDA core keeps x, the system
+//                  and the certificate on the GPU and answers with scalars).
 #pragma once
 
 #include <chrono>
 #include <functional>
 #include <memory>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -23,6 +31,7 @@ namespace hsi {
 struct QuadraticTerm;
 struct NewtonOptions;
 struct NewtonResult;
+class NewtonStepper;
 
 // Per-iteration sample work. Coefficients are the active real vector
 // v = (Re φ_a, Im φ_a, Re ψ_a, Im ψ_a) ∈ R^{4n} of MapSpace.
@@ -42,15 +51,61 @@ class NewtonCore {
   virtual double max_safe_step() = 0;              // first s > 0 with |a + s da| = |b + s db| at a sample
   virtual double energy_at(double s) = 0;          // energy at v + s dv
 
-  // A core that can run newton_solve's whole iteration on its own device (the CUDA
-  // core made from a ShapeSetup: factorisation, line search and certificate on the
-  // GPU) overrides this, fills *out with what newton_solve would return and says
-  // true. The default declines and newton_solve drives the core from the host.
-  virtual bool solve(const MapSpace& /*space*/, const Certifier* /*certifier*/, const QuadraticTerm* /*quad*/,
-                     const Eigen::VectorXd& /*x0*/, const NewtonOptions& /*options*/, NewtonResult* /*out*/) {
-    return false;
+  // A stepper of the core's own for one solve in `space` (certifier and quad may be
+  // null), or null: newton_solve then drives this core through the host stepper. The
+  // CUDA core made from a ShapeSetup answers for that setup's spaces and certifier.
+  virtual std::unique_ptr<NewtonStepper> make_stepper(const MapSpace& /*space*/, const Certifier* /*certifier*/,
+                                                      const QuadraticTerm* /*quad*/) {
+    return nullptr;
   }
 };
+
+// Which Hessian a Newton system is built from.
+struct HessianChoice {
+  bool exact = false;  // the unprojected Hessian (mean over H); else the projection below
+  HessianProjection projection = HessianProjection::PartProj;
+  // Solve with the global rotation of the image free: the system gets one more unknown,
+  // θ, along MapSpace::rotation_generator, and a step is taken along T d + θ u and then
+  // turned back into the rotation gauge exactly (MapSpace::regauge). The energy and the
+  // certificate do not change under that rotation. Only for the ModuloRigid space
+  // without a quadratic term (newton_solve decides).
+  bool free_rotation = false;
+};
+
+// What a stepper reports about the system it solved: (H + ridge I) d = −g.
+struct NewtonSystem {
+  bool factored = false;       // Cholesky succeeded and d is finite
+  double slope = 0;            // gᵀd (< 0 for a descent direction; −slope is the squared Newton decrement)
+  double gradient_norm = 0;    // |g| in the reduced variables
+  double diagonal_max = 0;     // max |diagonal of H|: the scale of a ridge
+  double max_safe_step = 0;    // first s > 0 at which a sample reaches |a| = |b| along d
+};
+
+// One solve's work in the reduced space. Vectors stay where the stepper keeps them;
+// newton_solve sees scalars, certificates and, at the end, x. "x ⊕ s·d" is x + s d, or
+// with free_rotation the regauged T x + s (T d + θ u).
+class NewtonStepper {
+ public:
+  virtual ~NewtonStepper() = default;
+  // x ← x0; the total energy there (mean over G plus the quadratic term), +inf if it folds.
+  virtual double start(const Eigen::VectorXd& x0) = 0;
+  // The gradient and the chosen Hessian at x (the quadratic term's added).
+  virtual void linearize(const HessianChoice& choice) = 0;
+  // d from (H + ridge I) d = −g of the last linearize(), and the safe step along it.
+  virtual NewtonSystem solve(double ridge) = 0;
+  // Total energies at x ⊕ steps[j]·d.
+  virtual void trial_energies(std::span<const double> steps, std::span<double> energies) = 0;
+  // The certificate of x ⊕ step·d (step 0: of x). Full: every segment, with bounds;
+  // otherwise it may stop at the first failure (a pass has looked at every segment).
+  virtual CertificateResult certify(double step, bool full) = 0;
+  // x ← x ⊕ step·d: exactly the point certify(step, ·) looked at.
+  virtual void accept(double step) = 0;
+  virtual Eigen::VectorXd x() = 0;
+};
+
+// The host stepper: reduced-space algebra with Eigen over the core's per-call interface.
+std::unique_ptr<NewtonStepper> make_host_stepper(NewtonCore& core, const MapSpace& space, const Certifier* certifier,
+                                                 const QuadraticTerm* quad);
 
 // D: the active basis rows D(w) at the samples G (|G| × n); H: indices into G.
 std::unique_ptr<NewtonCore> make_cpu_newton_core(MatrixXcd D, std::vector<int> H);
@@ -63,16 +118,37 @@ struct QuadraticTerm {
   double value(const Eigen::VectorXd& x) const { return 0.5 * x.dot(Q * x) + c.dot(x) + k; }
 };
 
+// Every threshold newton_solve decides by. Energies are compared relative to |E|, so a
+// test means the same whatever the energy's scale (the interpolation energy is ≥ 2; an
+// authoring energy adds a positional term).
 struct NewtonOptions {
   int max_iterations = 100;
-  double tolerance = 1e-7;        // stop when E_k − E_{k+1} < tolerance (paper: 1e-7)
+  // Converged when a step lowers the energy by less than tolerance·|E| and the
+  // decrease is not a slow linear crawl: with ρ = ΔE_k / ΔE_{k−1} (0 for the first
+  // step), the decrease still to come, ΔE ρ/(1 − ρ), counts too. 5e-8 is the paper's
+  // absolute 1e-7 at E = 2, the isometric energy's minimum.
+  double tolerance = 5e-8;
   HessianProjection projection = HessianProjection::PartProj;
+  // Once a full step was taken, use the unprojected Hessian whenever its reduced system
+  // is positive definite (quadratic convergence near the solution), and the projection
+  // above otherwise (and always in a solve's first iteration).
+  bool exact_hessian_when_definite = true;
+  // Free the global rotation in projected systems (HessianChoice::free_rotation): a PSD
+  // projection gives the rotation, along which the energy is flat, a curvature that the
+  // rotation gauge Re φ_r = 0 otherwise spreads over every other direction, and Newton
+  // then crawls (issue #20).
+  bool free_rotation = true;
   double armijo = 0.2;            // sufficient-decrease factor
   double shrink = 0.5;            // backtracking factor
   double safe_fraction = 0.8;     // first trial step: min(1, 0.8 s_max)
   int max_backtracks = 60;
+  int max_ridge_attempts = 12;    // ridges 1e-12·max|diag H|, ×10 each, when Cholesky fails
+  double descent_slope = 1e-14;   // no descent left when gᵀd ≥ −descent_slope·max(1, |E|)
+  // Stagnation: this many accepted steps in a row, each at a linear rate ρ ≥
+  // stagnation_rate, stop the solve as not converged.
+  int stagnation_steps = 12;
+  double stagnation_rate = 0.9;
   bool certify = true;            // accept a step only if the certificate passes
-  bool device_loop = true;        // let a core run the whole iteration on its device (NewtonCore::solve)
   // The certificate of x0's map when the caller has it already (a warm start from the
   // previous frame's solution): not computed again. Must be of space.expand(x0) exactly.
   const CertificateResult* start_certificate = nullptr;
@@ -80,6 +156,8 @@ struct NewtonOptions {
 
 struct NewtonIteration {
   double energy = 0, gradient_norm = 0, step = 0, max_safe_step = 0;
+  double decrement2 = 0;          // −gᵀd: the squared Newton decrement (predicted decrease of a full step ×2)
+  bool exact_hessian = false;     // the system used the unprojected Hessian
   int backtracks = 0, certificate_rejections = 0;
   double ms = 0;
 };
@@ -89,16 +167,28 @@ struct NewtonResult {
   double energy = 0;
   int iterations = 0;
   bool converged = false;
+  bool stagnated = false;         // stopped because the energy decreased only linearly and slowly
   bool certified = false;         // the final map passed the certificate
   CertificateResult certificate;  // of the final map (when certify)
   std::vector<NewtonIteration> log;
   std::string message;            // why it stopped
   double ms = 0;
+  // Host time per part: energy_gradient the start and each accepted step (the samples
+  // at the new x), hessian the gradient and Hessian (linearize), solve the
+  // factorisation, direction and safe step, line_search the trial energies,
+  // certificate every certificate.
   struct Timing { double energy_gradient = 0, hessian = 0, solve = 0, line_search = 0, certificate = 0; } timing;
 };
 
-// Minimises mean_G E_iso + quad(x) from x0, which must be a certified map.
+// Minimises mean_G E_iso + quad(x) from x0, which must be a certified map: the core's
+// own stepper where it has one for these arguments, else the host stepper.
 NewtonResult newton_solve(NewtonCore& core, const MapSpace& space, const Certifier* certifier, const QuadraticTerm* quad,
                           const Eigen::VectorXd& x0, const NewtonOptions& options);
+
+// The loop itself over any stepper (newton_solve's body; tests drive it with a fake).
+// certify: the stepper's certificates decide steps; rotation_invariant: the energy is
+// invariant under the global rotation of the image, so projected systems may free it.
+NewtonResult newton_run(NewtonStepper& stepper, bool certify, bool rotation_invariant, const Eigen::VectorXd& x0,
+                        const NewtonOptions& options);
 
 }  // namespace hsi
