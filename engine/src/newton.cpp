@@ -436,7 +436,7 @@ NewtonResult newton_run(NewtonStepper& st, bool certify, bool rotation_invariant
       res.message = "converged (energy decrease below tolerance)";
       break;
     }
-    crawling = rate >= opt.stagnation_rate ? crawling + 1 : 0;
+    crawling = rate >= opt.stagnation_rate && dE < 10 * tol ? crawling + 1 : 0;
     if (crawling >= opt.stagnation_steps) {
       res.stagnated = true;
       char why[200];

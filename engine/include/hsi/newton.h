@@ -144,8 +144,8 @@ struct NewtonOptions {
   int max_backtracks = 60;
   int max_ridge_attempts = 12;    // ridges 1e-12·max|diag H|, ×10 each, when Cholesky fails
   double descent_slope = 1e-14;   // no descent left when gᵀd ≥ −descent_slope·max(1, |E|)
-  // Stagnation: this many accepted steps in a row, each at a linear rate ρ ≥
-  // stagnation_rate, stop the solve as not converged.
+  // Stagnation: this many accepted steps in a row, each lowering the energy by less than
+  // 10·tolerance·|E| at a linear rate ρ ≥ stagnation_rate, stop the solve as not converged.
   int stagnation_steps = 12;
   double stagnation_rate = 0.9;
   bool certify = true;            // accept a step only if the certificate passes

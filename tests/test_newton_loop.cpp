@@ -1,0 +1,341 @@
+// newton_run's decisions (issue #20: one loop for every backend), driven by a fake
+// stepper whose answers are scripted; the rotation gauge (rotation_generator, regauge);
+// and the stall that the freed rotation fixes, on the issue's grid of round holes.
+#include <catch2/catch.hpp>
+
+#include <cmath>
+#include <functional>
+
+#include <Eigen/LU>
+#include <numbers>
+
+#include "hsi/interpolation.h"
+#include "hsi/keyframes.h"
+#include "hsi/newton.h"
+#include "hsi/scene_sequence.h"
+#include "hsi/shape_setup.h"
+#include "test_shapes.h"
+
+using namespace hsi;
+
+namespace {
+
+// A scripted stepper on E(x) = 2 + ½ (x − a)ᵀ A (x − a) in R², with hooks to make
+// the exact system indefinite, the first factorisations fail, certificates fail, or
+// the energy crawl.
+struct FakeStepper : NewtonStepper {
+  Eigen::Matrix2d A = Eigen::Matrix2d::Identity();
+  Eigen::Vector2d a{1.0, -2.0}, x_, d_;
+  std::vector<HessianChoice> choices;
+  std::vector<double> ridges, certified_steps;
+  bool exact_definite = true;
+  int fail_factorisations = 0;                 // at ridge 0, this many times
+  std::function<bool(double)> certifies = [](double) { return true; };
+  std::function<double(const Eigen::Vector2d&)> energy = [this](const Eigen::Vector2d& x) {
+    return 2 + 0.5 * (x - a).dot(A * (x - a));
+  };
+  bool exact_now = false;
+
+  double start(const Eigen::VectorXd& x0) override {
+    x_ = x0;
+    return energy(x_);
+  }
+  void linearize(const HessianChoice& c) override {
+    choices.push_back(c);
+    exact_now = c.exact;
+  }
+  NewtonSystem solve(double ridge) override {
+    ridges.push_back(ridge);
+    NewtonSystem s;
+    s.diagonal_max = A.diagonal().cwiseAbs().maxCoeff();
+    if ((exact_now && !exact_definite) || (ridge == 0 && fail_factorisations-- > 0)) return s;
+    const Eigen::Vector2d g = A * (x_ - a);
+    d_ = -(A + ridge * Eigen::Matrix2d::Identity()).inverse() * g;
+    s.factored = true;
+    s.slope = g.dot(d_);
+    s.gradient_norm = g.norm();
+    s.max_safe_step = std::numeric_limits<double>::infinity();
+    return s;
+  }
+  void trial_energies(std::span<const double> steps, std::span<double> out) override {
+    for (size_t j = 0; j < steps.size(); ++j) out[j] = energy(x_ + steps[j] * d_);
+  }
+  CertificateResult certify(double step, bool) override {
+    certified_steps.push_back(step);
+    CertificateResult c;
+    c.certified = certifies(step);
+    if (!c.certified) c.reason = "scripted failure";
+    return c;
+  }
+  void accept(double step) override { x_ += step * d_; }
+  Eigen::VectorXd x() override { return x_; }
+};
+
+}  // namespace
+
+TEST_CASE("newton_run: a quadratic converges in one full step, then stops on the relative decrease", "[newton][loop]") {
+  FakeStepper f;
+  const NewtonResult r = newton_run(f, true, true, Eigen::Vector2d(0, 0), {});
+  CHECK(r.converged);
+  CHECK_FALSE(r.stagnated);
+  CHECK(r.certified);
+  CHECK(r.x.isApprox(f.a, 1e-12));
+  CHECK(r.iterations <= 2);
+  CHECK(r.log.front().step == 1.0);
+  // The first system is projected (with the rotation freed: rotation-invariant, PartProj),
+  // the next, after a full step, exact.
+  REQUIRE(f.choices.size() >= 2);
+  CHECK_FALSE(f.choices[0].exact);
+  CHECK(f.choices[0].free_rotation);
+  CHECK(f.choices[1].exact);  // and at the minimum it finds no descent left
+  CHECK(r.message.find("no descent direction") != std::string::npos);
+}
+
+TEST_CASE("newton_run: an indefinite exact system falls back to the projection; Delete and non-invariant energies keep the gauge",
+          "[newton][loop]") {
+  for (auto [projection, invariant, freed] : {std::tuple{HessianProjection::PartProj, true, true},
+                                               std::tuple{HessianProjection::FullProj, true, true},
+                                               std::tuple{HessianProjection::Delete, true, false},
+                                               std::tuple{HessianProjection::PartProj, false, false}}) {
+    FakeStepper f;
+    f.A << 1, 0, 0, 1e-3;  // slow second coordinate: several iterations
+    f.energy = [&f](const Eigen::Vector2d& x) { return 2 + 0.5 * (x - f.a).dot(f.A * (x - f.a)) + 0.1 * std::pow((x - f.a).norm(), 3); };
+    f.exact_definite = false;
+    NewtonOptions o;
+    o.projection = projection;
+    const NewtonResult r = newton_run(f, true, invariant, Eigen::Vector2d(0, 0), o);
+    CHECK(r.converged);
+    for (size_t k = 0; k + 1 < f.choices.size(); ++k)
+      if (f.choices[k].exact) {
+        REQUIRE_FALSE(f.choices[k + 1].exact);  // each failed exact system is followed by the projection
+        CHECK(f.choices[k + 1].projection == projection);
+      }
+    for (const HessianChoice& c : f.choices)
+      if (!c.exact) CHECK(c.free_rotation == freed);
+    for (const NewtonIteration& it : r.log) CHECK_FALSE(it.exact_hessian);
+  }
+}
+
+TEST_CASE("newton_run: a singular system gets ridges 1e-12 * max|diag| growing tenfold", "[newton][loop]") {
+  FakeStepper f;
+  f.A << 4, 0, 0, 1;
+  f.fail_factorisations = 1;
+  NewtonOptions o;
+  o.exact_hessian_when_definite = false;
+  const NewtonResult r = newton_run(f, false, false, Eigen::Vector2d(0, 0), o);
+  REQUIRE(f.ridges.size() >= 2);
+  CHECK(f.ridges[0] == 0);
+  CHECK(f.ridges[1] == Approx(4e-12));
+  CHECK(r.converged);
+
+  FakeStepper never;
+  never.fail_factorisations = 1000;
+  never.exact_definite = false;
+  o.max_ridge_attempts = 3;
+  // Every factorisation fails, with or without a ridge.
+  never.A << 1, 0, 0, 1;
+  struct Always final : FakeStepper {
+    NewtonSystem solve(double ridge) override {
+      ridges.push_back(ridge);
+      return {};
+    }
+  } always;
+  const NewtonResult bad = newton_run(always, false, false, Eigen::Vector2d(0, 0), o);
+  CHECK_FALSE(bad.converged);
+  CHECK(bad.message == "the Newton system could not be factored");
+  CHECK(always.ridges.size() == 3);
+  CHECK(always.ridges[2] == Approx(always.ridges[1] * 10));
+}
+
+TEST_CASE("newton_run: a step the certificate rejects is halved; the start must be certified", "[newton][loop]") {
+  FakeStepper f;
+  f.certifies = [](double s) { return s == 0 || s <= 0.5; };
+  NewtonOptions o;
+  o.max_iterations = 1;
+  const NewtonResult r = newton_run(f, true, true, Eigen::Vector2d(0, 0), o);
+  REQUIRE(r.log.size() == 1);
+  CHECK(r.log[0].step == 0.5);
+  CHECK(r.log[0].certificate_rejections == 1);
+  CHECK(r.certified);
+
+  FakeStepper g;
+  g.certifies = [](double) { return false; };
+  const NewtonResult bad = newton_run(g, true, true, Eigen::Vector2d(0, 0), {});
+  CHECK_FALSE(bad.certified);
+  CHECK(bad.iterations == 0);
+  CHECK(bad.message.rfind("the starting map is not certified", 0) == 0);
+
+  FakeStepper h;  // certified only at the start: no certified decrease anywhere
+  h.certifies = [](double s) { return s == 0; };
+  const NewtonResult stuck = newton_run(h, true, true, Eigen::Vector2d(0, 0), {});
+  CHECK_FALSE(stuck.converged);
+  CHECK(stuck.message == "line search found no certified decrease");
+  CHECK(stuck.x.isApprox(Eigen::Vector2d(0, 0)));
+}
+
+TEST_CASE("newton_run: a linear crawl below the tolerance is not convergence; a long one is stagnation", "[newton][loop]") {
+  // Steps that each gain a little less than the last (rate 0.97): the decreases soon
+  // fall below the tolerance, yet far more is still to come.
+  struct Crawl final : FakeStepper {
+    double gain = 1e-6, E = 3;
+    double start(const Eigen::VectorXd& x0) override {
+      x_ = x0;
+      return E;
+    }
+    NewtonSystem solve(double) override {
+      NewtonSystem s;
+      s.factored = true;
+      s.slope = -2 * gain;
+      s.gradient_norm = 1;
+      s.diagonal_max = 1;
+      s.max_safe_step = std::numeric_limits<double>::infinity();
+      d_ = Eigen::Vector2d(1, 0);
+      return s;
+    }
+    void trial_energies(std::span<const double> steps, std::span<double> out) override {
+      for (size_t j = 0; j < steps.size(); ++j) out[j] = E - gain * steps[j];
+    }
+    void accept(double step) override {
+      E -= gain * step;
+      gain *= 0.97;
+      x_ += step * d_;
+    }
+  } crawl;
+  NewtonOptions o;  // tolerance 5e-8 · E = 1.5e-7
+  const NewtonResult r = newton_run(crawl, false, false, Eigen::Vector2d(0, 0), o);
+  CHECK_FALSE(r.converged);
+  CHECK(r.stagnated);
+  CHECK(r.iterations == o.stagnation_steps + 1);
+  CHECK(r.message.find("stagnated") != std::string::npos);
+
+  // The same gains shrinking fast (rate 0.1): converged after the first small one.
+  struct Fast final : FakeStepper {
+    double gain = 1e-3, E = 3;
+    double start(const Eigen::VectorXd& x0) override {
+      x_ = x0;
+      return E;
+    }
+    NewtonSystem solve(double) override {
+      NewtonSystem s;
+      s.factored = true;
+      s.slope = -2 * gain;
+      s.gradient_norm = 1;
+      s.diagonal_max = 1;
+      s.max_safe_step = std::numeric_limits<double>::infinity();
+      d_ = Eigen::Vector2d(1, 0);
+      return s;
+    }
+    void trial_energies(std::span<const double> steps, std::span<double> out) override {
+      for (size_t j = 0; j < steps.size(); ++j) out[j] = E - gain * steps[j];
+    }
+    void accept(double step) override {
+      E -= gain * step;
+      gain *= 0.01;
+      x_ += step * d_;
+    }
+  } fast;
+  const NewtonResult q = newton_run(fast, false, false, Eigen::Vector2d(0, 0), o);
+  CHECK(q.converged);
+  CHECK(q.iterations == 3);  // 1e-3, 1e-5, 1e-7 (< 1.5e-7 with little to come)
+}
+
+TEST_CASE("regauge undoes a rotation of the image exactly; rotation_generator is its derivative", "[newton][map_space]") {
+  const Shape s = test::bar_with_holes();
+  const ShapeSetup setup(s, build_cage(s), 400, 1.0);
+  const MapSpace& space = setup.metric_space;
+  std::mt19937 rng(3);
+  std::normal_distribution<double> noise(0, 0.05);
+  Eigen::VectorXd x = space.reduce(identity_map(setup.cage)).x;
+  for (Eigen::Index i = 0; i < x.size(); ++i) x(i) += noise(rng);
+  const Eigen::VectorXd v = space.T() * x;
+  const Eigen::Index n = space.n();
+  auto rotated = [&](double theta) {  // φ → e^{iθ} φ, ψ → e^{−iθ} ψ
+    Eigen::VectorXd w(v.size());
+    const cd r = std::polar(1.0, theta);
+    for (Eigen::Index a = 0; a < n; ++a) {
+      const cd p = r * cd(v(a), v(n + a)), q = std::conj(r) * cd(v(2 * n + a), v(3 * n + a));
+      w(a) = p.real();
+      w(n + a) = p.imag();
+      w(2 * n + a) = q.real();
+      w(3 * n + a) = q.imag();
+    }
+    return w;
+  };
+  for (double theta : {0.3, -2.0, 3.0}) CHECK((space.regauge(rotated(theta)) - x).norm() < 1e-12 * x.norm());
+  const double h = 1e-6;
+  CHECK((((rotated(h) - rotated(-h)) / (2 * h)) - space.rotation_generator(v)).norm() < 1e-8 * v.norm());
+  // A step along the generator changes the image by a rotation and a scale only: after
+  // regauge the map is that of x scaled by |1 + iθ| (f_z and f_zbar both scaled).
+  const double theta = 0.2;
+  const Eigen::VectorXd back = space.regauge(v + theta * space.rotation_generator(v));
+  CHECK((back - std::hypot(1.0, theta) * x).norm() < 1e-12 * x.norm());
+}
+
+namespace {
+// The issue's grid: a square of side 2k with a k × k grid of round holes (radius 0.45,
+// centres 2 apart, 24-gons), handles near the corners and the bottom middle; keyframe 1
+// turns the right-hand handles by 0.6 rad about the middle of the left side.
+Scene grid_scene(int k) {
+  Scene sc;
+  sc.name = "grid" + std::to_string(k);
+  const double L = 2.0 * k;
+  Loop outer;
+  const cd corners[4] = {{0, 0}, {L, 0}, {L, L}, {0, L}};
+  for (int c = 0; c < 4; ++c)
+    for (int i = 0; i < 8 * k; ++i) outer.push_back(corners[c] + (corners[(c + 1) % 4] - corners[c]) * (double(i) / (8 * k)));
+  sc.shape.outer = outer;
+  for (int i = 0; i < k; ++i)
+    for (int j = 0; j < k; ++j) sc.shape.holes.push_back(test::circle({1.0 + 2 * i, 1.0 + 2 * j}, 0.45, 24));
+  sc.shape = normalize(sc.shape);
+  const double e = 0.15;
+  sc.handles = {{e, e}, {L - e, e}, {L - e, L - e}, {e, L - e}, {L / 2, e}};
+  const cd c(0, L / 2);
+  const cd r = std::polar(1.0, 0.6);
+  Keyframe k0, k1;
+  k0.time = 0;
+  k0.targets = sc.handles;
+  k1.time = 1;
+  k1.targets = {sc.handles[0], c + r * (sc.handles[1] - c), c + r * (sc.handles[2] - c), sc.handles[3], sc.handles[4]};
+  sc.keyframes = {k0, k1};
+  return sc;
+}
+}  // namespace
+
+TEST_CASE("the grid of holes of issue #20 converges in a few iterations per frame, as the paper reports", "[newton][interpolation][stall]") {
+  Scene sc = grid_scene(2);
+  sc.samples = 4000;
+  const auto setup = scene_setup(sc);
+  solve_scene_keyframes(sc, *setup);
+  std::vector<double> times;
+  std::vector<HarmonicMap> maps;
+  for (const Keyframe& k : sc.keyframes) {
+    times.push_back(k.time);
+    maps.push_back(*k.coefficients);
+  }
+  auto run = [&](bool fixed) {
+    InterpolationOptions o;
+    o.exact_hessian_when_definite = fixed;
+    o.free_rotation = fixed;
+    Interpolator interp(*setup, times, maps, o);
+    return interp.sequence(11);
+  };
+  const std::vector<FrameResult> fixed = run(true);
+  double mean = 0;
+  int worst = 0;
+  for (const FrameResult& f : fixed) {
+    CHECK(f.certified);
+    CHECK(f.converged);
+    mean += f.iterations / 9.0;  // 9 solved frames
+    worst = std::max(worst, f.iterations);
+  }
+  INFO("mean " << mean << ", worst " << worst);
+  CHECK(mean <= 4.0);
+  CHECK(worst <= 6);
+  // The paper's plain projected Newton on the same frames: one crawls (the stall).
+  const std::vector<FrameResult> plain = run(false);
+  int plain_worst = 0;
+  for (const FrameResult& f : plain) plain_worst = std::max(plain_worst, f.iterations);
+  CHECK(plain_worst >= 3 * worst);
+  // And it never ends higher: the plain method's crawl stops short of the minimum.
+  for (size_t i = 0; i < fixed.size(); ++i) CHECK(fixed[i].energy <= plain[i].energy + 1e-9);
+}
