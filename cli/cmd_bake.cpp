@@ -77,6 +77,12 @@ void register_bake(CLI::App& app) {
     std::printf("wrote %s: %zu frames, %zu bytes (%.1f KB per frame), %d uncertified\n", o->out.c_str(), ff.frames.size(),
                 bytes.size(), static_cast<double>(bytes.size()) / 1024.0 / static_cast<double>(std::max<size_t>(1, ff.frames.size())),
                 uncertified);
+    int overlapping = 0;
+    for (const StoredFrame& f : ff.frames) overlapping += f.overlaps;
+    if (overlapping > 0)
+      std::printf("WARNING: %d frame(s) overlap themselves (the image of the boundary crosses itself); flagged "
+                  "HSIB_FRAME_OVERLAPS in the baked file\n",
+                  overlapping);
     if (uncertified > 0)
       throw std::runtime_error(std::to_string(uncertified) + " frame(s) could not be certified; they are flagged in the baked file");
   });

@@ -60,7 +60,9 @@ void register_interpolate(CLI::App& app) {
       if (k.solved)
         std::printf("keyframe %d solved from targets: %s\n", k.index, k.result.message.c_str());
       else
-        std::printf("keyframe %d: certified\n", k.index);
+        std::printf("keyframe %d: certified locally injective\n", k.index);
+      // Locally injective is not globally injective: say so when its outline crosses itself.
+      if (k.overlap.overlaps()) std::printf("WARNING: keyframe %d %s\n", k.index, describe(k.overlap).c_str());
     });
     std::vector<double> times;
     std::vector<HarmonicMap> maps;
@@ -90,6 +92,7 @@ void register_interpolate(CLI::App& app) {
     std::filesystem::create_directories(out);
     const bool tty = isatty(fileno(stderr));
     const auto t0 = Clock::now();
+    bool prev_overlaps = false;
     auto progress = [&](const FrameResult& f, int i, int n) {
       const double el = std::chrono::duration<double>(Clock::now() - t0).count();
       const double eta = el / (i + 1) * (n - i - 1);
@@ -100,6 +103,9 @@ void register_interpolate(CLI::App& app) {
         std::fprintf(stderr, "[interpolate] frame %d/%d (%.0f%%), %.1f s elapsed, ETA %.0f s\n", i + 1, n, 100.0 * (i + 1) / n, el, eta);
       if (!f.certified) std::fprintf(stderr, "%s[interpolate] frame %d (t = %.6f) NOT CERTIFIED: %s\n", tty ? "\n" : "", i, f.t,
                                      f.certificate.reason.c_str());
+      if (f.overlap.overlaps() && (i == 0 || !prev_overlaps))  // the first frame of each overlapping run
+        std::fprintf(stderr, "%s[interpolate] frame %d (t = %.6f) %s\n", tty ? "\n" : "", i, f.t, describe(f.overlap).c_str());
+      prev_overlaps = f.overlap.overlaps();
       if (tty && i + 1 == n) std::fprintf(stderr, "\n");
     };
 
@@ -112,7 +118,7 @@ void register_interpolate(CLI::App& app) {
     // The table and the plots' series.
     std::vector<double> ts, energy, iters, kappa, kappa_b, s1, s1b, s2, s2b, flagged;
     std::string table =
-        "frame        t  keyframe  certified  iters     energy      ms   sigma1_max  sigma2_min  conformal_max  bound_excess\n";
+        "frame        t  keyframe  certified  iters     energy      ms   sigma1_max  sigma2_min  conformal_max  bound_excess  overlaps\n";
     for (size_t i = 0; i < frames.size(); ++i) {
       const FrameResult& f = frames[i];
       ts.push_back(f.t);
@@ -126,18 +132,26 @@ void register_interpolate(CLI::App& app) {
       s2b.push_back(f.bound.sigma2_min);
       if (!f.certified) flagged.push_back(f.t);
       char line[256];
-      std::snprintf(line, sizeof line, "%5zu %8.5f  %8s  %9s  %5d  %9.6f  %6.1f  %11.5f %11.5f  %13.5f  %12.3e\n", i, f.t,
+      std::snprintf(line, sizeof line, "%5zu %8.5f  %8s  %9s  %5d  %9.6f  %6.1f  %11.5f %11.5f  %13.5f  %12.3e  %8s\n", i, f.t,
                     f.keyframe ? "yes" : "", f.certified ? "yes" : "NO", f.iterations, f.energy, f.ms,
-                    f.distortion.sigma1_max, f.distortion.sigma2_min, f.distortion.conformal_max, f.bound_excess);
+                    f.distortion.sigma1_max, f.distortion.sigma2_min, f.distortion.conformal_max, f.bound_excess,
+                    f.overlap.overlaps() ? "YES" : "");
       table += line;
     }
     const SequenceSummary sum = summarize(frames, seq.total_s);
-    char head[512];
+    char head[1024];
+    // Certified means locally injective; a frame can still overlap itself (overlap.h).
+    char overlap_line[320] = "";
+    if (sum.overlapping > 0)
+      std::snprintf(overlap_line, sizeof overlap_line,
+                    "WARNING: %d frame(s) overlap themselves (the image of the boundary crosses itself: locally but not "
+                    "globally injective; sampled at the boundary breakpoints)\n",
+                    sum.overlapping);
     std::snprintf(head, sizeof head,
-                  "hsi interpolate %s: %zu frames, %d certified, %d NOT certified\n"
+                  "hsi interpolate %s: %zu frames, %d certified locally injective, %d NOT certified, %d overlapping themselves\n%s"
                   "mean %.2f Newton iterations and %.1f ms per solved frame (max %.1f ms), %.1f s in all\n"
                   "%d frames within the keyframes' distortion bounds, largest excess %.3g (relative)\n\n",
-                  o->scene.c_str(), frames.size(), sum.certified, sum.uncertified, sum.mean_iterations, sum.mean_ms, sum.max_ms,
+                  o->scene.c_str(), frames.size(), sum.certified, sum.uncertified, sum.overlapping, overlap_line, sum.mean_iterations, sum.mean_ms, sum.max_ms,
                   sum.total_s, sum.within_bounds, sum.max_bound_excess);
     write_file_atomic(out / "report.txt", std::string(head) + table);
 
@@ -165,6 +179,7 @@ void register_interpolate(CLI::App& app) {
                       f.iterations, f.distortion.conformal_max);
         extras.title = title;
         extras.uncertified = !f.certified;
+        extras.overlaps = f.overlap.overlaps();
         char name[64];
         std::snprintf(name, sizeof name, "frame_%04zu.png", i);
         plot_map(out / "frames" / name, scene.shape, setup->cage, f.map, extras, 640);

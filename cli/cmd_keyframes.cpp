@@ -37,11 +37,12 @@ void register_keyframes(CLI::App& app) {
     ko.stages = o->stages;
     if (!o->png_dir.empty()) std::filesystem::create_directories(o->png_dir);
     bool all_ok = true;
+    int overlapping = 0;  // keyframes that are locally but not globally injective
     solve_scene_keyframes(scene, *setup, ko, o->force, [&](const SceneKeyframe& k) {
       const Keyframe& key = scene.keyframes[static_cast<size_t>(k.index)];
       const std::string label = "keyframe " + std::to_string(k.index) + " (t = " + std::to_string(key.time) + ")";
       if (!k.solved) {
-        std::printf("%-28s given as coefficients: certified\n", label.c_str());
+        std::printf("%-28s given as coefficients: certified locally injective\n", label.c_str());
       } else {
         std::printf("%-28s %3d Newton iterations, %8.1f ms, energy %.4f, %s\n", label.c_str(), k.result.iterations,
                     k.result.ms, k.result.energy, k.result.message.c_str());
@@ -54,8 +55,13 @@ void register_keyframes(CLI::App& app) {
                         it.certificate_rejections, it.ms);
           }
       }
+      if (k.overlap.overlaps()) {
+        ++overlapping;
+        std::printf("WARNING: %s %s\n", label.c_str(), describe(k.overlap).c_str());
+      }
       if (!o->png_dir.empty()) {
         MapPlot extras;
+        extras.overlaps = k.overlap.overlaps();
         extras.handles_image = map_points(setup->cage, *key.coefficients, scene.handles);
         extras.targets = key.targets;
         extras.title = scene.name + " " + label;
@@ -69,6 +75,10 @@ void register_keyframes(CLI::App& app) {
       scene.texture = std::filesystem::relative(scene.texture_path(), out.parent_path().empty() ? "." : out.parent_path());
     save_scene(scene, out);
     std::printf("wrote %s%s\n", out.string().c_str(), all_ok ? "" : " (some targets were not reached: see above)");
+    if (overlapping > 0)
+      std::printf("WARNING: %d keyframe(s) overlap themselves (certified locally injective, but the image of the boundary "
+                  "crosses itself)\n",
+                  overlapping);
   });
 }
 

@@ -289,6 +289,7 @@ void run_render(const Opts& o) {
   const int digits = std::max(4, static_cast<int>(std::to_string(ff.frames.size() - 1).size()));
   const bool tty = isatty(fileno(stderr));
   int uncertified = 0;
+  int overlapping = 0;  // frames flagged 8 in frames.hsif: the boundary's image crosses itself
   size_t next_sheet = 0;
   double render_ms = 0;
   for (size_t s = 0; s < selected.size(); ++s) {
@@ -296,9 +297,19 @@ void run_render(const Opts& o) {
     const StoredFrame& fr = ff.frames[static_cast<size_t>(i)];
     style.uncertified = !fr.certified;
     uncertified += !fr.certified;
+    overlapping += fr.overlaps;
     const vk::RgbaImage img = renderer.render(ff.cage, fr.map, view, style);
     render_ms += renderer.last_stats().gpu_ms + renderer.last_stats().upload_ms + renderer.last_stats().readback_ms;
     const Surface surf = surface_from(img);
+    if (fr.overlaps) {  // an amber border (inside the red one of an uncertified frame): not globally injective
+      const double b = std::max(4.0, std::min(W, H) / 64.0);
+      cairo_t* cr = surf.cr();
+      cairo_set_source_rgb(cr, 0.96, 0.58, 0.0);
+      cairo_set_line_width(cr, b);
+      const double inset = (fr.certified ? 0.5 : 1.5) * b;
+      cairo_rectangle(cr, inset, inset, W - 2 * inset, H - 2 * inset);
+      cairo_stroke(cr);
+    }
     if (!sheet_at.empty() && next_sheet < sheet_at.size() && sheet_at[next_sheet] == s) {
       const int k = static_cast<int>(next_sheet++);
       const double x0 = pad + (k % cols) * (tw + pad), y0 = title_h + (k / cols) * (th + cap + pad);
@@ -313,16 +324,22 @@ void run_render(const Opts& o) {
       cairo_paint(cr);
       cairo_restore(cr);
       cairo_rectangle(cr, x0 - 0.5, y0 - 0.5, tw + 1, th + 1);
-      if (fr.certified)
-        cairo_set_source_rgb(cr, 0.7, 0.7, 0.7);
-      else
+      if (!fr.certified)
         cairo_set_source_rgb(cr, 0.86, 0.04, 0.04);
-      cairo_set_line_width(cr, fr.certified ? 1 : 3);
+      else if (fr.overlaps)
+        cairo_set_source_rgb(cr, 0.96, 0.58, 0.0);
+      else
+        cairo_set_source_rgb(cr, 0.7, 0.7, 0.7);
+      cairo_set_line_width(cr, fr.certified && !fr.overlaps ? 1 : 3);
       cairo_stroke(cr);
       std::string label = "#" + std::to_string(i) + "  t = " + fmt("%.3f", fr.t) + (fr.keyframe ? "  key" : "");
       if (!fr.certified) label += "  NOT CERTIFIED";
       text(cr, x0, y0 + th + 15, label, 12, !fr.certified, fr.certified ? 0.15 : 0.8, fr.certified ? 0.15 : 0.0,
            fr.certified ? 0.15 : 0.0, false);
+      if (fr.overlaps) {
+        const std::string ov = "OVERLAPS ITSELF";
+        text(cr, x0 + tw - text_width(cr, ov, 11, true), y0 + th + 15, ov, 11, true, 0.85, 0.45, 0.0, false);
+      }
     }
     if (!o.no_labels) {
       cairo_t* cr = surf.cr();
@@ -333,6 +350,13 @@ void run_render(const Opts& o) {
       if (!fr.certified) {
         const std::string warn = "NOT CERTIFIED";
         text(cr, W - text_width(cr, warn, 1.3 * font, true) - font, y + 0.2 * font, warn, 1.3 * font, true, 0.86, 0.04, 0.04);
+      }
+      if (fr.overlaps) {  // amber, right-aligned: on the label's line when it fits, else below (and below NOT CERTIFIED)
+        const std::string warn = "OVERLAPS ITSELF";
+        const bool fits = fr.certified && 0.6 * font + text_width(cr, label, font, false) + text_width(cr, warn, 1.3 * font, true) +
+                                                  2 * font < W;
+        const double yo = fits ? y + 0.2 * font : y + (fr.certified ? 1.6 : 3.0) * font;
+        text(cr, W - text_width(cr, warn, 1.3 * font, true) - font, yo, warn, 1.3 * font, true, 0.9, 0.5, 0.0);
       }
       if (legend) draw_legend(cr, W, H, margin + strip, lo, hi, font);
     }
@@ -354,6 +378,7 @@ void run_render(const Opts& o) {
     std::string title = (scene.name.empty() ? o.scene : scene.name) + ": " + std::to_string(sheet_at.size()) + " of " +
                         std::to_string(ff.frames.size()) + " frames";
     if (uncertified) title += "   " + std::to_string(uncertified) + " NOT CERTIFIED (red)";
+    if (overlapping) title += "   " + std::to_string(overlapping) + " OVERLAP ITSELF (amber)";
     text(sheet.cr(), pad, 26, title, 16, true, uncertified ? 0.8 : 0.1, 0.1, 0.1, false);
     write_surface(sheet, out / "contact_sheet.png");
   }
@@ -366,6 +391,10 @@ void run_render(const Opts& o) {
   if (uncertified)
     std::printf("%d of the rendered frames are NOT CERTIFIED: they are drawn tinted red with a red border and labelled\n",
                 uncertified);
+  if (overlapping)
+    std::printf("%d of the rendered frames OVERLAP ITSELF (certified locally injective at most, the boundary's image crosses "
+                "itself): amber border and label\n",
+                overlapping);
 }
 
 }  // namespace
@@ -380,7 +409,8 @@ void register_render(CLI::App& app) {
       "Render the frames of 'hsi interpolate' offscreen (Vulkan; lavapipe on a machine without a GPU):\n"
       "the deformed shape with its texture, clipped at its outline and holes, anti-aliased, with optional\n"
       "overlays. Writes OUT/frame_NNNN.png per frame and OUT/contact_sheet.png. Frames that could not be\n"
-      "certified are tinted red, bordered in red and labelled.");
+      "certified are tinted red, bordered in red and labelled; frames that overlap themselves (the image of\n"
+      "the boundary crosses itself, frames.hsif flag 8) get an amber border and label.");
 #ifdef HSI_WITH_VULKAN
   cmd->add_option("scene", o->scene, "Scene file (.json) the frames were computed for")->required()->check(CLI::ExistingFile);
   cmd->add_option("frames_dir", o->frames_dir, "Output folder of hsi interpolate (holds frames.hsif)")->required();

@@ -155,7 +155,8 @@ void plot_map(const std::filesystem::path& png, const Shape& shape, const Cage& 
   const Frame fr{lo, scale, width_px, height_px, pad};
   const Canvas canvas(width_px, height_px);
   cairo_t* cr = canvas.cr();
-  cairo_set_fill_rule(cr, CAIRO_FILL_RULE_EVEN_ODD);
+  // Overlapping layers fill by winding (even-odd would punch the overlap out as a hole).
+  cairo_set_fill_rule(cr, extras.overlaps ? CAIRO_FILL_RULE_WINDING : CAIRO_FILL_RULE_EVEN_ODD);
   size_t off = 0;
   for (int l = 0; l < shape.loop_count(); ++l) {
     const size_t n = static_cast<size_t>(dense.loop_begin[static_cast<size_t>(l) + 1] - dense.loop_begin[static_cast<size_t>(l)]);
@@ -198,13 +199,23 @@ void plot_map(const std::filesystem::path& png, const Shape& shape, const Cage& 
     cairo_arc(cr, q.real(), q.imag(), 3.5, 0, 2 * M_PI);
     cairo_fill(cr);
   }
-  if (!extras.title.empty() || extras.uncertified) {
+  if (extras.overlaps) {  // amber, distinct from the uncertified red
+    cairo_set_source_rgb(cr, 0.95, 0.55, 0.0);
+    cairo_set_line_width(cr, 6);
+    cairo_rectangle(cr, 3, 3, width_px - 6, height_px - 6);
+    cairo_stroke(cr);
+  }
+  if (!extras.title.empty() || extras.uncertified || extras.overlaps) {
     cairo_set_source_rgb(cr, extras.uncertified ? 0.8 : 0.1, 0.1, 0.1);
     cairo_select_font_face(cr, "sans-serif", CAIRO_FONT_SLANT_NORMAL, CAIRO_FONT_WEIGHT_NORMAL);
     cairo_set_font_size(cr, 14);
     cairo_move_to(cr, pad, 18);
     const std::string t = extras.title + (extras.uncertified ? "  [NOT CERTIFIED]" : "");
     cairo_show_text(cr, t.c_str());
+    if (extras.overlaps) {
+      cairo_set_source_rgb(cr, 0.85, 0.45, 0.0);
+      cairo_show_text(cr, "  [OVERLAPS ITSELF]");
+    }
   }
   canvas.write(png);
 }

@@ -24,6 +24,7 @@ struct MapPlot {
   std::vector<cd> targets;        // their targets (drawn as rings)
   std::string title;
   bool uncertified = false;       // draws the fill in red and says so
+  bool overlaps = false;          // the boundary's image crosses itself (overlap.h): amber border and label
 };
 void plot_map(const std::filesystem::path& png, const Shape& shape, const Cage& cage, const HarmonicMap& map,
               const MapPlot& extras = {}, int width_px = 800);

@@ -21,7 +21,9 @@ layout(push_constant) uniform Push {
   float dist_inv;
   float overlay_alpha;  // opacity of the colour map over the texture
   uint flags;
-  uint first;           // index in f of the first handle (discs)
+  uint first;           // index in f of the first handle (discs); the mesh: the border's width in pixels (0: none)
+  vec4 background;      // the mesh: premultiplied background, which the top layer is composited over
+  vec4 border_color;    // the mesh: premultiplied colour of the uncertified frame's border
 } pc;
 
 #ifdef HSI_REAL_DOUBLE

@@ -95,7 +95,8 @@ TEST_CASE("baked playback matches direct evaluation of every frame", "[baked]") 
       uint32_t flags;
       REQUIRE(hsib_frame_info(S.s, f, &t, &flags) == HSIB_OK);
       CHECK(t == fr.t);
-      CHECK(flags == ((fr.certified ? 1u : 0u) | (fr.keyframe ? 2u : 0u) | (fr.converged ? 4u : 0u)));
+      CHECK(flags == ((fr.certified ? 1u : 0u) | (fr.keyframe ? 2u : 0u) | (fr.converged ? 4u : 0u) |
+                      (fr.overlap.overlaps() ? 8u : 0u)));
       REQUIRE(hsib_evaluate(b, f, out.data(), 0) == HSIB_OK);
       const VectorXcd want = evaluate_map(rows, fr.map).f;
       for (size_t i = 0; i < pts.size(); ++i)
@@ -267,4 +268,22 @@ TEST_CASE("baked files are written atomically and read back from disk", "[baked]
   FrameFile bad = F.seq.frame_file();
   bad.frames[1].map.phi.conservativeResize(3);
   CHECK_THROWS_WITH(encode_baked(F.seq.setup->shape, bad), Contains("frame 1") && Contains("coefficients"));
+}
+
+TEST_CASE("baked frames carry the overlaps-itself flag (8)", "[baked][overlap]") {
+  // The bent bar (tests/scenes/bent_bar.json): its second keyframe rolls the bar over itself.
+  Scene scene = load_scene(std::filesystem::path(HSI_TESTS_DIR) / "scenes" / "bent_bar.json");
+  SceneSequenceOptions o;
+  o.frames = 3;
+  const SceneSequence seq = interpolate_scene(scene, o);
+  REQUIRE(seq.frames.back().overlap.overlaps());
+  REQUIRE_FALSE(seq.frames.front().overlap.overlaps());
+  Sequence S(encode_baked(seq.setup->shape, seq.frame_file()));
+  REQUIRE(S.status == HSIB_OK);
+  for (uint32_t f = 0; f < 3; ++f) {
+    uint32_t flags = 0;
+    REQUIRE(hsib_frame_info(S.s, f, nullptr, &flags) == HSIB_OK);
+    CHECK(((flags & HSIB_FRAME_OVERLAPS) != 0) == seq.frames[f].overlap.overlaps());
+    CHECK(((flags & HSIB_FRAME_CERTIFIED) != 0) == seq.frames[f].certified);
+  }
 }

@@ -257,3 +257,26 @@ TEST_CASE("libhsi exports only the C API", "[c_api]") {
   }
   CHECK(exported > 40);
 }
+
+TEST_CASE("C API: frame reports and the summary say which frames overlap themselves", "[c_api][overlap]") {
+  hsi_scene* s = nullptr;
+  REQUIRE(hsi_scene_load_file((std::string(HSI_TESTS_DIR) + "/scenes/bent_bar.json").c_str(), &s) == HSI_OK);
+  hsi_interpolator* it = nullptr;
+  REQUIRE(hsi_interpolator_create(s, nullptr, &it) == HSI_OK);
+  hsi_scene_destroy(s);
+  hsi_sequence* seq = nullptr;
+  REQUIRE(hsi_interpolator_sequence(it, 3, nullptr, nullptr, &seq) == HSI_OK);
+  hsi_frame_report first{}, last{};
+  REQUIRE(hsi_sequence_frame_report(seq, 0, &first) == HSI_OK);
+  REQUIRE(hsi_sequence_frame_report(seq, 2, &last) == HSI_OK);
+  CHECK(first.overlaps == 0);
+  CHECK(first.crossings == 0);
+  CHECK(last.certified == 1);  // locally injective...
+  CHECK(last.overlaps == 1);   // ...but not globally
+  CHECK(last.crossings >= 2);
+  hsi_sequence_summary sum{};
+  REQUIRE(hsi_sequence_summary_get(seq, &sum) == HSI_OK);
+  CHECK(sum.overlapping >= 1);
+  hsi_sequence_destroy(seq);
+  hsi_interpolator_destroy(it);
+}

@@ -93,3 +93,24 @@ TEST_CASE("triangulate: refuses bad shapes and absurd sizes", "[triangulate]") {
   CHECK_THROWS_WITH(triangulate(test::disc(), o), Catch::Contains("vertices (limit"));
   CHECK_THROWS_AS(edge_for_vertex_count(test::disc(), 1), InputError);
 }
+
+TEST_CASE("triangulate: triangles come in a spatially coherent (Hilbert-curve) order", "[triangulate][overlap]") {
+  // The renderers draw the later triangle on top where a map overlaps itself (issue
+  // #20): consecutive triangles must be neighbours in the rest shape, not scattered
+  // over it as CGAL's face order leaves them, or an overlap shows a speckle of layers.
+  for (const Shape& s : {normalize(Shape{test::rect(0, -0.2, 7, 0.2), {}}), test::bar_with_holes(), test::annulus()}) {
+    TriangulateOptions o;
+    o.max_edge = bounding_box(s).diagonal() / 100;
+    const TriMesh m = triangulate(s, o);
+    auto centroid = [&](size_t t) {
+      const auto& tri = m.triangles[t];
+      return (m.vertices[static_cast<size_t>(tri[0])] + m.vertices[static_cast<size_t>(tri[1])] +
+              m.vertices[static_cast<size_t>(tri[2])]) / 3.0;
+    };
+    double jumps = 0;
+    for (size_t t = 1; t < m.triangles.size(); ++t) jumps += std::abs(centroid(t) - centroid(t - 1));
+    const double mean = jumps / static_cast<double>(m.triangles.size() - 1);
+    INFO(m.triangles.size() << " triangles, mean step between consecutive centroids " << mean / o.max_edge << " max_edge");
+    CHECK(mean < 1.5 * o.max_edge);
+  }
+}

@@ -13,6 +13,8 @@
 
 #include <cmath>
 #include <cstdlib>
+#include <cstring>
+#include <map>
 #include <memory>
 
 #include "hsi/compute/renderer.h"
@@ -779,4 +781,119 @@ TEST_CASE("render: the distortion legend's upper end is a round number at or abo
   CHECK(vk::round_distortion_hi(2.0) == Approx(2.0));   // already round
   CHECK(vk::round_distortion_hi(1.0) == Approx(1.001));  // the smallest span, 1e-3, in steps of 0.00025
   for (double hi : {1.01, 1.37, 3.3, 12.0, 250.0}) CHECK(vk::round_distortion_hi(hi) >= hi);
+}
+
+TEST_CASE("render: a mesh whose image overlaps itself shows the later layer alone, the same in both rasterizers",
+          "[vulkan][render][overlap]") {
+  // A bar [0, 7] x [-0.2, 0.2] rolled up by g(z) = exp((0.05 + i) z) (issue #20): its far
+  // end lies over its near end. The grid's triangles go row by row (y), and the far
+  // layer lies at larger y wherever the two overlap, so it is the later one there.
+  // Translucent colour (fill alpha 0 under the colour map at half opacity) shows whether
+  // anything of the layer below comes through: it must not, in either rasterizer.
+  with_vulkan([](vk::Context& ctx) {
+    const int W = 192, H = 192;
+    const TriMesh m = grid_mesh(140, 8, 0.0, -0.2, 7.0, 0.2, 0.0);
+    const auto g = [](cd z) { return std::exp(cd(0.05, 1.0) * z); };
+    std::vector<cd> pos;
+    std::vector<double> kappa;
+    for (const cd& z : m.vertices) {
+      pos.push_back(g(z));
+      kappa.push_back(z.real() < 3.5 ? 1.0 : 2.0);  // near layer: colour map 0, far layer: colour map 1
+    }
+    const vk::View view = vk::View::fit({{-1.9, -1.9}, {1.9, 1.9}}, W, H);
+    vk::RenderStyle style;
+    style.background = {1, 1, 1, 1};
+    style.fill = {0, 0, 0, 0};
+    style.overlays = vk::kOverlayDistortion;
+    style.distortion_opacity = 0.5f;
+    style.distortion_lo = 1;
+    style.distortion_hi = 2;
+    // A point of the near layer that the far layer covers: z1 and, one turn on, z2.
+    const cd z1(0.36, -0.16);
+    const cd w = g(z1);
+    REQUIRE(std::abs(w - g(z1 + cd(2 * std::numbers::pi, 0.1 * std::numbers::pi))) < 0.03);
+    const auto far = vk::colormap(1);
+    std::map<int, std::vector<vk::RgbaImage>> images;  // per sample count: graphics, compute
+    for (const int samples : {1, 4})
+      for (const vk::Rasterizer ras : {vk::Rasterizer::kGraphics, vk::Rasterizer::kCompute}) {
+        vk::RendererOptions o;
+        o.msaa_samples = samples;
+        vk::Renderer r(ctx, W, H, with_rasterizer(ras, o));
+        if (r.msaa_samples() != samples) continue;
+        r.set_mesh(m);
+        const vk::RgbaImage a = r.render(pos, kappa, view, style);
+        const vk::RgbaImage b = r.render(pos, kappa, view, style);
+        INFO(rasterizer_name(ras) << ", " << samples << " samples");
+        CHECK(std::memcmp(a.pixels.data(), b.pixels.data(), a.pixels.size()) == 0);  // deterministic
+        // Where the layers overlap: the far layer's half-opaque colour over white, nothing
+        // of the near layer's (which would pull it towards colour map 0).
+        const cd q = view.to_pixel(w);
+        const uint8_t* px = a.at(static_cast<int>(q.real()), static_cast<int>(q.imag()));
+        for (size_t ch = 0; ch < 3; ++ch) CHECK(std::abs(px[ch] - (0.5 * far[ch] + 0.5) * 255) <= 2.5);
+        images[samples].push_back(a);
+      }
+    REQUIRE(images[1].size() == 2);
+    for (const auto& [samples, pair] : images) {
+      if (pair.size() < 2) continue;
+      const Difference d = compare(pair[0], pair[1]);
+      INFO(samples << " samples, graphics vs compute: mean abs diff " << d.mean_abs << "/255, pixels off by > 48: "
+                   << 100 * d.outlier_fraction << "%");
+      CHECK(d.mean_abs <= (samples == 1 ? 1.0 : 0.5));
+      CHECK(d.outlier_fraction <= (samples == 1 ? 0.01 : 0.002));
+    }
+  });
+}
+
+TEST_CASE("render: the triangulation's spatial order shows an overlapping layer whole, not speckled", "[vulkan][render][overlap]") {
+  // The bar rolled over itself (as above), now meshed by triangulate(): its triangles
+  // come in Hilbert-curve order of their rest centroids, so the far end (later on the
+  // curve) covers the near end everywhere they overlap. CGAL's own face order, which
+  // the renderers used to draw in, alternated the two layers triangle by triangle.
+  with_vulkan([](vk::Context& ctx) {
+    const int W = 256, H = 256;
+    const Shape bar = normalize(Shape{test::rect(0, -0.2, 7, 0.2), {}});
+    TriangulateOptions to;
+    to.max_edge = 0.05;
+    const TriMesh m = triangulate(bar, to);
+    const cd c(0.05, 1.0);
+    const auto g = [&](cd z) { return std::exp(c * z); };
+    std::vector<cd> pos;
+    std::vector<double> kappa;
+    for (const cd& z : m.vertices) {
+      pos.push_back(g(z));
+      kappa.push_back(z.real() < 3.5 ? 1.0 : 2.0);
+    }
+    const vk::View view = vk::View::fit({{-1.9, -1.9}, {1.9, 1.9}}, W, H);
+    vk::RenderStyle style;
+    style.background = {1, 1, 1, 1};
+    style.overlays = vk::kOverlayDistortion;
+    style.distortion_opacity = 1;
+    style.distortion_lo = 1;
+    style.distortion_hi = 2;
+    const auto far = vk::colormap(1);
+    // Inside the bar by a margin (in rest units) that keeps pixels off the layers' edges.
+    const auto inside = [](cd z) { return z.real() > 0.03 && z.real() < 6.97 && std::abs(z.imag()) < 0.17; };
+    for (const vk::Rasterizer ras : {vk::Rasterizer::kGraphics, vk::Rasterizer::kCompute}) {
+      vk::Renderer r(ctx, W, H, with_rasterizer(ras));
+      r.set_mesh(m);
+      const vk::RgbaImage img = r.render(pos, kappa, view, style);
+      int both = 0, wrong = 0;
+      for (int y = 0; y < H; ++y)
+        for (int x = 0; x < W; ++x) {
+          const cd w = world_at(view, x, y);
+          // The two preimages of w one turn apart: z_k = (Log w + 2 pi i k) / c.
+          const double a = std::arg(w) < 0 ? std::arg(w) + 2 * std::numbers::pi : std::arg(w);
+          const cd z0 = cd(std::log(std::abs(w)), a) / c, z1 = cd(std::log(std::abs(w)), a + 2 * std::numbers::pi) / c;
+          if (!inside(z0) || !inside(z1)) continue;
+          ++both;
+          const uint8_t* px = img.at(x, y);
+          bool ok = true;
+          for (size_t ch = 0; ch < 3; ++ch) ok = ok && std::abs(px[ch] - far[ch] * 255) <= 2.5;
+          wrong += !ok;
+        }
+      INFO(rasterizer_name(ras) << ": " << both << " pixels covered by both layers, " << wrong << " not the far layer's colour");
+      CHECK(both > 80);  // 115 at 256 x 256
+      CHECK(wrong == 0);
+    }
+  });
 }

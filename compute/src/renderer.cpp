@@ -52,9 +52,12 @@ struct RenderPush {
   float dist_lo, dist_inv;
   float overlay_alpha;
   uint32_t flags;
-  uint32_t first;
+  uint32_t first;       // discs: the first handle in f; the mesh: the uncertified border's width (0: none)
+  float pad_[3];
+  float background[4];  // the mesh: premultiplied background and border, which its top layer is blended over
+  float border_color[4];
 };
-static_assert(sizeof(RenderPush) == 84);
+static_assert(sizeof(RenderPush) == 128);  // Vulkan's guaranteed maxPushConstantsSize
 // Shading flags (shaders/render_shade.glsl).
 constexpr uint32_t kTextured = 1u, kDistortion = 2u, kUncertified = 4u;
 // Mirrors `Push` in shaders/raster_common.glsl (std430 offsets).
@@ -525,7 +528,7 @@ Renderer::Renderer(const Context& context, int width, int height, const Renderer
 
   // --- pipelines --------------------------------------------------------------------------------
   const bool f64 = eval_.double_precision();
-  auto make_pipeline = [&](std::span<const uint32_t> vert, std::span<const uint32_t> frag, bool uv_input) {
+  auto make_pipeline = [&](std::span<const uint32_t> vert, std::span<const uint32_t> frag, bool uv_input, bool blending) {
     const DeviceHandle<VkShaderModule> vs = shader_module(dev, vert), fs = shader_module(dev, frag);
     VkPipelineShaderStageCreateInfo stages[2] = {};
     stages[0].sType = stages[1].sType = VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO;
@@ -566,7 +569,7 @@ Renderer::Renderer(const Context& context, int width, int height, const Renderer
     ms.sType = VK_STRUCTURE_TYPE_PIPELINE_MULTISAMPLE_STATE_CREATE_INFO;
     ms.rasterizationSamples = r.samples;
     VkPipelineColorBlendAttachmentState blend{};
-    blend.blendEnable = VK_TRUE;  // premultiplied "over"
+    blend.blendEnable = blending ? VK_TRUE : VK_FALSE;  // premultiplied "over" (the mesh: replace, see record_frame)
     blend.srcColorBlendFactor = VK_BLEND_FACTOR_ONE;
     blend.dstColorBlendFactor = VK_BLEND_FACTOR_ONE_MINUS_SRC_ALPHA;
     blend.colorBlendOp = VK_BLEND_OP_ADD;
@@ -598,9 +601,9 @@ Renderer::Renderer(const Context& context, int width, int height, const Renderer
   };
   using S = std::span<const uint32_t>;
   if (!compute)
-    r.mesh = make_pipeline(f64 ? S(render_mesh_vert_f64) : S(render_mesh_vert_f32), S(render_mesh_frag), true);
-  r.line = make_pipeline(f64 ? S(render_line_vert_f64) : S(render_line_vert_f32), S(render_line_frag), false);
-  r.disc = make_pipeline(f64 ? S(render_disc_vert_f64) : S(render_disc_vert_f32), S(render_disc_frag), false);
+    r.mesh = make_pipeline(f64 ? S(render_mesh_vert_f64) : S(render_mesh_vert_f32), S(render_mesh_frag), true, false);
+  r.line = make_pipeline(f64 ? S(render_line_vert_f64) : S(render_line_vert_f32), S(render_line_frag), false, true);
+  r.disc = make_pipeline(f64 ? S(render_disc_vert_f64) : S(render_disc_vert_f32), S(render_disc_frag), false, true);
 
   if (compute) {
     // Bindings of shaders/raster_common.glsl.
@@ -942,7 +945,15 @@ void Renderer::record_frame(VkCommandBuffer cmd, const Cage* cage, const Harmoni
   }
 
   if (!compute) {  // the shape
+    // Drawn without blending: each sample keeps the last triangle in mesh order that
+    // covers it (Vulkan's primitive order), its colour composited over the background
+    // by render_mesh.frag, as raster_resolve.comp does with the visibility buffer. So
+    // where a map overlaps itself both rasterizers show the top layer alone, whatever
+    // its alpha, and never the layers blended (issue #20).
     std::memcpy(pc.color, style.fill.data(), sizeof pc.color);
+    std::memcpy(pc.background, bg.data(), sizeof pc.background);
+    std::memcpy(pc.border_color, kBorderRed, sizeof pc.border_color);
+    pc.first = style.uncertified ? border_px : 0u;
     vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, r.mesh.get());
     vkCmdPushConstants(cmd, r.layout.get(), kPushStages, 0, sizeof pc, &pc);
     const VkDeviceSize zero = 0;

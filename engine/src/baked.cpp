@@ -117,7 +117,7 @@ std::string encode_baked(const Shape& shape, const FrameFile& frames, const Bake
     }
     const size_t start = fr.out.size();
     fr.f64(f.t);
-    fr.u32((f.certified ? 1u : 0u) | (f.keyframe ? 2u : 0u) | (f.converged ? 4u : 0u));
+    fr.u32((f.certified ? 1u : 0u) | (f.keyframe ? 2u : 0u) | (f.converged ? 4u : 0u) | (f.overlaps ? 8u : 0u));
     fr.u32(0);
     fr.point(c.rotation);
     fr.point(c.translation);

@@ -251,7 +251,7 @@ static hsib_status parse(const unsigned char* b, size_t size, hsib_sequence* s, 
     const uint32_t ff = rd_u32(fr + 8);
     if (!isfinite(t) || (f > 0 && !(t >= rd_f64(fr - S))))
       return fail(error, es, HSIB_ERROR_FORMAT, "frame %u: time is not finite or decreases (at byte %ld)", f, at);
-    if (ff > 7u) return fail(error, es, HSIB_ERROR_FORMAT, "frame %u: unknown flags 0x%x (at byte %ld)", f, ff, at + 8);
+    if (ff > 15u) return fail(error, es, HSIB_ERROR_FORMAT, "frame %u: unknown flags 0x%x (at byte %ld)", f, ff, at + 8);
     const double rr = rd_f64(fr + 16), ri = rd_f64(fr + 24);
     if (!isfinite(rr) || !isfinite(ri) || fabs(hypot(rr, ri) - 1.0) > 1e-6 || !isfinite(rd_f64(fr + 32)) || !isfinite(rd_f64(fr + 40)))
       return fail(error, es, HSIB_ERROR_FORMAT, "frame %u: the pose is not a rotation and a finite translation (at byte %ld)", f, at + 16);

@@ -127,6 +127,8 @@ hsi_frame_report to_report(const FrameResult& f) {
   r.bound_conformal_max = f.bound.conformal_max;
   r.bound_isometric_max = f.bound.isometric_max;
   r.bound_excess = f.bound_excess;
+  r.overlaps = f.overlap.overlaps();
+  r.crossings = f.overlap.crossings;
   return r;
 }
 
@@ -502,6 +504,7 @@ hsi_status hsi_sequence_summary_get(const hsi_sequence* s, hsi_sequence_summary*
     r.max_ms = m.max_ms;
     r.total_s = m.total_s;
     r.max_bound_excess = m.max_bound_excess;
+    r.overlapping = static_cast<uint32_t>(m.overlapping);
     *out = r;
   });
 }

@@ -77,7 +77,7 @@ std::string encode_frames(const FrameFile& f) {
   for (const StoredFrame& s : f.frames) {
     if (s.map.phi.size() != K || s.map.psi.size() != K) throw InputError("frame coefficients do not match the cage");
     w.f64(s.t);
-    w.u32((s.certified ? 1u : 0u) | (s.keyframe ? 2u : 0u) | (s.converged ? 4u : 0u));
+    w.u32((s.certified ? 1u : 0u) | (s.keyframe ? 2u : 0u) | (s.converged ? 4u : 0u) | (s.overlaps ? 8u : 0u));
     w.u32(s.iterations);
     w.f64(s.energy);
     for (Eigen::Index j = 0; j < K; ++j) w.point(s.map.phi(j));
@@ -129,10 +129,11 @@ FrameFile decode_frames(const std::string& bytes, const std::string& source) {
   for (StoredFrame& s : f.frames) {
     s.t = r.f64("a frame time");
     const uint32_t flags = r.u32("frame flags");
-    if (flags > 7) r.fail("unknown frame flags " + std::to_string(flags));
+    if (flags > 15) r.fail("unknown frame flags " + std::to_string(flags));
     s.certified = flags & 1u;
     s.keyframe = flags & 2u;
     s.converged = flags & 4u;
+    s.overlaps = flags & 8u;
     s.iterations = r.u32("an iteration count");
     s.energy = r.f64("an energy");
     s.map.phi.resize(K);

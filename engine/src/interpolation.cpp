@@ -116,6 +116,7 @@ FrameResult Interpolator::frame(double t, const Eigen::VectorXd& warm_start, con
       r.energy = 2.0;
       r.certificate = setup_.certifier.certify(r.map);
       r.distortion = key_distortion_[j];
+      r.overlap = setup_.overlap.check(r.map);
       r.message = "keyframe " + std::to_string(j);
       r.ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
       return r;
@@ -144,6 +145,7 @@ FrameResult Interpolator::frame(double t, const Eigen::VectorXd& warm_start, con
   const cd rot = std::polar(1.0, want.angle - have.angle);
   r.map = transform_image(setup_.cage, canon, rot, want.centroid - rot * have.centroid);
   r.distortion = measure(n.certificate);
+  r.overlap = setup_.overlap.check(r.map);
   const Distortion& d = r.distortion;
   const Distortion& b = r.bound;
   r.bound_excess = std::max({0.0, d.sigma1_max / b.sigma1_max - 1, b.sigma2_min / d.sigma2_min - 1,

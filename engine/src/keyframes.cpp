@@ -130,6 +130,7 @@ std::vector<SceneKeyframe> solve_scene_keyframes(Scene& scene, const ShapeSetup&
       key.coefficients = rep.result.map;
     }
     previous = *key.coefficients;
+    rep.overlap = setup.overlap.check(*key.coefficients);
     if (on_keyframe) on_keyframe(rep);
     out.push_back(std::move(rep));
   }

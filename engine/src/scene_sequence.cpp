@@ -18,8 +18,10 @@ int SceneSequence::uncertified() const {
 FrameFile SceneSequence::frame_file() const {
   FrameFile ff;
   ff.cage = setup->cage;
-  for (const FrameResult& f : frames)
+  for (const FrameResult& f : frames) {
     ff.frames.push_back({f.t, f.certified, f.keyframe, f.converged, static_cast<uint32_t>(f.iterations), f.energy, f.map});
+    ff.frames.back().overlaps = f.overlap.overlaps();
+  }
   return ff;
 }
 
@@ -68,6 +70,7 @@ SequenceSummary summarize(const std::vector<FrameResult>& frames, double total_s
     s.certified += f.certified;
     s.within_bounds += f.bound_excess <= 1e-9;
     s.max_bound_excess = std::max(s.max_bound_excess, f.bound_excess);
+    s.overlapping += f.overlap.overlaps();
     if (!f.keyframe) {
       ++solved;
       it += f.iterations;
@@ -80,6 +83,20 @@ SequenceSummary summarize(const std::vector<FrameResult>& frames, double total_s
   s.mean_ms = solved ? ms / solved : 0.0;
   return s;
 }
+
+namespace {
+
+// A frame's global-overlap check (overlap.h): whether it ran, the crossings of the
+// boundary's image at the breakpoints, and the first one.
+nlohmann::json overlap_json(const OverlapResult& o) {
+  nlohmann::json j = {{"checked", o.checked}, {"crossings", o.crossings}, {"breakpoints", o.points}};
+  if (o.overlaps())
+    j["first"] = {{"loop_a", o.loop_a}, {"edge_a", o.edge_a}, {"loop_b", o.loop_b}, {"edge_b", o.edge_b},
+                  {"point", {o.point.real(), o.point.imag()}}};
+  return j;
+}
+
+}  // namespace
 
 std::string report_json(const Scene& scene, const SceneSequence& seq, const std::string& scene_path) {
   nlohmann::json rep;
@@ -110,7 +127,9 @@ std::string report_json(const Scene& scene, const SceneSequence& seq, const std:
                   {"bound_excess", f.bound_excess},
                   {"certificate", {{"sigma1_max", f.certificate.sigma1_max}, {"sigma2_min", f.certificate.sigma2_min},
                                    {"k_max", f.certificate.k_max}, {"reason", f.certificate.reason}}},
-                  {"message", f.message}});
+                  {"message", f.message},
+                  {"overlaps", f.overlap.overlaps()},
+                  {"overlap", overlap_json(f.overlap)}});
   }
   const SequenceSummary s = summarize(seq.frames, seq.total_s);
   rep["summary"] = {{"frames", s.frames},
@@ -121,7 +140,8 @@ std::string report_json(const Scene& scene, const SceneSequence& seq, const std:
                     {"max_ms", s.max_ms},
                     {"total_s", s.total_s},
                     {"frames_within_keyframe_bounds", s.within_bounds},
-                    {"max_bound_excess", s.max_bound_excess}};
+                    {"max_bound_excess", s.max_bound_excess},
+                    {"overlapping", s.overlapping}};
   rep["frames"] = fr;
   return rep.dump(1) + "\n";
 }
@@ -129,14 +149,15 @@ std::string report_json(const Scene& scene, const SceneSequence& seq, const std:
 std::string report_csv(const SceneSequence& seq) {
   std::string out =
       "frame,t,keyframe,certified,converged,iterations,energy,ms,sigma1_max,sigma2_min,conformal_max,isometric_max,"
-      "bound_sigma1_max,bound_sigma2_min,bound_conformal_max,bound_isometric_max,bound_excess\n";
+      "bound_sigma1_max,bound_sigma2_min,bound_conformal_max,bound_isometric_max,bound_excess,overlaps,crossings\n";
   char line[512];
   for (size_t i = 0; i < seq.frames.size(); ++i) {
     const FrameResult& f = seq.frames[i];
-    std::snprintf(line, sizeof line, "%zu,%.17g,%d,%d,%d,%d,%.17g,%.6g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g\n", i,
+    std::snprintf(line, sizeof line, "%zu,%.17g,%d,%d,%d,%d,%.17g,%.6g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%d,%d\n", i,
                   f.t, f.keyframe ? 1 : 0, f.certified ? 1 : 0, f.converged ? 1 : 0, f.iterations, f.energy, f.ms,
                   f.distortion.sigma1_max, f.distortion.sigma2_min, f.distortion.conformal_max, f.distortion.isometric_max,
-                  f.bound.sigma1_max, f.bound.sigma2_min, f.bound.conformal_max, f.bound.isometric_max, f.bound_excess);
+                  f.bound.sigma1_max, f.bound.sigma2_min, f.bound.conformal_max, f.bound.isometric_max, f.bound_excess,
+                  f.overlap.overlaps() ? 1 : 0, f.overlap.crossings);
     out += line;
   }
   return out;

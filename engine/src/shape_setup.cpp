@@ -18,6 +18,7 @@ ShapeSetup::ShapeSetup(Shape s, Cage c, int samples, double hessian_ratio)
       metric_space(cage, Gauge::ModuloRigid),
       D_G(map_space.restrict_columns(evaluate_basis(cage, G.points, kBasisD).D)),
       certifier(shape, cage, G),
+      overlap(cage, certifier.segments()),
       size(bounding_box(shape).diagonal()) {}
 
 std::unique_ptr<ShapeSetup> make_shape_setup(const Scene& scene, int samples, double hessian_ratio) {

@@ -10,7 +10,10 @@
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #include <CGAL/Triangulation_vertex_base_with_info_2.h>
 
+#include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <numeric>
 #include <string>
 
 namespace hsi {
@@ -27,6 +30,54 @@ using CDT = CGAL::Constrained_Delaunay_triangulation_2<K, Tds, CGAL::Exact_predi
 using Criteria = CGAL::Delaunay_mesh_size_criteria_2<CDT>;
 using Mesher = CGAL::Delaunay_mesher_2<CDT, Criteria>;
 using Point = K::Point_2;
+
+// Position of (x, y) along the Hilbert curve over an n × n grid (n a power of two).
+uint64_t hilbert_index(uint32_t n, uint32_t x, uint32_t y) {
+  uint64_t d = 0;
+  for (uint32_t s = n / 2; s > 0; s /= 2) {
+    const uint32_t rx = (x & s) ? 1u : 0u, ry = (y & s) ? 1u : 0u;
+    d += uint64_t{s} * s * ((3u * rx) ^ ry);
+    if (ry == 0) {
+      if (rx == 1) {
+        x = n - 1 - x;
+        y = n - 1 - y;
+      }
+      std::swap(x, y);
+    }
+  }
+  return d;
+}
+
+// Triangles in Hilbert-curve order of their rest centroids (CGAL's face order is its
+// memory order, scattered over the shape). Where a map overlaps itself, both
+// rasterizers draw the later triangle in this order on top (issue #20): in a
+// spatially coherent order each layer wins in whole patches, not in a speckle of
+// alternating triangles. Deterministic (ties keep CGAL's order).
+void sort_triangles_spatially(TriMesh& mesh) {
+  if (mesh.triangles.size() < 2) return;
+  BoundingBox bb{mesh.vertices.front(), mesh.vertices.front()};
+  for (const cd& v : mesh.vertices) {
+    bb.lo = {std::min(bb.lo.real(), v.real()), std::min(bb.lo.imag(), v.imag())};
+    bb.hi = {std::max(bb.hi.real(), v.real()), std::max(bb.hi.imag(), v.imag())};
+  }
+  constexpr uint32_t n = 1u << 16;
+  const double side = std::max({bb.hi.real() - bb.lo.real(), bb.hi.imag() - bb.lo.imag(), 1e-300});
+  auto cell = [&](double t) { return static_cast<uint32_t>(std::clamp(t / side * n, 0.0, n - 1.0)); };
+  std::vector<uint64_t> key(mesh.triangles.size());
+  for (size_t t = 0; t < key.size(); ++t) {
+    const auto& tri = mesh.triangles[t];
+    const cd c = (mesh.vertices[static_cast<size_t>(tri[0])] + mesh.vertices[static_cast<size_t>(tri[1])] +
+                  mesh.vertices[static_cast<size_t>(tri[2])]) / 3.0;
+    key[t] = hilbert_index(n, cell(c.real() - bb.lo.real()), cell(c.imag() - bb.lo.imag()));
+  }
+  std::vector<size_t> order(key.size());
+  std::iota(order.begin(), order.end(), size_t{0});
+  std::stable_sort(order.begin(), order.end(), [&](size_t a, size_t b) { return key[a] < key[b]; });
+  std::vector<std::array<int, 3>> sorted;
+  sorted.reserve(order.size());
+  for (size_t t : order) sorted.push_back(mesh.triangles[t]);
+  mesh.triangles = std::move(sorted);
+}
 
 // Vertices per unit area for near-equilateral triangles of edge h (2 triangles per vertex).
 double vertex_density(double h) { return 2.0 / (std::sqrt(3.0) * h * h); }
@@ -118,6 +169,7 @@ TriMesh triangulate(const Shape& input, const TriangulateOptions& options) {
   // Interior vertices keep −1 even if inserted on a loop (cannot happen for valid shapes).
   for (size_t v = 0; v < mesh.vertices.size(); ++v)
     if (next[v] < 0) mesh.boundary_loop[v] = -1;
+  sort_triangles_spatially(mesh);
   return mesh;
 }
 

@@ -112,6 +112,8 @@ class App {
 
   // --- display ---
   const HarmonicMap* shown_map(bool* certified, std::string* reason, bool* is_key);
+  // Whether a map's boundary image crosses itself (hsi/overlap.h), cached by its coefficients.
+  const OverlapResult& overlap_of(const HarmonicMap& map);
   void layout();
   void update_renderer_and_render();
   cd to_world(ImVec2 screen) const;
@@ -133,6 +135,8 @@ class App {
   Scene scene_;
   std::string scene_path_;
   std::shared_ptr<const ShapeSetup> setup_;
+  OverlapResult overlap_;           // of the map with coefficients overlap_phi_, overlap_psi_
+  VectorXcd overlap_phi_, overlap_psi_;
   std::unique_ptr<Solver> solver_;
   std::unique_ptr<Presenter> presenter_;
   std::unique_ptr<vk::Renderer> renderer_;
@@ -399,6 +403,15 @@ const HarmonicMap* App::shown_map(bool* certified, std::string* reason, bool* is
   *certified = shown_->certified;
   *reason = shown_->message;
   return &shown_->map;
+}
+
+const OverlapResult& App::overlap_of(const HarmonicMap& map) {
+  if (overlap_phi_.size() != map.phi.size() || overlap_phi_ != map.phi || overlap_psi_ != map.psi) {
+    overlap_ = setup_->overlap.check(map);
+    overlap_phi_ = map.phi;
+    overlap_psi_ = map.psi;
+  }
+  return overlap_;
 }
 
 void App::step(int delta) {
@@ -867,6 +880,12 @@ void App::draw_viewport_overlays() {
     dl->AddRectFilled(p, ImVec2(p.x + ts.x + 2 * pad, p.y + ts.y + pad), rgba(0.80f, 0.05f, 0.05f, 0.95f), 4 * scale_);
     dl->AddText(ImGui::GetFont(), ImGui::GetFontSize(), ImVec2(p.x + pad, p.y + pad / 2), rgba(1, 1, 1), text.c_str(), nullptr,
                 vp_size_.x - 4 * pad);
+  } else if (map && overlap_of(*map).overlaps()) {  // always shown, like the uncertified banner: amber
+    const std::string text = std::string(is_key ? "keyframe · " : "") + "certified locally injective, but overlaps itself";
+    const ImVec2 ts = ImGui::CalcTextSize(text.c_str());
+    const ImVec2 p(a.x + pad, a.y + pad);
+    dl->AddRectFilled(p, ImVec2(p.x + ts.x + 2 * pad, p.y + ts.y + pad), rgba(0.90f, 0.52f, 0.02f, 0.95f), 4 * scale_);
+    dl->AddText(ImVec2(p.x + pad, p.y + pad / 2), rgba(1, 1, 1), text.c_str());
   } else if (show_status_) {
     const std::string text = std::string(is_key ? "keyframe · " : "") + "certified locally injective";
     const ImVec2 ts = ImGui::CalcTextSize(text.c_str());
@@ -930,7 +949,7 @@ void App::draw_side_panel() {
   const auto bad = std::count(states.begin(), states.end(), uint8_t(2));
   bool cert = true, is_key = false;
   std::string reason;
-  shown_map(&cert, &reason, &is_key);
+  const HarmonicMap* panel_map = shown_map(&cert, &reason, &is_key);
   if (shown_ && !is_key && shown_index_ == cur_)
     ImGui::Text("solve %.1f ms · %d Newton iterations", shown_->ms, shown_->iterations);
   else if (is_key)
@@ -944,6 +963,8 @@ void App::draw_side_panel() {
     if (cert) ImGui::TextColored(ImVec4(0.4f, 0.85f, 0.45f, 1), "certified locally injective");
     else ImGui::TextColored(ImVec4(1, 0.3f, 0.3f, 1), "NOT CERTIFIED");
   }
+  if (panel_map && overlap_of(*panel_map).overlaps())  // a drag, a keyframe or a frame: locally, not globally injective
+    ImGui::TextColored(ImVec4(1, 0.62f, 0.1f, 1), "overlaps itself (%d boundary crossings)", overlap_.crossings);
   ImGui::Separator();
 
   ImGui::TextUnformatted("Overlays");

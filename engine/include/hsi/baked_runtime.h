@@ -37,7 +37,9 @@
  *                       weights: w[target] += value * x[source], target < 2R
  * Frames (F records of S bytes each, then the end of the file):
  *    0  f64      time t
- *    8  u32      flags: 1 certified locally injective, 2 keyframe, 4 converged
+ *    8  u32      flags: 1 certified locally injective, 2 keyframe, 4 converged,
+ *                8 overlaps itself (the image of the shape's boundary crosses
+ *                itself at the sampled breakpoints: not globally injective)
  *   12  u32      reserved (0)
  *   16  f64[2]   rotation r (unit complex number)
  *   32  f64[2]   translation c
@@ -93,6 +95,7 @@ extern "C" {
 #define HSIB_FRAME_CERTIFIED 1u
 #define HSIB_FRAME_KEYFRAME 2u
 #define HSIB_FRAME_CONVERGED 4u
+#define HSIB_FRAME_OVERLAPS 8u /* the frame overlaps itself (see the frame record) */
 
 typedef enum hsib_status {
   HSIB_OK = 0,

@@ -6,7 +6,9 @@
 //   u32 L; L × { u32 count; count × (f64 x, f64 y) }      cage loops (outer first)
 //   u32 N; N × (f64 x, f64 y)                               hole points ρ_i
 //   u32 K (= cage vertices + N, coefficients per map); u32 F (frames)
-//   F × { f64 t; u32 flags (1 certified, 2 keyframe, 4 converged); u32 iterations;
+//   F × { f64 t; u32 flags (1 certified locally injective, 2 keyframe, 4 converged,
+//         8 overlaps itself: the image of the boundary crosses itself, overlap.h);
+//         u32 iterations;
 //         f64 energy; K × (f64 re, f64 im) φ; K × (f64 re, f64 im) ψ }
 // A reader refuses a wrong magic, an unknown version, impossible sizes and a
 // truncated file, naming what is wrong and at which byte.
@@ -29,6 +31,7 @@ struct StoredFrame {
   uint32_t iterations = 0;
   double energy = 0;
   HarmonicMap map;
+  bool overlaps = false;  // flag 8: f(∂Ω) crosses itself at the breakpoints (overlap.h)
 };
 
 struct FrameFile {

@@ -184,6 +184,10 @@ typedef struct hsi_frame_report {
   double sigma1_max, sigma2_min, conformal_max, isometric_max; /* distortion over the shape */
   double bound_sigma1_max, bound_sigma2_min, bound_conformal_max, bound_isometric_max; /* keyframes' envelope */
   double bound_excess;  /* relative excess over the envelope (0 = within) */
+  /* The image of the shape's boundary crosses itself (the frame is locally injective
+   * at most, not globally: two layers of the shape overlap), sampled at the boundary
+   * breakpoints (engine/include/hsi/overlap.h); crossings: how many segment pairs. */
+  int overlaps, crossings;
 } hsi_frame_report;
 
 /* Called after each frame; return non-zero to stop (HSI_ERROR_CANCELLED). */
@@ -204,6 +208,7 @@ HSI_API hsi_status hsi_sequence_frame_report(const hsi_sequence* sequence, uint3
 typedef struct hsi_sequence_summary {
   uint32_t frames, certified, uncertified, within_bounds;
   double mean_iterations, mean_ms, max_ms, total_s, max_bound_excess;
+  uint32_t overlapping; /* frames that overlap themselves (hsi_frame_report.overlaps) */
 } hsi_sequence_summary;
 /* [per handle, const] */
 HSI_API hsi_status hsi_sequence_summary_get(const hsi_sequence* sequence, hsi_sequence_summary* summary);

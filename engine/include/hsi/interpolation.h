@@ -55,6 +55,10 @@ struct FrameResult {
   double bound_excess = 0;   // how far the frame leaves that envelope (relative; 0 = bounded)
   std::string message;
   NewtonResult::Timing timing;
+  // Whether the image of ∂Ω crosses itself (the frame overlaps itself: locally but not
+  // globally injective), sampled at the certificate's breakpoints (overlap.h). Checked
+  // for keyframes and solved frames alike; it does not change `certified`.
+  OverlapResult overlap;
 };
 
 class Interpolator {

@@ -63,6 +63,9 @@ struct SceneKeyframe {
   int index = 0;
   bool solved = false;     // authored from targets now (else certified coefficients)
   KeyframeResult result;   // when solved
+  // Whether the keyframe's boundary image crosses itself (overlap.h): certified means
+  // locally injective only, so an authored pose can still lay one part over another.
+  OverlapResult overlap;
 };
 
 // Makes every keyframe of a scene a certified map, in time order: keyframes with

@@ -45,11 +45,12 @@ SceneSequence interpolate_scene(Scene& scene, const SceneSequenceOptions& option
 struct SequenceSummary {
   int frames = 0, certified = 0, uncertified = 0, within_bounds = 0;
   double mean_iterations = 0, mean_ms = 0, max_ms = 0, total_s = 0, max_bound_excess = 0;
+  int overlapping = 0;  // frames whose boundary image crosses itself (FrameResult::overlap)
 };
 SequenceSummary summarize(const std::vector<FrameResult>& frames, double total_s);
 
 // The per-frame report (the fields of hsi interpolate's report.json: time, keyframe,
-// certified, iterations, energy, ms, distortion and its bound, certificate), the
+// certified, iterations, energy, ms, distortion and its bound, certificate, overlap), the
 // solver options, plus a summary. `scene_path` is only recorded.
 std::string report_json(const Scene& scene, const SceneSequence& sequence, const std::string& scene_path = "");
 // One line per frame, a header line first; RFC 4180, '.' decimals.

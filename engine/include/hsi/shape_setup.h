@@ -1,11 +1,12 @@
 // Everything the solvers precompute once per shape: cage, samples G and H, the
-// reduced spaces, the active basis rows at G and the certifier.
+// reduced spaces, the active basis rows at G, the certifier and the overlap check.
 #pragma once
 
 #include <memory>
 
 #include "hsi/certificate.h"
 #include "hsi/map_space.h"
+#include "hsi/overlap.h"
 #include "hsi/scene_io.h"
 
 namespace hsi {
@@ -19,6 +20,7 @@ struct ShapeSetup {
   MapSpace metric_space;  // Gauge::ModuloRigid: interpolation (only the metric matters)
   MatrixXcd D_G;          // active D rows at G (the same active columns in both gauges)
   Certifier certifier;
+  OverlapChecker overlap;  // self-crossings of f(∂Ω) at the certifier's breakpoints (overlap.h)
   double size = 1;        // bounding-box diagonal of the shape
 
   ShapeSetup(Shape shape, Cage cage, int samples, double hessian_ratio);

@@ -24,7 +24,10 @@ struct TriangulateOptions {
 
 struct TriMesh {
   std::vector<cd> vertices;                  // rest positions in the shape's plane
-  std::vector<std::array<int, 3>> triangles; // counter-clockwise
+  // Counter-clockwise, in Hilbert-curve order of their rest centroids: spatially
+  // coherent, so where a map overlaps itself the renderers' "later triangle on top"
+  // rule shows each layer in whole patches (issue #20).
+  std::vector<std::array<int, 3>> triangles;
   std::vector<int> boundary_loop;            // per vertex: loop index (0 outer, k hole k−1), −1 inside
   // Boundary edges (a, b) with the shape on their left, grouped by loop.
   std::vector<std::array<int, 2>> boundary_edges;

@@ -95,9 +95,13 @@ UnweldedMesh unweld(const TriMesh& mesh);
 // per pixel and triangle at the pixel's centre, the same colours, blended over the
 // background and averaged. Lines and handle discs are drawn by the graphics pipeline
 // either way (on top of the resolved image in the compute path: their edges are
-// anti-aliased by analytic coverage). One difference: where the image of the shape
-// overlaps itself (a map that is not globally injective), the graphics path blends
-// a translucent texel over the layer below it, the compute path shows the top layer only.
+// anti-aliased by analytic coverage). Where the image of the shape overlaps itself (a
+// map that is not globally injective, issue #20), both show the top layer alone, over
+// the background, whatever its alpha: per sample the last triangle in the mesh's
+// triangle order that covers it (the compute path's visibility buffer keeps the
+// largest 1 + triangle id by atomicMax; the graphics path draws the mesh without
+// blending, so Vulkan's primitive order leaves the last triangle's colour, composited
+// over the background in the fragment shader). Deterministic, and the same in both.
 enum class Rasterizer {
   kAuto,      // kCompute, except on CPU devices (lavapipe, whose rasterizer is faster
               // there) or where the visibility buffer would not fit (see kCompute).
