@@ -176,7 +176,8 @@ void register_interpolate(CLI::App& app) {
                   sum.within_certified_bounds, sum.max_certified_bound_excess);
     write_file_atomic(out / "report.txt", std::string(head) + table);
 
-    auto plot = [&](const std::string& file, const std::string& title, std::vector<Series> series, const std::string& note = "") {
+    auto plot = [&](const std::string& file, const std::string& title, std::vector<Series> series, const std::string& note = "",
+                    int height = 420) {
       PlotSpec spec;
       spec.title = title;
       spec.xlabel = "t";
@@ -185,6 +186,7 @@ void register_interpolate(CLI::App& app) {
       spec.flagged = flagged;
       spec.unconverged = unconverged;
       spec.note = note;
+      spec.height_px = height;
       plot_series(out / file, spec);
     };
     plot("energy.png", scene.name + ": energy per frame (2 = metric reproduced exactly)", {{"energy", energy, 0.1, 0.3, 0.7}});
@@ -208,7 +210,8 @@ void register_interpolate(CLI::App& app) {
     std::stable_partition(ds.begin(), ds.end(), [](const Series& s) { return s.width > 3; });
     plot("distortion.png", scene.name + ": distortion on the boundary vs the keyframes'", std::move(ds),
          "sampled: at the certificate's breakpoints; certified: the certificate's bounds over the boundary (so over the shape); "
-         "no certified bound for an uncertified frame");
+         "no certified bound for an uncertified frame",
+         500);
     if (o->png_count > 0) {
       std::filesystem::create_directories(out / "frames");
       const int count = std::min<int>(o->png_count, static_cast<int>(frames.size()));

@@ -3,7 +3,8 @@
 # (documented) unless --allow-unconverged; report.txt / report.json say which
 # distortion numbers are sampled and which are certified bounds; iterations.png marks
 # the non-converged frames in orange (pixels read back by hsi_png_probe).
-# -D: HSI_CLI, HSI_PROBE, HSI_SCENE, HSI_WORK_DIR
+# -D: HSI_CLI, HSI_PROBE, HSI_SCENE, HSI_WORK_DIR; HSI_NODE, HSI_TOOLS_DIR, HSI_VALIDATE_JS (optional: the glTF validator),
+# HSI_WITH_RENDER (hsi render is built: its labels)
 file(REMOVE_RECURSE ${HSI_WORK_DIR})
 file(MAKE_DIRECTORY ${HSI_WORK_DIR})
 include(${CMAKE_CURRENT_LIST_DIR}/cli_test.cmake)
@@ -104,4 +105,19 @@ endif()
 file(STRINGS ${HSI_WORK_DIR}/hard.glb glb REGEX "\"converged\":false")
 if(glb STREQUAL "")
   fail("hard.glb: the animation's extras do not flag the non-converged frames")
+endif()
+# The extras keep the file valid glTF (where the Khronos validator is installed).
+if(HSI_NODE AND NOT HSI_NODE MATCHES "NOTFOUND" AND EXISTS ${HSI_TOOLS_DIR}/node_modules/gltf-validator)
+  run(0 ${HSI_NODE} ${HSI_VALIDATE_JS} ${HSI_TOOLS_DIR} ${HSI_WORK_DIR}/hard.glb)
+endif()
+# hsi render: the count, and the orange labels on the contact sheet.
+if(HSI_WITH_RENDER)
+  run(0 ${HSI_CLI} render ${HSI_SCENE} ${hard} -o ${HSI_WORK_DIR}/render --size 200)
+  if(NOT RUN_OUTPUT MATCHES "[1-9][0-9]* of the rendered frames are NOT CONVERGED")
+    fail("hsi render: no NOT CONVERGED count")
+  endif()
+  orange_pixels(${HSI_WORK_DIR}/render/contact_sheet.png n_sheet)
+  if(n_sheet LESS 100)
+    fail("contact_sheet.png: no orange NOT CONVERGED labels or borders (${n_sheet} pixels)")
+  endif()
 endif()
