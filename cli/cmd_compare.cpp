@@ -920,7 +920,7 @@ void run_compare(const Opts& o) {
   rep["distortion_kinds"] = {
       {"sampled", "ours' kappa / isometric and the keyframes' bound: sampled at the certificate's breakpoints on the boundary"},
       {"certified", "*_certified_bound: the certificate's bounds over the boundary, so over the shape (Theorem 2); isometric from "
-                    "the sigma bounds; null where a frame is not certified"}};
+                    "the sigma bounds; \"nan\" where a frame is not certified"}};
   rep["sequence"] = {{"t", ts},
                      {"ours", {{"kappa", nums(our_kappa)}, {"isometric", nums(our_iso)}, {"kappa_certified_bound", nums(our_kappa_c)},
                                {"isometric_certified_bound", nums(our_iso_c)}, {"ms", nums(our_ms)}, {"iterations", our_iters}}},
