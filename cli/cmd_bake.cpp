@@ -28,9 +28,15 @@ SceneSequence interpolate_with_progress(Scene& scene, const SceneSequenceOptions
   const bool tty = isatty(fileno(stderr));
   SceneSequence seq = interpolate_scene(scene, o, [&](const FrameResult& f, int i, int n) {
     if (tty)
-      std::fprintf(stderr, "\r[%s] frame %d/%d  t = %.4f  %s   ", tag, i + 1, n, f.t, f.certified ? "certified" : "NOT CERTIFIED");
+      std::fprintf(stderr, "\r[%s] frame %d/%d  t = %.4f  %s%s   ", tag, i + 1, n, f.t, f.certified ? "certified" : "NOT CERTIFIED",
+                   f.converged ? "" : ", NOT CONVERGED");
     else if ((i + 1) % std::max(1, n / 10) == 0 || i + 1 == n)
       std::fprintf(stderr, "[%s] frame %d/%d\n", tag, i + 1, n);
+    if (!f.certified)
+      std::fprintf(stderr, "%s[%s] frame %d (t = %.6f) NOT CERTIFIED: %s\n", tty ? "\n" : "", tag, i, f.t, f.certificate.reason.c_str());
+    else if (!f.converged)
+      std::fprintf(stderr, "%s[%s] frame %d (t = %.6f) NOT CONVERGED after %d iterations: %s\n", tty ? "\n" : "", tag, i, f.t,
+                   f.iterations, f.message.c_str());
   });
   if (tty) std::fprintf(stderr, "\n");
   return seq;
@@ -41,20 +47,25 @@ void register_bake(CLI::App& app) {
     std::string scene, out = "sequence.hsib", from;
     int frames = 120, samples = 0;
     double ratio = 0;
-    bool f64 = false;
+    bool f64 = false, allow_unconverged = false;
+    int max_iterations = 100;
   };
   auto o = std::make_shared<Opts>();
   CLI::App* cmd = app.add_subcommand(
       "bake",
       "Bake a scene's interpolation for playback in a game: a compact .hsib file (the cage once, then per frame the\n"
       "reduced coefficients and pose, a few KB) that the dependency-free runtime hsi/baked_runtime.h plays back on\n"
-      "any mesh's vertices with one small matrix product per frame.");
+      "any mesh's vertices with one small matrix product per frame. Each frame's flags (certified, keyframe,\n"
+      "converged) are stored in the file.\n" +
+          std::string(kFlaggedFramesHelp));
   cmd->add_option("scene", o->scene, "Scene file (.json) with two or more keyframes")->required()->check(CLI::ExistingFile);
   cmd->add_option("-o,--output", o->out, "Baked file to write")->capture_default_str();
   cmd->add_option("--frames", o->frames, "Frames over the keyframes' time range")->capture_default_str()->check(CLI::Range(2, 1000000));
   cmd->add_option("--samples", o->samples, "Boundary samples |G| (default: the scene's)")->check(CLI::Range(100, 10000000));
   cmd->add_option("--ratio", o->ratio, "Hessian sample ratio r (default: the scene's)")->check(CLI::Range(1e-6, 1.0));
   cmd->add_option("--from", o->from, "Bake the frames of an earlier hsi interpolate (its folder or frames.hsif) instead");
+  cmd->add_option("--max-iterations", o->max_iterations, "Newton iterations per frame at most")->capture_default_str()->check(CLI::Range(1, 1000000));
+  cmd->add_flag("--allow-unconverged", o->allow_unconverged, "Exit 0 when certified frames did not converge (still flagged in the file)");
   cmd->add_flag("--f64", o->f64, "Store per-frame coefficients as f64 (default f32, about 1e-7 of the shape's size)");
   cmd->callback([o] {
     Scene scene = load_scene(o->scene);
@@ -66,25 +77,28 @@ void register_bake(CLI::App& app) {
       so.frames = o->frames;
       so.samples = o->samples;
       so.hessian_ratio = o->ratio;
+      so.interpolation.max_iterations = o->max_iterations;
       ff = interpolate_with_progress(scene, so, "bake").frame_file();
     }
     BakeOptions bo;
     bo.single_precision = !o->f64;
     const std::string bytes = encode_baked(scene.shape, ff, bo);
     write_file_atomic(o->out, bytes);
-    int uncertified = 0;
-    for (const StoredFrame& f : ff.frames) uncertified += !f.certified;
-    std::printf("wrote %s: %zu frames, %zu bytes (%.1f KB per frame), %d uncertified\n", o->out.c_str(), ff.frames.size(),
-                bytes.size(), static_cast<double>(bytes.size()) / 1024.0 / static_cast<double>(std::max<size_t>(1, ff.frames.size())),
-                uncertified);
-    int overlapping = 0;
-    for (const StoredFrame& f : ff.frames) overlapping += f.overlaps;
+    int uncertified = 0, not_converged = 0, overlapping = 0;
+    for (const StoredFrame& f : ff.frames) {
+      uncertified += !f.certified;
+      not_converged += !f.converged;
+      overlapping += f.overlaps;
+    }
+    std::printf("wrote %s: %zu frames, %zu bytes (%.1f KB per frame), %d uncertified, %d not converged\n", o->out.c_str(),
+                ff.frames.size(), bytes.size(),
+                static_cast<double>(bytes.size()) / 1024.0 / static_cast<double>(std::max<size_t>(1, ff.frames.size())), uncertified,
+                not_converged);
     if (overlapping > 0)
       std::printf("WARNING: %d frame(s) overlap themselves (the image of the boundary crosses itself); flagged "
                   "HSIB_FRAME_OVERLAPS in the baked file\n",
                   overlapping);
-    if (uncertified > 0)
-      throw std::runtime_error(std::to_string(uncertified) + " frame(s) could not be certified; they are flagged in the baked file");
+    exit_for_flagged_frames(uncertified, not_converged, o->allow_unconverged, "they are flagged in the baked file");
   });
 }
 

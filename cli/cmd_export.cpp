@@ -18,7 +18,8 @@ void register_export(CLI::App& app) {
     double ratio = 0;
     int gltf_frames = 61, gltf_vertices = 2000;
     double seconds = 1;
-    bool step = false;
+    bool step = false, allow_unconverged = false;
+    int max_iterations = 100;
     std::string size = "512";
     int every = 1;
   };
@@ -27,7 +28,9 @@ void register_export(CLI::App& app) {
       "export",
       "Export a scene's interpolation: --gltf an animated glTF 2.0 binary (.glb: the shape's triangulation with its\n"
       "texture, one morph target per sampled frame, a weights animation), --png a PNG sequence and contact sheet\n"
-      "(Vulkan renderer), --json / --csv the per-frame report. Frames that are not certified are never exported as good.");
+      "(Vulkan renderer), --json / --csv the per-frame report. Frames that are not certified are never exported as good;\n"
+      "the glTF animation's extras list each sampled frame's flags (certified, keyframe, converged).\n" +
+          std::string(kFlaggedFramesHelp));
   cmd->add_option("scene", o->scene, "Scene file (.json) with two or more keyframes")->required()->check(CLI::ExistingFile);
   cmd->add_option("--gltf", o->gltf, "Write an animated glTF binary (.glb)");
   cmd->add_option("--png", o->png, "Write OUT/frame_NNNN.png, OUT/contact_sheet.png (and OUT/frames.hsif)");
@@ -37,6 +40,8 @@ void register_export(CLI::App& app) {
   cmd->add_option("--frames", o->frames, "Frames over the keyframes' time range")->capture_default_str()->check(CLI::Range(2, 1000000));
   cmd->add_option("--samples", o->samples, "Boundary samples |G| (default: the scene's)")->check(CLI::Range(100, 10000000));
   cmd->add_option("--ratio", o->ratio, "Hessian sample ratio r (default: the scene's)")->check(CLI::Range(1e-6, 1.0));
+  cmd->add_option("--max-iterations", o->max_iterations, "Newton iterations per frame at most")->capture_default_str()->check(CLI::Range(1, 1000000));
+  cmd->add_flag("--allow-unconverged", o->allow_unconverged, "Exit 0 when certified frames did not converge (still flagged in the outputs)");
   cmd->add_option("--gltf-frames", o->gltf_frames, "Frames sampled into the glTF animation (morph targets + 1)")
       ->capture_default_str()->check(CLI::Range(2, 4096));
   cmd->add_option("--gltf-vertices", o->gltf_vertices, "Vertices of the glTF mesh (about)")->capture_default_str()->check(CLI::Range(16, 2000000));
@@ -59,6 +64,7 @@ void register_export(CLI::App& app) {
       so.frames = o->frames;
       so.samples = o->samples;
       so.hessian_ratio = o->ratio;
+      so.interpolation.max_iterations = o->max_iterations;
       const SceneSequence seq = interpolate_with_progress(scene, so, "export");
       ff = seq.frame_file();
       if (!o->json.empty()) {
@@ -70,7 +76,12 @@ void register_export(CLI::App& app) {
         std::printf("wrote %s\n", o->csv.c_str());
       }
     }
-    for (const StoredFrame& f : ff.frames) uncertified += !f.certified;
+    int not_converged = 0;
+    for (const StoredFrame& f : ff.frames) {
+      uncertified += !f.certified;
+      not_converged += !f.converged;
+    }
+    std::printf("%zu frames: %d uncertified, %d not converged\n", ff.frames.size(), uncertified, not_converged);
     if (!o->gltf.empty()) {
       GltfOptions go;
       go.mesh_vertices = o->gltf_vertices;
@@ -92,8 +103,8 @@ void register_export(CLI::App& app) {
       std::reverse(args.begin(), args.end());  // CLI11 takes the arguments last first
       render.parse(args);
     }
-    if (uncertified > 0)
-      throw std::runtime_error(std::to_string(uncertified) + " frame(s) could not be certified (see the report); glTF export refuses them");
+    exit_for_flagged_frames(uncertified, not_converged, o->allow_unconverged,
+                            "see the report" + std::string(uncertified > 0 ? "; glTF export refuses them" : ""));
   });
 }
 

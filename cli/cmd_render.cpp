@@ -290,6 +290,7 @@ void run_render(const Opts& o) {
   const bool tty = isatty(fileno(stderr));
   int uncertified = 0;
   int overlapping = 0;  // frames flagged 8 in frames.hsif: the boundary's image crosses itself
+  int not_converged = 0;  // Newton stopped before its tolerance (frames file flag 4 clear)
   size_t next_sheet = 0;
   double render_ms = 0;
   for (size_t s = 0; s < selected.size(); ++s) {
@@ -298,6 +299,7 @@ void run_render(const Opts& o) {
     style.uncertified = !fr.certified;
     uncertified += !fr.certified;
     overlapping += fr.overlaps;
+    not_converged += !fr.converged;
     const vk::RgbaImage img = renderer.render(ff.cage, fr.map, view, style);
     render_ms += renderer.last_stats().gpu_ms + renderer.last_stats().upload_ms + renderer.last_stats().readback_ms;
     const Surface surf = surface_from(img);
@@ -328,9 +330,11 @@ void run_render(const Opts& o) {
         cairo_set_source_rgb(cr, 0.86, 0.04, 0.04);
       else if (fr.overlaps)
         cairo_set_source_rgb(cr, 0.96, 0.58, 0.0);
+      else if (!fr.converged)
+        cairo_set_source_rgb(cr, 0.95, 0.5, 0.0);
       else
         cairo_set_source_rgb(cr, 0.7, 0.7, 0.7);
-      cairo_set_line_width(cr, fr.certified && !fr.overlaps ? 1 : 3);
+      cairo_set_line_width(cr, fr.certified && fr.converged && !fr.overlaps ? 1 : 3);
       cairo_stroke(cr);
       std::string label = "#" + std::to_string(i) + "  t = " + fmt("%.3f", fr.t) + (fr.keyframe ? "  key" : "");
       if (!fr.certified) label += "  NOT CERTIFIED";
@@ -340,6 +344,8 @@ void run_render(const Opts& o) {
         const std::string ov = "OVERLAPS ITSELF";
         text(cr, x0 + tw - text_width(cr, ov, 11, true), y0 + th + 15, ov, 11, true, 0.85, 0.45, 0.0, false);
       }
+      if (!fr.converged)
+        text(cr, x0 + text_width(cr, label + "  ", 12, !fr.certified), y0 + th + 15, "NOT CONVERGED", 12, true, 0.9, 0.45, 0.0, false);
     }
     if (!o.no_labels) {
       cairo_t* cr = surf.cr();
@@ -351,11 +357,17 @@ void run_render(const Opts& o) {
         const std::string warn = "NOT CERTIFIED";
         text(cr, W - text_width(cr, warn, 1.3 * font, true) - font, y + 0.2 * font, warn, 1.3 * font, true, 0.86, 0.04, 0.04);
       }
-      if (fr.overlaps) {  // amber, right-aligned: on the label's line when it fits, else below (and below NOT CERTIFIED)
+      if (!fr.converged) {  // below NOT CERTIFIED when both
+        const std::string warn = "NOT CONVERGED";
+        text(cr, W - text_width(cr, warn, 1.3 * font, true) - font, y + (fr.certified ? 0.2 : 1.7) * font, warn, 1.3 * font, true,
+             0.9, 0.45, 0.0);
+      }
+      if (fr.overlaps) {  // amber, right-aligned: on the label's line when it fits, else below (and below NOT CERTIFIED / CONVERGED)
         const std::string warn = "OVERLAPS ITSELF";
-        const bool fits = fr.certified && 0.6 * font + text_width(cr, label, font, false) + text_width(cr, warn, 1.3 * font, true) +
-                                                  2 * font < W;
-        const double yo = fits ? y + 0.2 * font : y + (fr.certified ? 1.6 : 3.0) * font;
+        const bool fits = fr.certified && fr.converged &&
+                          0.6 * font + text_width(cr, label, font, false) + text_width(cr, warn, 1.3 * font, true) + 2 * font < W;
+        const double below = (fr.certified ? 1.6 : 3.0) + (fr.converged ? 0.0 : 1.5);
+        const double yo = fits ? y + 0.2 * font : y + below * font;
         text(cr, W - text_width(cr, warn, 1.3 * font, true) - font, yo, warn, 1.3 * font, true, 0.9, 0.5, 0.0);
       }
       if (legend) draw_legend(cr, W, H, margin + strip, lo, hi, font);
@@ -368,7 +380,8 @@ void run_render(const Opts& o) {
     const size_t done = s + 1, n = selected.size();
     if (tty)
       std::fprintf(stderr, "\r[render] frame %zu/%zu (#%d)  %.1f ms  %s   ", done, n, i,
-                   renderer.last_stats().gpu_ms + renderer.last_stats().readback_ms, fr.certified ? "" : "NOT CERTIFIED");
+                   renderer.last_stats().gpu_ms + renderer.last_stats().readback_ms,
+                   (std::string(fr.certified ? "" : "NOT CERTIFIED ") + (fr.converged ? "" : "NOT CONVERGED")).c_str());
     else if (done % std::max<size_t>(1, n / 10) == 0 || done == n)
       std::fprintf(stderr, "[render] frame %zu/%zu (%.0f%%), %.1f s elapsed\n", done, n, 100.0 * static_cast<double>(done) / static_cast<double>(n), el);
   }
@@ -380,6 +393,9 @@ void run_render(const Opts& o) {
     if (uncertified) title += "   " + std::to_string(uncertified) + " NOT CERTIFIED (red)";
     if (overlapping) title += "   " + std::to_string(overlapping) + " OVERLAP ITSELF (amber)";
     text(sheet.cr(), pad, 26, title, 16, true, uncertified ? 0.8 : 0.1, 0.1, 0.1, false);
+    if (not_converged)
+      text(sheet.cr(), pad + text_width(sheet.cr(), title + "   ", 16, true), 26,
+           std::to_string(not_converged) + " NOT CONVERGED (orange)", 16, true, 0.9, 0.45, 0.0, false);
     write_surface(sheet, out / "contact_sheet.png");
   }
   if (ctx->validation_enabled() && ctx->validation_log()->count())
@@ -395,6 +411,9 @@ void run_render(const Opts& o) {
     std::printf("%d of the rendered frames OVERLAP ITSELF (certified locally injective at most, the boundary's image crosses "
                 "itself): amber border and label\n",
                 overlapping);
+  if (not_converged)
+    std::printf("%d of the rendered frames are NOT CONVERGED (the Newton solve stopped before its tolerance): labelled in orange\n",
+                not_converged);
 }
 
 }  // namespace
@@ -409,8 +428,9 @@ void register_render(CLI::App& app) {
       "Render the frames of 'hsi interpolate' offscreen (Vulkan; lavapipe on a machine without a GPU):\n"
       "the deformed shape with its texture, clipped at its outline and holes, anti-aliased, with optional\n"
       "overlays. Writes OUT/frame_NNNN.png per frame and OUT/contact_sheet.png. Frames that could not be\n"
-      "certified are tinted red, bordered in red and labelled; frames that overlap themselves (the image of\n"
-      "the boundary crosses itself, frames.hsif flag 8) get an amber border and label.");
+      "certified are tinted red, bordered in red and labelled; frames whose solve did not converge are labelled\n"
+      "NOT CONVERGED in orange; frames that overlap themselves (the image of the boundary crosses itself,\n"
+      "frames.hsif flag 8) get an amber border and label.");
 #ifdef HSI_WITH_VULKAN
   cmd->add_option("scene", o->scene, "Scene file (.json) the frames were computed for")->required()->check(CLI::ExistingFile);
   cmd->add_option("frames_dir", o->frames_dir, "Output folder of hsi interpolate (holds frames.hsif)")->required();

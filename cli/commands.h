@@ -3,8 +3,44 @@
 #pragma once
 
 #include <CLI/CLI.hpp>
+#include <stdexcept>
+#include <string>
 
 namespace hsi::cli {
+
+// Exit status of hsi (README "Exit status"). hsi interpolate / bake / export write
+// everything they can, flag the frames, and then exit with:
+//   0  every frame certified and converged
+//   1  an error (nothing or only part written)
+//   2  bad input (scene, file, option value)
+//   3  some frame could not be certified (locally injective not proved): never good
+//   4  every frame certified, but some Newton solve stopped without converging (its
+//      iteration limit reached): the frame is injective but not the interpolation's
+//      minimiser. --allow-unconverged makes this 0.
+// CLI11's own parse errors keep CLI11's codes (105 a bad option value, 106 a missing one, ...).
+enum ExitStatus { kExitOk = 0, kExitError = 1, kExitBadInput = 2, kExitUncertified = 3, kExitNotConverged = 4 };
+
+// Thrown once a command has written its outputs when frames are flagged; main() prints
+// the message (as an error for 3, a warning for 4) and exits with `status`.
+struct FlaggedFrames : std::runtime_error {
+  FlaggedFrames(int status_, const std::string& what) : std::runtime_error(what), status(status_) {}
+  int status;
+};
+// Throws FlaggedFrames for `uncertified` > 0 (3), else for `not_converged` > 0 unless
+// allowed (4); `what` names the command's output for the message.
+inline void exit_for_flagged_frames(int uncertified, int not_converged, bool allow_unconverged, const std::string& what) {
+  if (uncertified > 0)
+    throw FlaggedFrames(kExitUncertified, std::to_string(uncertified) + " frame(s) could not be certified; " + what + " (exit status 3)");
+  if (not_converged > 0 && !allow_unconverged)
+    throw FlaggedFrames(kExitNotConverged, std::to_string(not_converged) +
+                                              " frame(s) NOT CONVERGED: certified, but the Newton solve stopped at its iteration limit "
+                                              "before the tolerance; " + what +
+                                              " (exit status 4; --allow-unconverged accepts them, or raise --max-iterations)");
+}
+// The exit-status paragraph of --help for interpolate / bake / export.
+inline constexpr const char* kFlaggedFramesHelp =
+    "Exit status: 0 all frames certified and converged; 1 error; 2 bad input; 3 some frame not certified;\n"
+    "4 some frame did not converge (certified, but Newton stopped at --max-iterations; --allow-unconverged: 0).";
 
 void register_info(CLI::App& app);
 void register_import_png(CLI::App& app);

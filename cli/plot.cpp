@@ -205,7 +205,7 @@ void plot_map(const std::filesystem::path& png, const Shape& shape, const Cage& 
     cairo_rectangle(cr, 3, 3, width_px - 6, height_px - 6);
     cairo_stroke(cr);
   }
-  if (!extras.title.empty() || extras.uncertified || extras.overlaps) {
+  if (!extras.title.empty() || extras.uncertified || extras.overlaps || extras.not_converged) {
     cairo_set_source_rgb(cr, extras.uncertified ? 0.8 : 0.1, 0.1, 0.1);
     cairo_select_font_face(cr, "sans-serif", CAIRO_FONT_SLANT_NORMAL, CAIRO_FONT_WEIGHT_NORMAL);
     cairo_set_font_size(cr, 14);
@@ -215,6 +215,10 @@ void plot_map(const std::filesystem::path& png, const Shape& shape, const Cage& 
     if (extras.overlaps) {
       cairo_set_source_rgb(cr, 0.85, 0.45, 0.0);
       cairo_show_text(cr, "  [OVERLAPS ITSELF]");
+    }
+    if (extras.not_converged) {
+      cairo_set_source_rgb(cr, 0.9, 0.45, 0.0);
+      cairo_show_text(cr, "  [NOT CONVERGED]");
     }
   }
   canvas.write(png);
@@ -279,12 +283,22 @@ void plot_series(const std::filesystem::path& png, const PlotSpec& spec) {
   // Legend rows: as many entries per row as fit between the margins.
   cairo_set_font_size(cr, 11);
   const double L = spec.ylabel.empty() ? 70 : 86, R = 20, B = 48;
+  // Entries past the series: the kinds of vertical marks present (index series.size():
+  // flagged, red; series.size() + 1: unconverged, orange).
   std::vector<std::vector<size_t>> rows(1);
   double row_w = 0;
-  std::vector<double> entry_w(spec.series.size());
-  for (size_t k = 0; k < spec.series.size(); ++k) {
+  const size_t S = spec.series.size();
+  auto entry_name = [&](size_t k) -> const std::string& {
+    return k < S ? spec.series[k].name : k == S ? spec.flagged_label : spec.unconverged_label;
+  };
+  std::vector<size_t> entries;
+  for (size_t k = 0; k < S; ++k) entries.push_back(k);
+  if (!spec.flagged.empty()) entries.push_back(S);
+  if (!spec.unconverged.empty()) entries.push_back(S + 1);
+  std::vector<double> entry_w(S + 2);
+  for (size_t k : entries) {
     cairo_text_extents_t ext;
-    cairo_text_extents(cr, spec.series[k].name.c_str(), &ext);
+    cairo_text_extents(cr, entry_name(k).c_str(), &ext);
     entry_w[k] = ext.x_advance + 40;
     if (!rows.back().empty() && row_w + entry_w[k] > W - L - R) {
       rows.emplace_back();
@@ -386,21 +400,34 @@ void plot_series(const std::filesystem::path& png, const PlotSpec& spec) {
   cairo_show_text(cr, spec.title.c_str());
   cairo_set_font_size(cr, 11);
   const double d[] = {5.0, 3.0};
+  const double mark_dash[] = {4.0, 2.0};
   for (size_t r = 0; r < rows.size(); ++r) {
     double lx = L;
     const double ly = legend_top + row_h * static_cast<double>(r) + 6;
     for (size_t k : rows[r]) {
-      const Series& s = spec.series[k];
-      cairo_set_source_rgb(cr, s.r, s.g, s.b);
-      cairo_set_dash(cr, d, s.dashed ? 2 : 0, 0);
-      cairo_set_line_width(cr, std::max(2.0, s.width));
-      cairo_move_to(cr, lx, ly - 4);
-      cairo_line_to(cr, lx + 26, ly - 4);
-      cairo_stroke(cr);
+      if (k < S) {
+        const Series& s = spec.series[k];
+        cairo_set_source_rgb(cr, s.r, s.g, s.b);
+        cairo_set_dash(cr, d, s.dashed ? 2 : 0, 0);
+        cairo_set_line_width(cr, std::max(2.0, s.width));
+        cairo_move_to(cr, lx, ly - 4);
+        cairo_line_to(cr, lx + 26, ly - 4);
+        cairo_stroke(cr);
+      } else {  // a short vertical mark, as drawn on the plot
+        if (k == S)
+          cairo_set_source_rgb(cr, 0.85, 0.05, 0.05);
+        else
+          cairo_set_source_rgb(cr, 0.95, 0.5, 0.0);
+        cairo_set_dash(cr, mark_dash, k == S ? 0 : 2, 0);
+        cairo_set_line_width(cr, 2);
+        cairo_move_to(cr, lx + 13, ly - 11);
+        cairo_line_to(cr, lx + 13, ly + 3);
+        cairo_stroke(cr);
+      }
       cairo_set_dash(cr, nullptr, 0, 0);
       cairo_move_to(cr, lx + 32, ly);
       cairo_set_source_rgb(cr, 0.2, 0.2, 0.2);
-      cairo_show_text(cr, s.name.c_str());
+      cairo_show_text(cr, entry_name(k).c_str());
       lx += entry_w[k];
     }
   }
@@ -463,6 +490,16 @@ void plot_series(const std::filesystem::path& png, const PlotSpec& spec) {
     cairo_line_to(cr, px(f), H - B);
     cairo_stroke(cr);
   }
+  // Not converged: orange, dashed, so that a frame both uncertified and unconverged
+  // shows both colours.
+  cairo_set_source_rgb(cr, 0.95, 0.5, 0.0);
+  cairo_set_dash(cr, mark_dash, 2, 0);
+  for (double f : spec.unconverged) {
+    cairo_move_to(cr, px(f), T);
+    cairo_line_to(cr, px(f), H - B);
+    cairo_stroke(cr);
+  }
+  cairo_set_dash(cr, nullptr, 0, 0);
   cairo_restore(cr);
   canvas.write(png);
 }

@@ -25,6 +25,7 @@ struct MapPlot {
   std::string title;
   bool uncertified = false;       // draws the fill in red and says so
   bool overlaps = false;          // the boundary's image crosses itself (overlap.h): amber border and label
+  bool not_converged = false;     // says "NOT CONVERGED" in orange (the Newton solve stopped early)
 };
 void plot_map(const std::filesystem::path& png, const Shape& shape, const Cage& cage, const HarmonicMap& map,
               const MapPlot& extras = {}, int width_px = 800);
@@ -49,6 +50,9 @@ struct PlotSpec {
   std::vector<double> x;
   std::vector<Series> series;
   std::vector<double> flagged;  // red vertical lines (e.g. frames that could not be certified)
+  std::vector<double> unconverged;  // orange dashed vertical lines (frames whose solve did not converge)
+  // Legend entries for the two kinds of marks, shown when there are such marks.
+  std::string flagged_label = "not certified", unconverged_label = "not converged";
   std::vector<double> x_marks;  // thin dotted vertical lines (e.g. keyframe times)
   std::string note;             // a line of small print under the legend
   AxisScale y_scale = AxisScale::kLinear;

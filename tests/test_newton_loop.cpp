@@ -40,9 +40,10 @@ struct FakeStepper : NewtonStepper {
     x_ = x0;
     return energy(x_);
   }
-  void linearize(const HessianChoice& c) override {
+  double linearize(const HessianChoice& c) override {
     choices.push_back(c);
     exact_now = c.exact;
+    return A.diagonal().cwiseAbs().maxCoeff();
   }
   NewtonSystem solve(double ridge) override {
     ridges.push_back(ridge);
@@ -121,7 +122,7 @@ TEST_CASE("newton_run: a singular system gets ridges 1e-12 * max|diag| growing t
   f.A << 4, 0, 0, 1;
   f.fail_factorisations = 1;
   NewtonOptions o;
-  o.exact_hessian_when_definite = false;
+  o.exact_hessian_when_definite = false;  // (the exact system's first factorisation has a ridge: exact_ridge)
   const NewtonResult r = newton_run(f, false, false, Eigen::Vector2d(0, 0), o);
   REQUIRE(f.ridges.size() >= 2);
   CHECK(f.ridges[0] == 0);

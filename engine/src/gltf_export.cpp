@@ -215,6 +215,18 @@ std::string encode_glb(const Scene& scene, const FrameFile& frames, const GltfOp
     c.target_path = "weights";
     tinygltf::Animation an;
     an.name = "interpolation";
+    // Each key's frame and its flags, so that a consumer can tell a frame whose Newton
+    // solve stopped early (converged false) from a converged one.
+    tinygltf::Value::Array keys;
+    for (size_t k = 0; k < pos.size(); ++k) {
+      const StoredFrame& f = frames.frames[static_cast<size_t>(picks[k])];
+      keys.emplace_back(tinygltf::Value::Object{{"frame", tinygltf::Value(picks[k])},
+                                                {"t", tinygltf::Value(f.t)},
+                                                {"certified", tinygltf::Value(f.certified)},
+                                                {"keyframe", tinygltf::Value(f.keyframe)},
+                                                {"converged", tinygltf::Value(f.converged)}});
+    }
+    an.extras = tinygltf::Value(tinygltf::Value::Object{{"frames", tinygltf::Value(keys)}});
     an.samplers.push_back(s);
     an.channels.push_back(c);
     b.model.animations.push_back(an);

@@ -3,6 +3,7 @@
 
 #include <chrono>
 #include <cmath>
+#include <limits>
 #include <numbers>
 #include <sstream>
 
@@ -33,6 +34,7 @@ Interpolator::Interpolator(const ShapeSetup& setup, std::vector<double> times, s
     const CertificateResult c = setup_.certifier.certify(keys_[k]);
     if (!c.certified) throw InputError("keyframe " + std::to_string(k) + " is not locally injective: " + c.reason);
     key_distortion_.push_back(measure(c));
+    key_certified_.push_back(certified_distortion(c));
     key_x_.push_back(setup_.metric_space.reduce(keys_[k]).x);
     const MapValues v = evaluate_map(D, keys_[k]);
     std::vector<Metric> m(static_cast<size_t>(v.f_z.size()));
@@ -97,15 +99,36 @@ Distortion Interpolator::measure(const CertificateResult& c) const {
   return d;
 }
 
+Distortion certified_distortion(const CertificateResult& c) {
+  if (!c.certified || !(c.sigma2_min > 0)) {
+    const double nan = std::numeric_limits<double>::quiet_NaN();
+    return {nan, nan, nan, nan};
+  }
+  const auto g = [](double s) { return s * s + 1 / (s * s); };
+  return {c.sigma1_max, c.sigma2_min, c.conformal_max, std::max(g(c.sigma2_min), g(c.sigma1_max))};
+}
+
+namespace {
+// The two keyframes' envelope: the larger σ1, κ, E; the smaller σ2.
+Distortion envelope(const Distortion& a, const Distortion& b) {
+  return {std::max(a.sigma1_max, b.sigma1_max), std::min(a.sigma2_min, b.sigma2_min), std::max(a.conformal_max, b.conformal_max),
+          std::max(a.isometric_max, b.isometric_max)};
+}
+// How far d leaves the envelope b, relative (0 = within; NaN when d is).
+double excess(const Distortion& d, const Distortion& b) {
+  if (std::isnan(d.sigma1_max)) return std::numeric_limits<double>::quiet_NaN();
+  return std::max({0.0, d.sigma1_max / b.sigma1_max - 1, b.sigma2_min / d.sigma2_min - 1, d.conformal_max / b.conformal_max - 1,
+                   d.isometric_max / b.isometric_max - 1});
+}
+}  // namespace
+
 FrameResult Interpolator::frame(double t, const Eigen::VectorXd& warm_start, const CertificateResult* warm_certificate) {
   const auto t0 = std::chrono::steady_clock::now();
   FrameResult r;
   r.t = t;
   const int k = segment(t);
-  const Distortion& da = key_distortion_[static_cast<size_t>(k)];
-  const Distortion& db = key_distortion_[static_cast<size_t>(k) + 1];
-  r.bound = {std::max(da.sigma1_max, db.sigma1_max), std::min(da.sigma2_min, db.sigma2_min),
-             std::max(da.conformal_max, db.conformal_max), std::max(da.isometric_max, db.isometric_max)};
+  r.bound = envelope(key_distortion_[static_cast<size_t>(k)], key_distortion_[static_cast<size_t>(k) + 1]);
+  r.certified_bound = envelope(key_certified_[static_cast<size_t>(k)], key_certified_[static_cast<size_t>(k) + 1]);
   // At a keyframe time the blended metric is the keyframe's own: its map is the
   // minimiser (energy 2), so return it exactly.
   for (size_t j = 0; j < times_.size(); ++j)
@@ -117,6 +140,7 @@ FrameResult Interpolator::frame(double t, const Eigen::VectorXd& warm_start, con
       r.certificate = setup_.certifier.certify(r.map);
       r.distortion = key_distortion_[j];
       r.overlap = setup_.overlap.check(r.map);
+      r.distortion_certified = key_certified_[j];
       r.message = "keyframe " + std::to_string(j);
       r.ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
       return r;
@@ -146,10 +170,9 @@ FrameResult Interpolator::frame(double t, const Eigen::VectorXd& warm_start, con
   r.map = transform_image(setup_.cage, canon, rot, want.centroid - rot * have.centroid);
   r.distortion = measure(n.certificate);
   r.overlap = setup_.overlap.check(r.map);
-  const Distortion& d = r.distortion;
-  const Distortion& b = r.bound;
-  r.bound_excess = std::max({0.0, d.sigma1_max / b.sigma1_max - 1, b.sigma2_min / d.sigma2_min - 1,
-                             d.conformal_max / b.conformal_max - 1, d.isometric_max / b.isometric_max - 1});
+  r.distortion_certified = certified_distortion(n.certificate);
+  r.bound_excess = excess(r.distortion, r.bound);
+  r.certified_bound_excess = excess(r.distortion_certified, r.certified_bound);
   r.ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
   return r;
 }

@@ -187,7 +187,7 @@ class HostStepper final : public NewtonStepper {
     return core_.energy() + quad_value(x_);
   }
 
-  void linearize(const HessianChoice& choice) override {
+  double linearize(const HessianChoice& choice) override {
     if (!gradient_valid_) {
       gv_ = core_.gradient();
       gradient_valid_ = true;
@@ -214,6 +214,7 @@ class HostStepper final : public NewtonStepper {
     }
     g_ = std::move(g);
     H_ = std::move(H);
+    return H_.diagonal().cwiseAbs().maxCoeff();
   }
 
   NewtonSystem solve(double ridge) override {
@@ -334,8 +335,9 @@ NewtonResult newton_run(NewtonStepper& st, bool certify, bool rotation_invariant
     NewtonSystem sys;
     auto build = [&](const HessianChoice& choice) {
       t0 = Clock::now();
-      st.linearize(choice);
+      const double diagonal_max = st.linearize(choice);
       res.timing.hessian += ms_since(t0);
+      return diagonal_max;
     };
     auto factor = [&](double ridge) {
       t0 = Clock::now();
@@ -345,8 +347,7 @@ NewtonResult newton_run(NewtonStepper& st, bool certify, bool rotation_invariant
     // The exact Hessian is tried once Newton takes full steps (near the solution, where
     // it is definite and converges quadratically); a first iteration seldom gets there.
     if (opt.exact_hessian_when_definite && !res.log.empty() && res.log.back().step == 1.0) {
-      build({true, opt.projection, false});
-      factor(0);
+      factor(opt.exact_ridge * build({true, opt.projection, false}));
       log.exact_hessian = sys.factored;
     }
     if (!sys.factored) {

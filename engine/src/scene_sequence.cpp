@@ -2,6 +2,7 @@
 #include "hsi/scene_sequence.h"
 
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <nlohmann/json.hpp>
 
@@ -71,6 +72,11 @@ SequenceSummary summarize(const std::vector<FrameResult>& frames, double total_s
     s.within_bounds += f.bound_excess <= 1e-9;
     s.max_bound_excess = std::max(s.max_bound_excess, f.bound_excess);
     s.overlapping += f.overlap.overlaps();
+    s.not_converged += !f.converged;
+    if (f.certified && std::isfinite(f.certified_bound_excess)) {
+      s.within_certified_bounds += f.certified_bound_excess <= 1e-9;
+      s.max_certified_bound_excess = std::max(s.max_certified_bound_excess, f.certified_bound_excess);
+    }
     if (!f.keyframe) {
       ++solved;
       it += f.iterations;
@@ -96,6 +102,12 @@ nlohmann::json overlap_json(const OverlapResult& o) {
   return j;
 }
 
+nlohmann::json distortion_json(const Distortion& d) {
+  // NaN (a certified bound of an uncertified frame) is written as null.
+  auto v = [](double x) { return std::isfinite(x) ? nlohmann::json(x) : nlohmann::json(nullptr); };
+  return {{"sigma1_max", v(d.sigma1_max)}, {"sigma2_min", v(d.sigma2_min)}, {"conformal_max", v(d.conformal_max)},
+          {"isometric_max", v(d.isometric_max)}};
+}
 }  // namespace
 
 std::string report_json(const Scene& scene, const SceneSequence& seq, const std::string& scene_path) {
@@ -107,6 +119,15 @@ std::string report_json(const Scene& scene, const SceneSequence& seq, const std:
   rep["n"] = seq.setup->map_space.n();
   rep["projection"] = to_string(seq.options.projection);
   rep["tolerance"] = seq.options.tolerance;
+  rep["max_iterations"] = seq.options.max_iterations;
+  rep["distortion_kinds"] = {
+      {"sampled",
+       "sigma1_max, sigma2_min, conformal_max, isometric_max (also under distortion_sampled), bound, bound_excess: sampled "
+       "at the certificate's breakpoints (observed maxima/minima, not bounds)"},
+      {"certified",
+       "distortion_certified, certified_bound, certified_bound_excess: the certificate's bounds over the boundary, so over "
+       "the shape (sigma2_min a lower bound, the others upper bounds; isometric_max derived from the sigma bounds); null "
+       "when the frame is not certified"}};
   nlohmann::json fr = nlohmann::json::array();
   for (size_t i = 0; i < seq.frames.size(); ++i) {
     const FrameResult& f = seq.frames[i];
@@ -122,9 +143,13 @@ std::string report_json(const Scene& scene, const SceneSequence& seq, const std:
                   {"sigma2_min", f.distortion.sigma2_min},
                   {"conformal_max", f.distortion.conformal_max},
                   {"isometric_max", f.distortion.isometric_max},
-                  {"bound", {{"sigma1_max", f.bound.sigma1_max}, {"sigma2_min", f.bound.sigma2_min},
-                             {"conformal_max", f.bound.conformal_max}, {"isometric_max", f.bound.isometric_max}}},
+                  {"distortion_sampled", distortion_json(f.distortion)},
+                  {"distortion_certified", distortion_json(f.distortion_certified)},
+                  {"bound", distortion_json(f.bound)},
+                  {"certified_bound", distortion_json(f.certified_bound)},
                   {"bound_excess", f.bound_excess},
+                  {"certified_bound_excess", std::isfinite(f.certified_bound_excess) ? nlohmann::json(f.certified_bound_excess)
+                                                                                     : nlohmann::json(nullptr)},
                   {"certificate", {{"sigma1_max", f.certificate.sigma1_max}, {"sigma2_min", f.certificate.sigma2_min},
                                    {"k_max", f.certificate.k_max}, {"reason", f.certificate.reason}}},
                   {"message", f.message},
@@ -135,21 +160,35 @@ std::string report_json(const Scene& scene, const SceneSequence& seq, const std:
   rep["summary"] = {{"frames", s.frames},
                     {"certified", s.certified},
                     {"uncertified", s.uncertified},
+                    {"not_converged", s.not_converged},
                     {"mean_iterations", s.mean_iterations},
                     {"mean_ms", s.mean_ms},
                     {"max_ms", s.max_ms},
                     {"total_s", s.total_s},
                     {"frames_within_keyframe_bounds", s.within_bounds},
                     {"max_bound_excess", s.max_bound_excess},
-                    {"overlapping", s.overlapping}};
+                    {"overlapping", s.overlapping},
+                    {"frames_within_keyframe_certified_bounds", s.within_certified_bounds},
+                    {"max_certified_bound_excess", s.max_certified_bound_excess}};
   rep["frames"] = fr;
   return rep.dump(1) + "\n";
 }
 
 std::string report_csv(const SceneSequence& seq) {
+  // sigma1_max..bound_excess: sampled at the certificate's breakpoints; certified_*:
+  // the certificate's bounds, empty when the frame is not certified.
   std::string out =
       "frame,t,keyframe,certified,converged,iterations,energy,ms,sigma1_max,sigma2_min,conformal_max,isometric_max,"
-      "bound_sigma1_max,bound_sigma2_min,bound_conformal_max,bound_isometric_max,bound_excess,overlaps,crossings\n";
+      "bound_sigma1_max,bound_sigma2_min,bound_conformal_max,bound_isometric_max,bound_excess,overlaps,crossings,"
+      "certified_sigma1_max,certified_sigma2_min,certified_conformal_max,certified_isometric_max,"
+      "certified_bound_sigma1_max,certified_bound_sigma2_min,certified_bound_conformal_max,certified_bound_isometric_max,"
+      "certified_bound_excess\n";
+  auto num = [](double x) {
+    if (!std::isfinite(x)) return std::string(",");
+    char b[40];
+    std::snprintf(b, sizeof b, ",%.17g", x);
+    return std::string(b);
+  };
   char line[512];
   for (size_t i = 0; i < seq.frames.size(); ++i) {
     const FrameResult& f = seq.frames[i];
@@ -159,6 +198,13 @@ std::string report_csv(const SceneSequence& seq) {
                   f.bound.sigma1_max, f.bound.sigma2_min, f.bound.conformal_max, f.bound.isometric_max, f.bound_excess,
                   f.overlap.overlaps() ? 1 : 0, f.overlap.crossings);
     out += line;
+    out.pop_back();  // the newline: the certified columns follow
+    const Distortion& c = f.distortion_certified;
+    const Distortion& cb = f.certified_bound;
+    for (double x : {c.sigma1_max, c.sigma2_min, c.conformal_max, c.isometric_max, cb.sigma1_max, cb.sigma2_min, cb.conformal_max,
+                     cb.isometric_max, f.certified_bound_excess})
+      out += num(x);
+    out += "\n";
   }
   return out;
 }

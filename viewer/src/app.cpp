@@ -947,6 +947,7 @@ void App::draw_side_panel() {
   const auto states = solver_->solved_states();
   const auto solved = std::count_if(states.begin(), states.end(), [](uint8_t s) { return s != 0; });
   const auto bad = std::count(states.begin(), states.end(), uint8_t(2));
+  const auto unconverged = std::count(states.begin(), states.end(), uint8_t(3));
   bool cert = true, is_key = false;
   std::string reason;
   const HarmonicMap* panel_map = shown_map(&cert, &reason, &is_key);
@@ -958,10 +959,17 @@ void App::draw_side_panel() {
     ImGui::TextColored(ImVec4(0.9f, 0.8f, 0.3f, 1), "solving frame %d…", cur_);
   ImGui::Text("render %.1f ms · solved %lld / %zu frames", render_ms_, static_cast<long long>(solved), states.size());
   if (bad > 0) ImGui::TextColored(ImVec4(1, 0.3f, 0.3f, 1), "%lld frame(s) NOT CERTIFIED", static_cast<long long>(bad));
+  if (unconverged > 0)
+    ImGui::TextColored(ImVec4(1, 0.6f, 0.1f, 1), "%lld frame(s) NOT CONVERGED", static_cast<long long>(unconverged));
   if (shown_ && !is_key && shown_index_ == cur_) {
-    ImGui::Text("energy %.5f · σ₁/σ₂ max %.3f", shown_->energy, shown_->distortion.conformal_max);
+    ImGui::Text("energy %.5f", shown_->energy);
+    ImGui::Text("σ₁/σ₂ max %.3f sampled (at breakpoints)", shown_->distortion.conformal_max);
+    if (shown_->certified && std::isfinite(shown_->distortion_certified.conformal_max))
+      ImGui::Text("σ₁/σ₂ ≤ %.3f certified bound", shown_->distortion_certified.conformal_max);
     if (cert) ImGui::TextColored(ImVec4(0.4f, 0.85f, 0.45f, 1), "certified locally injective");
     else ImGui::TextColored(ImVec4(1, 0.3f, 0.3f, 1), "NOT CERTIFIED");
+    if (!shown_->converged)
+      ImGui::TextColored(ImVec4(1, 0.6f, 0.1f, 1), "NOT CONVERGED (Newton stopped after %d iterations)", shown_->iterations);
   }
   if (panel_map && overlap_of(*panel_map).overlaps())  // a drag, a keyframe or a frame: locally, not globally injective
     ImGui::TextColored(ImVec4(1, 0.62f, 0.1f, 1), "overlaps itself (%d boundary crossings)", overlap_.crossings);
@@ -1084,7 +1092,9 @@ void App::draw_timeline() {
   const auto states = solver_->solved_states();
   for (int i = 0; i < n && i < static_cast<int>(states.size()); ++i) {
     if (!states[static_cast<size_t>(i)]) continue;
-    const ImU32 c = states[static_cast<size_t>(i)] == 1 ? rgba(0.3f, 0.75f, 0.4f, 0.9f) : rgba(0.95f, 0.15f, 0.15f, 1);
+    const uint8_t st = states[static_cast<size_t>(i)];
+    // green: certified and converged; red: not certified; orange: certified, not converged
+    const ImU32 c = st == 1 ? rgba(0.3f, 0.75f, 0.4f, 0.9f) : st == 3 ? rgba(1.0f, 0.55f, 0.05f, 1) : rgba(0.95f, 0.15f, 0.15f, 1);
     dl->AddRectFilled(ImVec2(x_of(i - 0.5), p1.y - 3 * scale_), ImVec2(x_of(i + 0.5), p1.y), c);
   }
   for (const Keyframe& k : scene_.keyframes) {

@@ -101,7 +101,7 @@ std::vector<uint8_t> Solver::solved_states() const {
   std::lock_guard lock(mutex_);
   std::vector<uint8_t> s(frames_.size(), 0);
   for (size_t i = 0; i < frames_.size(); ++i)
-    if (frames_[i]) s[i] = frames_[i]->certified ? 1 : 2;
+    if (frames_[i]) s[i] = !frames_[i]->certified ? 2 : frames_[i]->converged ? 1 : 3;
   return s;
 }
 
@@ -235,6 +235,7 @@ void Solver::run() {
         f->ms = r.ms;
         f->energy = r.energy;
         f->distortion = r.distortion;
+        f->distortion_certified = r.distortion_certified;
         f->message = r.certified ? r.message : r.certificate.reason;
         last_ms_.store(r.ms);
       } catch (const std::exception& e) {

@@ -38,7 +38,8 @@ struct SolvedFrame {
   bool keyframe = false, certified = false, converged = false;
   int iterations = 0;
   double ms = 0, energy = 0;
-  Distortion distortion;
+  Distortion distortion;            // sampled at the certificate's breakpoints
+  Distortion distortion_certified;  // the certificate's bounds (NaN when not certified)
   std::string message;  // the certificate's reason when not certified
 };
 
@@ -79,7 +80,8 @@ class Solver {
   // The frame shown now and the playback direction (+1 / −1) for solving ahead.
   void request(int frame, int direction = 1);
   std::shared_ptr<const SolvedFrame> get(int frame) const;
-  // Per frame: 0 not solved, 1 certified, 2 not certified (for the timeline).
+  // Per frame: 0 not solved, 1 certified, 2 not certified, 3 certified but not
+  // converged (Newton stopped at its iteration limit) (for the timeline).
   std::vector<uint8_t> solved_states() const;
 
   void pose(PoseRequest request);

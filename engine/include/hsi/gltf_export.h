@@ -3,7 +3,9 @@
 // first frame, and one morph target per further sampled frame (POSITION deltas),
 // played by a weights animation whose keys are one-hot: LINEAR interpolation
 // blends neighbouring frames, so at most two targets are active at a time (what
-// three.js, Babylon.js, Blender, Unity and Godot all play back).
+// three.js, Babylon.js, Blender, Unity and Godot all play back). The animation's
+// extras.frames lists, per key, the frame index, t and its flags (certified,
+// keyframe, converged).
 #pragma once
 
 #include <string>

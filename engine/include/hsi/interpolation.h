@@ -31,7 +31,9 @@ struct Pose {
   double angle = 0;
 };
 
-// Distortion over the boundary (so over Ω, by Theorem 2).
+// Distortion over the boundary (so over Ω, by Theorem 2): either sampled (maxima and
+// minima over the certificate's breakpoints: what the map does there, not a bound) or
+// certified (the certificate's bounds, proved between the breakpoints too).
 struct Distortion {
   double sigma1_max = 0;     // largest singular value
   double sigma2_min = 0;     // smallest singular value
@@ -50,9 +52,17 @@ struct FrameResult {
   int iterations = 0;
   double energy = 0;         // mean isometric energy against the blended metric (2 = exact)
   double ms = 0;
-  Distortion distortion;     // observed at the certificate's breakpoints
-  Distortion bound;          // the two neighbouring keyframes' envelope
-  double bound_excess = 0;   // how far the frame leaves that envelope (relative; 0 = bounded)
+  Distortion distortion;     // sampled at the certificate's breakpoints (observed values, not bounds)
+  // Certified bounds over ∂Ω (so over Ω): σ1 and κ upper bounds, σ2 a *lower* bound,
+  // the isometric energy's upper bound derived from those two (certified_distortion()).
+  // Meaningful only when `certified`; NaN otherwise.
+  Distortion distortion_certified;
+  Distortion bound;            // the two neighbouring keyframes' envelope of their sampled distortion
+  Distortion certified_bound;  // the same keyframes' envelope of their certified bounds
+  double bound_excess = 0;     // how far `distortion` leaves `bound` (relative; 0 = bounded); sampled
+  // How far `distortion_certified` leaves `certified_bound` (relative; 0 = bounded);
+  // NaN when the frame is not certified.
+  double certified_bound_excess = 0;
   std::string message;
   NewtonResult::Timing timing;
   // Whether the image of ∂Ω crosses itself (the frame overlaps itself: locally but not
@@ -60,6 +70,14 @@ struct FrameResult {
   // for keyframes and solved frames alike; it does not change `certified`.
   OverlapResult overlap;
 };
+
+// The certificate's bounds as a Distortion (valid when c.certified): σ1 ≤ sigma1_max,
+// σ2 ≥ sigma2_min, σ1/σ2 ≤ conformal_max, and for the isometric energy
+// ½(σ1² + σ1⁻² + σ2² + σ2⁻²), which is not monotone in σ: both σ lie in
+// [sigma2_min, sigma1_max] and s² + s⁻² is convex, so each half is at most its value
+// at an end of that interval: E ≤ max(g(sigma2_min), g(sigma1_max)), g(s) = s² + s⁻².
+// NaN in every field when not certified.
+Distortion certified_distortion(const CertificateResult& c);
 
 class Interpolator {
  public:
@@ -82,7 +100,9 @@ class Interpolator {
   std::vector<Metric> blended_metric(double t) const;
   Pose pose_of(const HarmonicMap& map) const;
   Pose interpolated_pose(double t) const;
+  // Keyframe k's distortion: sampled at the certificate's breakpoints / certified bounds.
   const Distortion& keyframe_distortion(int k) const { return key_distortion_[static_cast<size_t>(k)]; }
+  const Distortion& keyframe_certified_distortion(int k) const { return key_certified_[static_cast<size_t>(k)]; }
   NewtonCore& core() { return *core_; }
 
  private:
@@ -96,6 +116,7 @@ class Interpolator {
   std::vector<std::vector<Metric>> key_metrics_;
   std::vector<Pose> key_poses_;  // angles unwrapped across keyframes
   std::vector<Distortion> key_distortion_;
+  std::vector<Distortion> key_certified_;
   InterpolationOptions options_;
   std::unique_ptr<NewtonCore> core_;
   // Poses are linear in the coefficients: centroid = c_mean·φ + conj(c_mean·ψ) and the

@@ -89,8 +89,9 @@ class NewtonStepper {
   virtual ~NewtonStepper() = default;
   // x ← x0; the total energy there (mean over G plus the quadratic term), +inf if it folds.
   virtual double start(const Eigen::VectorXd& x0) = 0;
-  // The gradient and the chosen Hessian at x (the quadratic term's added).
-  virtual void linearize(const HessianChoice& choice) = 0;
+  // The gradient and the chosen Hessian at x (the quadratic term's added); returns
+  // max |diagonal of H|, the scale of a ridge.
+  virtual double linearize(const HessianChoice& choice) = 0;
   // d from (H + ridge I) d = −g of the last linearize(), and the safe step along it.
   virtual NewtonSystem solve(double ridge) = 0;
   // Total energies at x ⊕ steps[j]·d.
@@ -133,6 +134,12 @@ struct NewtonOptions {
   // is positive definite (quadratic convergence near the solution), and the projection
   // above otherwise (and always in a solve's first iteration).
   bool exact_hessian_when_definite = true;
+  // The exact system is factored with this ridge (relative to max |diag H|; 1e-9 would
+  // already damp real soft modes, whose eigenvalues reach ~4e-13 of the largest): its
+  // smallest eigenvalues lie near 0 (cage modes that barely move the boundary), where
+  // round-off alone would decide whether a bare Cholesky succeeds; with the ridge only
+  // a clearly indefinite system falls back to the projection, and CPU and GPU agree.
+  double exact_ridge = 1e-12;
   // Free the global rotation in projected systems (HessianChoice::free_rotation): a PSD
   // projection gives the rotation, along which the energy is flat, a curvature that the
   // rotation gauge Re φ_r = 0 otherwise spreads over every other direction, and Newton

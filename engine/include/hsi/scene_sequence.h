@@ -46,6 +46,14 @@ struct SequenceSummary {
   int frames = 0, certified = 0, uncertified = 0, within_bounds = 0;
   double mean_iterations = 0, mean_ms = 0, max_ms = 0, total_s = 0, max_bound_excess = 0;
   int overlapping = 0;  // frames whose boundary image crosses itself (FrameResult::overlap)
+  // Frames whose Newton solve stopped at its iteration limit (or otherwise) without
+  // meeting the tolerance, certified or not (FrameResult::converged false).
+  int not_converged = 0;
+  // within_bounds / max_bound_excess compare the *sampled* distortion with the
+  // keyframes' sampled values; these compare certified bounds with certified bounds
+  // (certified frames only: an uncertified frame has no certified bound).
+  int within_certified_bounds = 0;
+  double max_certified_bound_excess = 0;
 };
 SequenceSummary summarize(const std::vector<FrameResult>& frames, double total_s);
 
