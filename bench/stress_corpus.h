@@ -1,0 +1,126 @@
+// The Newton stress corpus (bench/stress/, issue #20), read by bench_stress and by the
+// test slice (tests/test_stress.cpp): shapes (scene files) and sequences of 2 or 3
+// keyframes given as handles + targets, exactly what an animator writes in a scene.
+// A sequence becomes a Scene (its shape's scene with the sequence's |G|, handles and
+// keyframe targets; any keyframes the shape's scene had are dropped), and its
+// keyframes are made by solve_scene_keyframes, the authoring path.
+#pragma once
+
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <memory>
+#include <nlohmann/json.hpp>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "hsi/keyframes.h"
+
+namespace hsi::stress {
+
+struct ShapeEntry {
+  std::string name, scene, family;  // scene: relative to the corpus folder
+};
+
+struct Sequence {
+  std::string id, shape, kind, description;
+  int samples = 10000;
+  std::vector<cd> handles;
+  std::vector<std::vector<cd>> targets;  // per keyframe, at times 0, 1, ...
+  std::vector<double> times;
+};
+
+struct Corpus {
+  std::filesystem::path dir;
+  int seed = 0;
+  std::vector<ShapeEntry> shapes;
+  std::vector<Sequence> sequences;
+  const ShapeEntry& shape(const std::string& name) const {
+    for (const ShapeEntry& s : shapes)
+      if (s.name == name) return s;
+    throw std::runtime_error("stress corpus: no shape " + name);
+  }
+};
+
+inline Corpus load_corpus(const std::filesystem::path& file) {
+  std::ifstream in(file);
+  if (!in) throw std::runtime_error("cannot read the stress corpus " + file.string());
+  const nlohmann::json j = nlohmann::json::parse(in);
+  if (j.value("hsi_stress_corpus", 0) != 1) throw std::runtime_error(file.string() + ": not a version-1 stress corpus");
+  Corpus c;
+  c.dir = file.parent_path();
+  c.seed = j.value("seed", 0);
+  auto point = [](const nlohmann::json& p) { return cd(p.at(0).get<double>(), p.at(1).get<double>()); };
+  for (const auto& s : j.at("shapes")) c.shapes.push_back({s.at("name"), s.at("scene"), s.value("family", "")});
+  for (const auto& s : j.at("sequences")) {
+    Sequence q;
+    q.id = s.at("id");
+    q.shape = s.at("shape");
+    q.kind = s.value("kind", "");
+    q.description = s.value("description", "");
+    q.samples = s.value("samples", 10000);
+    for (const auto& p : s.at("handles")) q.handles.push_back(point(p));
+    for (const auto& k : s.at("keyframes")) {
+      q.times.push_back(k.at("time").get<double>());
+      std::vector<cd> t;
+      for (const auto& p : k.at("targets")) t.push_back(point(p));
+      q.targets.push_back(std::move(t));
+    }
+    c.sequences.push_back(std::move(q));
+  }
+  return c;
+}
+
+// The shape's scene with its cage fixed (the user cage, or the automatic one built
+// now), without handles or keyframes.
+inline Scene load_shape(const Corpus& c, const ShapeEntry& s) {
+  Scene scene = load_scene(c.dir / s.scene);
+  scene.name = s.name;
+  scene.cage = scene_cage(scene);
+  scene.handles.clear();
+  scene.keyframes.clear();
+  return scene;
+}
+
+// The sequence as a scene: handles and keyframe targets (no coefficients), |G| =
+// samples when positive, else the sequence's.
+inline Scene sequence_scene(const Scene& shape, const Sequence& q, int samples = 0) {
+  Scene scene = shape;
+  scene.samples = samples > 0 ? samples : q.samples;
+  scene.handles = q.handles;
+  scene.keyframes.clear();
+  for (size_t k = 0; k < q.targets.size(); ++k) {
+    Keyframe kf;
+    kf.time = q.times[k];
+    kf.targets = q.targets[k];
+    scene.keyframes.push_back(std::move(kf));
+  }
+  return scene;
+}
+
+// A sequence with its keyframes authored (certified maps), ready for an Interpolator.
+struct Authored {
+  std::vector<double> times;
+  std::vector<HarmonicMap> maps;
+  int unreached = 0;  // keyframes whose drag would fold: the closest certified map was kept
+  double max_target_error = 0;  // over the keyframes, relative to the shape's size
+  double ms = 0;
+};
+
+inline Authored author(Scene& scene, const ShapeSetup& setup) {
+  Authored a;
+  for (const SceneKeyframe& k : solve_scene_keyframes(scene, setup)) {
+    if (!k.solved) continue;
+    a.unreached += !k.result.reached;
+    a.max_target_error = std::max(a.max_target_error, k.result.max_target_error / setup.size);
+    a.ms += k.result.ms;
+  }
+  for (const Keyframe& k : scene.keyframes) {
+    a.times.push_back(k.time);
+    a.maps.push_back(*k.coefficients);
+  }
+  return a;
+}
+
+}  // namespace hsi::stress
