@@ -237,7 +237,17 @@ TEST_CASE("newton_run: a linear crawl below the tolerance is not convergence; a 
   } fast;
   const NewtonResult q = newton_run(fast, false, false, Eigen::Vector2d(0, 0), o);
   CHECK(q.converged);
-  CHECK(q.iterations == 3);  // 1e-3, 1e-5, 1e-7 (< 1.5e-7 with little to come)
+  // Steps of 1e-3 and 1e-5; the third system is exact (after full steps) and its
+  // decrement, 1e-7, is below 1.5e-7: nothing left to take.
+  CHECK(q.iterations == 2);
+  CHECK(q.message == "converged (Newton decrement below tolerance)");
+  NewtonOptions projected_only = o;
+  projected_only.exact_hessian_when_definite = false;  // a projected decrement is not trusted: one more step
+  Fast again;
+  const NewtonResult q3 = newton_run(again, false, false, Eigen::Vector2d(0, 0), projected_only);
+  CHECK(q3.converged);
+  CHECK(q3.iterations == 3);  // 1e-3, 1e-5, 1e-7 (< 1.5e-7 with little to come)
+  CHECK(q3.message == "converged (energy decrease below tolerance)");
 }
 
 TEST_CASE("regauge undoes a rotation of the image exactly; rotation_generator is its derivative", "[newton][map_space]") {

@@ -372,6 +372,14 @@ NewtonResult newton_run(NewtonStepper& st, bool certify, bool rotation_invariant
       res.message = "converged (no descent direction left: gradient at round-off level)";
       break;
     }
+    // With the exact Hessian the Newton decrement is the decrease a full step would
+    // bring (−gᵀd / 2): below the tolerance there is nothing left to take. (A projected
+    // Hessian overestimates curvature, so its decrement can understate what is left.)
+    if (log.exact_hessian && -slope / 2 < opt.tolerance * std::max(std::abs(E), 1e-300)) {
+      res.converged = true;
+      res.message = "converged (Newton decrement below tolerance)";
+      break;
+    }
 
     // 2. Armijo backtracking from min(1, safe_fraction · s_max); a step is taken only if
     //    the certificate passes at the new map.

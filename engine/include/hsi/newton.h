@@ -127,7 +127,8 @@ struct NewtonOptions {
   // Converged when a step lowers the energy by less than tolerance·|E| and the
   // decrease is not a slow linear crawl: with ρ = ΔE_k / ΔE_{k−1} (0 for the first
   // step), the decrease still to come, ΔE ρ/(1 − ρ), counts too. 5e-8 is the paper's
-  // absolute 1e-7 at E = 2, the isometric energy's minimum.
+  // absolute 1e-7 at E = 2, the isometric energy's minimum. Also converged: an exact
+  // system whose Newton decrement (the decrease of a full step, −gᵀd/2) is below it.
   double tolerance = 5e-8;
   HessianProjection projection = HessianProjection::PartProj;
   // Once a full step was taken, use the unprojected Hessian whenever its reduced system
