@@ -19,6 +19,7 @@
 #include <sstream>
 #include <thread>
 
+#include "hsi/machine.h"
 #include "hsi/interpolation.h"
 #include "hsi/keyframes.h"
 #include "stress_corpus.h"
@@ -34,29 +35,6 @@ namespace {
 using Clock = std::chrono::steady_clock;
 double s_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
 
-struct Machine {
-  std::string cpu = "unknown CPU";
-  int cores = 0;
-};
-Machine this_machine() {
-  Machine m;
-  std::ifstream in("/proc/cpuinfo");
-  std::string line;
-  bool named = false;
-  while (std::getline(in, line)) {
-    if (!named && line.rfind("model name", 0) == 0) {
-      const size_t colon = line.find(':');
-      const size_t start = colon == std::string::npos ? std::string::npos : line.find_first_not_of(" \t", colon + 1);
-      if (start != std::string::npos) {
-        m.cpu = line.substr(start);
-        named = true;
-      }
-    }
-    if (line.rfind("processor", 0) == 0) ++m.cores;
-  }
-  if (m.cores == 0) m.cores = static_cast<int>(std::thread::hardware_concurrency());
-  return m;
-}
 
 std::vector<std::string> split(const std::string& s) {
   std::vector<std::string> out;

@@ -30,6 +30,7 @@
 #include <unordered_set>
 
 #include "commands.h"
+#include "hsi/machine.h"
 #include "hsi/interpolation.h"
 #include "hsi/keyframes.h"
 #include "hsi/scene_io.h"
@@ -83,30 +84,6 @@ __attribute__((format(printf, 2, 3))) void stage(Clock::time_point t0, const cha
   va_end(ap);
 }
 
-// What this run ran on, for the report: CPU model and logical cores from /proc/cpuinfo.
-struct Machine {
-  std::string cpu = "unknown CPU";
-  int cores = 0;
-};
-Machine this_machine() {
-  Machine m;
-  std::ifstream in("/proc/cpuinfo");
-  std::string line;
-  bool named = false;
-  while (std::getline(in, line)) {
-    if (!named && line.rfind("model name", 0) == 0) {
-      const size_t colon = line.find(':');
-      const size_t start = colon == std::string::npos ? std::string::npos : line.find_first_not_of(" \t", colon + 1);
-      if (start != std::string::npos) {
-        m.cpu = line.substr(start);
-        named = true;
-      }
-    }
-    if (line.rfind("processor", 0) == 0) ++m.cores;
-  }
-  if (m.cores == 0) m.cores = static_cast<int>(std::thread::hardware_concurrency());
-  return m;
-}
 
 std::string fixed(double v, int digits) {
   if (std::isnan(v)) return "n/a";

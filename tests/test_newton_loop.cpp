@@ -175,10 +175,10 @@ TEST_CASE("newton_run: a step the certificate rejects is halved; the start must 
 }
 
 TEST_CASE("newton_run: a linear crawl below the tolerance is not convergence; a long one is stagnation", "[newton][loop]") {
-  // Steps that each gain a little less than the last (rate 0.97): the decreases soon
-  // fall below the tolerance, yet far more is still to come.
-  struct Crawl final : FakeStepper {
-    double gain = 1e-6, E = 3;
+  // A stepper whose k-th step lowers E = 3 by gain·rate^k (its slope says so).
+  struct Geometric final : FakeStepper {
+    double gain, rate, E = 3;
+    Geometric(double g, double r) : gain(g), rate(r) {}
     double start(const Eigen::VectorXd& x0) override {
       x_ = x0;
       return E;
@@ -198,10 +198,13 @@ TEST_CASE("newton_run: a linear crawl below the tolerance is not convergence; a 
     }
     void accept(double step) override {
       E -= gain * step;
-      gain *= 0.97;
+      gain *= rate;
       x_ += step * d_;
     }
-  } crawl;
+  };
+  // Steps that each gain a little less than the last (rate 0.97): the decreases soon
+  // fall below the tolerance, yet far more is still to come.
+  Geometric crawl(1e-6, 0.97);
   NewtonOptions o;  // tolerance 5e-8 · E = 1.5e-7
   const NewtonResult r = newton_run(crawl, false, false, Eigen::Vector2d(0, 0), o);
   CHECK_FALSE(r.converged);
@@ -209,32 +212,8 @@ TEST_CASE("newton_run: a linear crawl below the tolerance is not convergence; a 
   CHECK(r.iterations == o.stagnation_steps + 1);
   CHECK(r.message.find("stagnated") != std::string::npos);
 
-  // The same gains shrinking fast (rate 0.1): converged after the first small one.
-  struct Fast final : FakeStepper {
-    double gain = 1e-3, E = 3;
-    double start(const Eigen::VectorXd& x0) override {
-      x_ = x0;
-      return E;
-    }
-    NewtonSystem solve(double) override {
-      NewtonSystem s;
-      s.factored = true;
-      s.slope = -2 * gain;
-      s.gradient_norm = 1;
-      s.diagonal_max = 1;
-      s.max_safe_step = std::numeric_limits<double>::infinity();
-      d_ = Eigen::Vector2d(1, 0);
-      return s;
-    }
-    void trial_energies(std::span<const double> steps, std::span<double> out) override {
-      for (size_t j = 0; j < steps.size(); ++j) out[j] = E - gain * steps[j];
-    }
-    void accept(double step) override {
-      E -= gain * step;
-      gain *= 0.01;
-      x_ += step * d_;
-    }
-  } fast;
+  // Gains shrinking fast (rate 0.01): converged at once.
+  Geometric fast(1e-3, 0.01);
   const NewtonResult q = newton_run(fast, false, false, Eigen::Vector2d(0, 0), o);
   CHECK(q.converged);
   // Steps of 1e-3 and 1e-5; the third system is exact (after full steps) and its
@@ -243,7 +222,7 @@ TEST_CASE("newton_run: a linear crawl below the tolerance is not convergence; a 
   CHECK(q.message == "converged (Newton decrement below tolerance)");
   NewtonOptions projected_only = o;
   projected_only.exact_hessian_when_definite = false;  // a projected decrement is not trusted: one more step
-  Fast again;
+  Geometric again(1e-3, 0.01);
   const NewtonResult q3 = newton_run(again, false, false, Eigen::Vector2d(0, 0), projected_only);
   CHECK(q3.converged);
   CHECK(q3.iterations == 3);  // 1e-3, 1e-5, 1e-7 (< 1.5e-7 with little to come)
