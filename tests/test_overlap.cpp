@@ -153,3 +153,15 @@ TEST_CASE("overlap: no bundled asset's keyframe overlaps itself", "[overlap][ass
     }
   }
 }
+
+TEST_CASE("overlap: a round-off fold-back a hair's width from a vertex is not a crossing; a real one is", "[overlap]") {
+  // A square whose corner at (1, 0) carries an extra point 1e-12 past the corner and
+  // back (the image of a sample next to a vertex, shifted by round-off): with exact
+  // predicates alone its two neighbours "cross" at the corner.
+  const Loop square = {{0, 0}, {1, 0}, {1 + 1e-12, -1e-12}, {1 - 1e-13, 1e-13}, {1, 1}, {0, 1}};
+  CHECK_FALSE(polyline_overlap({square}).overlaps());
+  // A bow tie still crosses, and so does a fold of 1e-6 of the size (visible at 1e6 px).
+  CHECK(polyline_overlap({{{0, 0}, {1, 1}, {1, 0}, {0, 1}}}).overlaps());
+  const Loop folded = {{0, 0}, {1, 0}, {1 + 1e-6, -1e-6}, {1 - 1e-6, 1e-6}, {1, 1}, {0, 1}};
+  CHECK(polyline_overlap({folded}).overlaps());
+}

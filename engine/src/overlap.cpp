@@ -58,16 +58,32 @@ OverlapResult search(const Polylines& p, int points) {
   return r;
 }
 
-void push_point(Polylines& p, size_t loop, cd z, int origin) {
+// Image points closer than this fraction of the image's size to the last point kept
+// on their loop are merged into it (overlap.h: the tolerance).
+constexpr double kMergeFraction = 1e-9;
+
+double merge_distance(const std::vector<cd>& image) {
+  if (image.empty()) return 0;
+  double x0 = image[0].real(), x1 = x0, y0 = image[0].imag(), y1 = y0;
+  for (const cd& z : image) {
+    x0 = std::min(x0, z.real());
+    x1 = std::max(x1, z.real());
+    y0 = std::min(y0, z.imag());
+    y1 = std::max(y1, z.imag());
+  }
+  return kMergeFraction * std::hypot(x1 - x0, y1 - y0);
+}
+
+void push_point(Polylines& p, size_t loop, cd z, int origin, double merge) {
   Loop& l = p.loops[loop];
-  if (!l.empty() && l.back() == z) return;
+  if (!l.empty() && (l.back() == z || std::abs(l.back() - z) <= merge)) return;
   l.push_back(z);
   p.origin[loop].push_back(origin);
 }
 
-void close_loop(Polylines& p, size_t loop) {
+void close_loop(Polylines& p, size_t loop, double merge) {
   Loop& l = p.loops[loop];
-  while (l.size() > 1 && l.back() == l.front()) {
+  while (l.size() > 1 && (l.back() == l.front() || std::abs(l.back() - l.front()) <= merge)) {
     l.pop_back();
     p.origin[loop].pop_back();
   }
@@ -111,15 +127,16 @@ OverlapResult OverlapChecker::check_points(const std::vector<cd>& image) const {
   Polylines p;
   p.loops.resize(static_cast<size_t>(loops));
   p.origin.resize(static_cast<size_t>(loops));
+  const double merge = merge_distance(image);
   for (size_t i = 0; i < image.size(); ++i) {
     if (!std::isfinite(image[i].real()) || !std::isfinite(image[i].imag())) {
       OverlapResult r;  // a map that is not finite on the boundary: nothing to decide
       return r;
     }
     // Segment i starts at breakpoint i and lies on polygon edge seg_.edge[i].
-    push_point(p, static_cast<size_t>(seg_.loop[i]), image[i], seg_.edge[i]);
+    push_point(p, static_cast<size_t>(seg_.loop[i]), image[i], seg_.edge[i], merge);
   }
-  for (size_t l = 0; l < p.loops.size(); ++l) close_loop(p, l);
+  for (size_t l = 0; l < p.loops.size(); ++l) close_loop(p, l, merge);
   return search(p, static_cast<int>(image.size()));
 }
 
@@ -128,9 +145,12 @@ OverlapResult polyline_overlap(const std::vector<Loop>& loops) {
   p.loops.resize(loops.size());
   p.origin.resize(loops.size());
   int points = 0;
+  std::vector<cd> all;
+  for (const Loop& l : loops) all.insert(all.end(), l.begin(), l.end());
+  const double merge = merge_distance(all);
   for (size_t l = 0; l < loops.size(); ++l) {
-    for (size_t i = 0; i < loops[l].size(); ++i) push_point(p, l, loops[l][i], static_cast<int>(i));
-    close_loop(p, l);
+    for (size_t i = 0; i < loops[l].size(); ++i) push_point(p, l, loops[l][i], static_cast<int>(i), merge);
+    close_loop(p, l, merge);
     points += static_cast<int>(loops[l].size());
   }
   return search(p, points);

@@ -14,7 +14,11 @@
 // (a loop against itself, the outer loop against a hole, hole against hole), other
 // than the two neighbours of one loop meeting at their shared point (those are
 // reported only when they fold back onto each other along a line). A touching counts
-// like a crossing. The search is a box-intersection sweep, O(B log B + crossings)
+// like a crossing. Tolerance: an image point within 1e-9 of the image's size (its
+// bounding box's diagonal) of the last one kept on its loop is merged into it: a
+// sample a hair's width from a polygon vertex gives a segment whose image round-off
+// can fold back on its neighbours (seen on bar_holes: one "crossing" of two edges at
+// their shared corner in a certified frame), and nothing visible is that small. The search is a box-intersection sweep, O(B log B + crossings)
 // for B breakpoints.
 //
 // What is NOT checked: the curve f(∂Ω) between two breakpoints is replaced by the
