@@ -445,11 +445,15 @@ void plot_series(const std::filesystem::path& png, const PlotSpec& spec) {
   cairo_set_source_rgb(cr, 0.45, 0.45, 0.45);
   cairo_set_line_width(cr, 1);
   cairo_set_dash(cr, dot, 2, 0);
-  for (double m : spec.x_marks) {
-    cairo_move_to(cr, px(m), T);
-    cairo_line_to(cr, px(m), H - B);
-    cairo_stroke(cr);
-  }
+  // A vertical line across the plot at each x, in the current source, width and dash.
+  auto vertical_lines = [&](const std::vector<double>& xs) {
+    for (double xv : xs) {
+      cairo_move_to(cr, px(xv), T);
+      cairo_line_to(cr, px(xv), H - B);
+      cairo_stroke(cr);
+    }
+  };
+  vertical_lines(spec.x_marks);
   cairo_set_dash(cr, nullptr, 0, 0);
   for (const Series& s : spec.series) {
     cairo_set_source_rgb(cr, s.r, s.g, s.b);
@@ -485,20 +489,12 @@ void plot_series(const std::filesystem::path& png, const PlotSpec& spec) {
   }
   cairo_set_source_rgb(cr, 0.85, 0.05, 0.05);
   cairo_set_line_width(cr, 2);
-  for (double f : spec.flagged) {
-    cairo_move_to(cr, px(f), T);
-    cairo_line_to(cr, px(f), H - B);
-    cairo_stroke(cr);
-  }
+  vertical_lines(spec.flagged);
   // Not converged: orange, dashed, so that a frame both uncertified and unconverged
   // shows both colours.
   cairo_set_source_rgb(cr, 0.95, 0.5, 0.0);
   cairo_set_dash(cr, mark_dash, 2, 0);
-  for (double f : spec.unconverged) {
-    cairo_move_to(cr, px(f), T);
-    cairo_line_to(cr, px(f), H - B);
-    cairo_stroke(cr);
-  }
+  vertical_lines(spec.unconverged);
   cairo_set_dash(cr, nullptr, 0, 0);
   cairo_restore(cr);
   canvas.write(png);
