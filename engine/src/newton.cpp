@@ -440,7 +440,7 @@ NewtonResult newton_run(NewtonStepper& st, bool certify, bool rotation_invariant
     dE_prev = dE;
     const double to_come = rate < 1 ? dE * rate / (1 - rate) : std::numeric_limits<double>::infinity();
     const double tol = opt.tolerance * std::max(std::abs(E), 1e-300);
-    if (dE + to_come < tol || dE <= 0) {
+    if (dE + to_come < tol) {  // (dE > 0: the step passed Armijo with slope < 0)
       res.converged = true;
       res.message = "converged (energy decrease below tolerance)";
       break;
