@@ -2,7 +2,9 @@
 // an image point (what a click on the posed shape picks). A triangulation of the shape
 // finds the triangle whose image holds the point (the map is locally injective), its
 // barycentric coordinates give a first guess, and Newton on f (f_z, f_z̄) refines it to
-// round-off, so f(inverse(w)) = w.
+// round-off, so f(inverse(w)) = w (the guess is kept where Newton would leave the
+// triangle's neighbourhood). Within about a mesh edge of the boundary's image, a point
+// that no image triangle holds is refused like a point off the shape.
 #pragma once
 
 #include <optional>
