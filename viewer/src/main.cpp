@@ -1,13 +1,94 @@
-// hsi-viewer SCENE: plays a scene's interpolation live and edits its keyframes.
+// hsi-viewer SCENE: plays a scene's interpolation live and edits its keyframes. The
+// command line, then the window (GLFW), Vulkan context and ImGui around App's frames.
 #include <CLI/CLI.hpp>
+#include <imgui.h>
+#include <volk.h>
+#define GLFW_INCLUDE_NONE
+#include <GLFW/glfw3.h>
+#include <backends/imgui_impl_glfw.h>
 
 #include <cstdio>
 #include <exception>
+#include <stdexcept>
 
 #include "app.h"
 #include "hsi/compute/vulkan_context.h"
 #include "hsi/domain.h"
 #include "hsi/scene_io.h"
+
+namespace hsi::viewer {
+
+int run(const Options& o) {
+  glfwSetErrorCallback([](int code, const char* text) { std::fprintf(stderr, "hsi-viewer: GLFW error %d: %s\n", code, text); });
+  if (!glfwInit()) throw std::runtime_error("hsi-viewer: cannot initialise GLFW (no display? run under X11/Wayland or xvfb-run)");
+  struct GlfwGuard {
+    ~GlfwGuard() { glfwTerminate(); }
+  } glfw_guard;
+  if (!glfwVulkanSupported()) throw vk::VulkanUnavailable("hsi-viewer: GLFW finds no Vulkan loader/driver for windows");
+  glfwWindowHint(GLFW_CLIENT_API, GLFW_NO_API);
+  glfwWindowHint(GLFW_SCALE_TO_MONITOR, GLFW_TRUE);
+  GLFWwindow* window = glfwCreateWindow(o.width, o.height, "hsi viewer", nullptr, nullptr);
+  if (!window) throw std::runtime_error("hsi-viewer: cannot open a window");
+  struct WindowGuard {
+    GLFWwindow* w;
+    ~WindowGuard() { glfwDestroyWindow(w); }
+  } window_guard{window};
+
+  vk::ContextOptions co;
+  co.validation = o.validation;
+  co.device_name = o.device;
+  co.application_name = "hsi-viewer";
+  uint32_t n = 0;
+  const char** ext = glfwGetRequiredInstanceExtensions(&n);
+  for (uint32_t i = 0; i < n; ++i) co.instance_extensions.emplace_back(ext[i]);
+  co.make_surface = [window](VkInstance instance) {
+    VkSurfaceKHR surface = VK_NULL_HANDLE;
+    const VkResult r = glfwCreateWindowSurface(instance, window, nullptr, &surface);
+    if (r != VK_SUCCESS) throw vk::VulkanError(std::string("glfwCreateWindowSurface failed with ") + vk::result_name(r), r);
+    return surface;
+  };
+  std::shared_ptr<vk::ValidationLog> log;
+  int status = 0;
+  {
+    vk::Context ctx(co);
+    log = ctx.validation_log();
+    IMGUI_CHECKVERSION();
+    ImGui::CreateContext();
+    ImGui::GetIO().IniFilename = nullptr;  // no imgui.ini next to the user's files
+    ImGui::StyleColorsDark();
+    ImGui_ImplGlfw_InitForVulkan(window, true);
+    struct ImGuiGuard {
+      ~ImGuiGuard() {
+        ImGui_ImplGlfw_Shutdown();
+        ImGui::DestroyContext();
+      }
+    } imgui_guard;
+    {
+      App app(o, window, ctx);
+      std::printf("hsi-viewer: %s on %s (%s); press H for the keys\n", o.scene.c_str(), ctx.info().name.c_str(),
+                  ctx.info().type_name().c_str());
+      std::fflush(stdout);
+      while (true) {
+        glfwPollEvents();
+        int w = 0, h = 0;
+        glfwGetFramebufferSize(window, &w, &h);
+        if (w == 0 || h == 0) {  // minimised
+          glfwWaitEvents();
+          continue;
+        }
+        if (!app.frame()) break;
+      }
+      status = app.script_status();
+    }
+  }
+  if (log && log->count() > 0) {
+    std::fprintf(stderr, "hsi-viewer: %s\n", log->summary(20).c_str());
+    return 3;
+  }
+  return status;
+}
+
+}  // namespace hsi::viewer
 
 int main(int argc, char** argv) {
   hsi::viewer::Options o;
