@@ -25,6 +25,7 @@ void register_interpolate(CLI::App& app) {
     double ratio = 0, tolerance = 5e-8;
     std::string projection = "partproj";
     std::string backend = "auto";
+    std::string timing;  // empty: the scene's keyframe timings
     bool projected_only = false, gauged_rotation = false;
     bool allow_unconverged = false;
   };
@@ -45,6 +46,10 @@ void register_interpolate(CLI::App& app) {
   cmd->add_option("--tolerance", o->tolerance, "Stop a frame when its energy decreases by less than this fraction of itself (and not in a slow linear crawl)")->capture_default_str();
   cmd->add_option("--max-iterations", o->max_iterations, "Newton iterations per frame at most")->capture_default_str();
   cmd->add_option("--projection", o->projection, "Hessian PSD projection: partproj, fullproj or delete")->capture_default_str();
+  cmd->add_option("--timing", o->timing,
+                  "How every keyframe interval is travelled: linear (the paper's), smooth (C1 through the keyframes), ease "
+                  "(in and out) or hold (default: each keyframe's \"timing\" in the scene, else linear)")
+      ->check(CLI::IsMember({"linear", "smooth", "ease", "hold"}));
   cmd->add_flag("--projected-only", o->projected_only,
                 "Always use the projected Hessian (the paper's method), not the exact one where it is positive definite");
   cmd->add_flag("--gauged-rotation", o->gauged_rotation,
@@ -82,6 +87,7 @@ void register_interpolate(CLI::App& app) {
     io.projection = parse_projection(o->projection);
     io.exact_hessian_when_definite = !o->projected_only;
     io.free_rotation = !o->gauged_rotation;
+    io.timing = o->timing.empty() ? scene_timings(scene) : std::vector<KeyTiming>{*parse_key_timing(o->timing)};
     // The Newton core: the CUDA twin where asked for (or, with auto, where a device
     // is present), the CPU reference otherwise.
     std::unique_ptr<NewtonCore> core;

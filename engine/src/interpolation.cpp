@@ -1,6 +1,7 @@
 // Metric blending, projection by certified Newton, pose interpolation (paper §4–5).
 #include "hsi/interpolation.h"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <limits>
@@ -16,6 +17,9 @@ Interpolator::Interpolator(const ShapeSetup& setup, std::vector<double> times, s
   if (keys_.size() != times_.size()) throw InputError("interpolation: keyframe times and maps differ in number");
   for (size_t k = 1; k < times_.size(); ++k)
     if (!(times_[k] > times_[k - 1])) throw InputError("interpolation: keyframe times must increase");
+  if (!options_.timing.empty() && options_.timing.size() != 1 && options_.timing.size() != keys_.size())
+    throw InputError("interpolation: " + std::to_string(options_.timing.size()) + " keyframe timings for " +
+                     std::to_string(keys_.size()) + " keyframes (give one per keyframe, or one for all)");
   if (!core_) core_ = make_cpu_newton_core(setup_.D_G, setup_.H);
   {
     const MatrixXcd C = evaluate_basis(setup_.cage, setup_.G.points, kBasisC).C;
@@ -40,6 +44,11 @@ Interpolator::Interpolator(const ShapeSetup& setup, std::vector<double> times, s
     std::vector<Metric> m(static_cast<size_t>(v.f_z.size()));
     for (Eigen::Index i = 0; i < v.f_z.size(); ++i) m[static_cast<size_t>(i)] = pullback_metric(v.f_z(i), v.fzbar_conj(i));  // Eq. 5
     key_metrics_.push_back(std::move(m));
+    if (std::find(options_.timing.begin(), options_.timing.end(), KeyTiming::Smooth) != options_.timing.end()) {
+      std::vector<Metric> l(key_metrics_.back().size());
+      for (Eigen::Index i = 0; i < v.f_z.size(); ++i) l[static_cast<size_t>(i)] = metric_log(v.f_z(i), v.fzbar_conj(i));
+      key_log_metrics_.push_back(std::move(l));
+    }
     Pose p = pose_of(keys_[k]);
     if (k > 0) {  // unwrap: the nearest turn to the previous keyframe's angle
       const double prev = key_poses_.back().angle;
@@ -58,12 +67,18 @@ int Interpolator::segment(double t) const {
 }
 
 std::vector<Metric> Interpolator::blended_metric(double t) const {
-  const int k = segment(t);
-  const double u = std::clamp((t - times_[static_cast<size_t>(k)]) / (times_[static_cast<size_t>(k) + 1] - times_[static_cast<size_t>(k)]), 0.0, 1.0);
-  const auto& A = key_metrics_[static_cast<size_t>(k)];
-  const auto& B = key_metrics_[static_cast<size_t>(k) + 1];
-  std::vector<Metric> m(A.size());
-  for (size_t i = 0; i < A.size(); ++i) m[i] = (1 - u) * A[i] + u * B[i];  // M_g = (1 − t) M⁰ + t M¹
+  // Linear, Ease, Hold: M_g = Σ w_j M_j (the paper's (1 − t) M⁰ + t M¹ when Linear), a
+  // convex combination, so positive definite. Smooth: exp(Σ w_j log M_j), positive
+  // definite for any weights (the Hermite weights can be negative).
+  const std::vector<double> w = key_weights(times_, options_.timing, t);
+  const bool smooth = interval_timing(times_, options_.timing, t) == KeyTiming::Smooth;
+  const auto& keys = smooth ? key_log_metrics_ : key_metrics_;
+  std::vector<Metric> m(key_metrics_.front().size(), Metric::Zero());
+  for (size_t j = 0; j < w.size(); ++j)
+    if (w[j] != 0)
+      for (size_t i = 0; i < m.size(); ++i) m[i] += w[j] * keys[j][i];
+  if (smooth)
+    for (Metric& mi : m) mi = metric_exp(mi);
   return m;
 }
 
@@ -83,11 +98,15 @@ Pose Interpolator::pose_of(const HarmonicMap& map) const {
 }
 
 Pose Interpolator::interpolated_pose(double t) const {
-  const int k = segment(t);
-  const double u = std::clamp((t - times_[static_cast<size_t>(k)]) / (times_[static_cast<size_t>(k) + 1] - times_[static_cast<size_t>(k)]), 0.0, 1.0);
-  const Pose& a = key_poses_[static_cast<size_t>(k)];
-  const Pose& b = key_poses_[static_cast<size_t>(k) + 1];
-  return {(1 - u) * a.centroid + u * b.centroid, (1 - u) * a.angle + u * b.angle};
+  // The pose follows the metrics' timing: the same weights over the keyframes' poses
+  // (angles unwrapped, so a blend of angles turns the short way between neighbours).
+  const std::vector<double> w = key_weights(times_, options_.timing, t);
+  Pose p;
+  for (size_t j = 0; j < w.size(); ++j) {
+    p.centroid += w[j] * key_poses_[j].centroid;
+    p.angle += w[j] * key_poses_[j].angle;
+  }
+  return p;
 }
 
 Distortion Interpolator::measure(const CertificateResult& c) const {
@@ -145,6 +164,24 @@ FrameResult Interpolator::frame(double t, const Eigen::VectorXd& warm_start, con
       r.ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
       return r;
     }
+  // A held keyframe (Hold timing): the keyframe itself, exactly, as at its own time.
+  if (interval_timing(times_, options_.timing, t) == KeyTiming::Hold) {
+    const std::vector<double> w = key_weights(times_, options_.timing, t);
+    const size_t j = static_cast<size_t>(std::max_element(w.begin(), w.end()) - w.begin());
+    r.held = r.certified = r.converged = true;
+    r.map = keys_[j];
+    r.x = key_x_[j];
+    r.energy = 2.0;
+    r.certificate = setup_.certifier.certify(r.map);
+    r.distortion = key_distortion_[j];
+    r.overlap = setup_.overlap.check(r.map);
+    r.distortion_certified = key_certified_[j];
+    r.bound_excess = excess(r.distortion, r.bound);
+    r.certified_bound_excess = excess(r.distortion_certified, r.certified_bound);
+    r.message = "keyframe " + std::to_string(j) + " held";
+    r.ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+    return r;
+  }
   core_->set_targets(blended_metric(t));
   NewtonOptions no;
   no.tolerance = options_.tolerance;
@@ -187,8 +224,9 @@ std::vector<FrameResult> Interpolator::sequence(int frames, const std::function<
     const double t = i == frames - 1 ? t_end() : t_begin() + (t_end() - t_begin()) * i / (frames - 1);
     // Crossing into a new keyframe segment keeps the warm start: frames are continuous.
     // A solved frame's certificate is of its canonical map expand(x): reusable as the
-    // next solve's start (a keyframe's is of the posed map, so it is certified again).
-    out.push_back(frame(t, warm, out.empty() || out.back().keyframe ? nullptr : &warm_certificate));
+    // next solve's start (a keyframe's, or a held one's, is of the posed map, so it is
+    // certified again).
+    out.push_back(frame(t, warm, out.empty() || out.back().keyframe || out.back().held ? nullptr : &warm_certificate));
     if (out.back().certified) {
       warm = out.back().x;
       warm_certificate = out.back().certificate;

@@ -1,6 +1,7 @@
 // Scene JSON reading and writing (format documented in hsi/scene_io.h).
 #include "hsi/scene_io.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
@@ -123,8 +124,9 @@ Scene parse_scene(const std::string& text, const std::filesystem::path& base_dir
   if (!version) c.fail("", "missing \"hsi_scene\" (the format version); is this an hsi scene file?");
   if (!version->is_number_integer()) c.fail("hsi_scene", "expected an integer version, got " + type_name(*version));
   // Compared as written (not narrowed to int, which would read 4294967297 as 1).
-  if (version->dump() != std::to_string(kSceneVersion))
-    c.fail("hsi_scene", "unsupported version " + version->dump() + " (this hsi reads version " + std::to_string(kSceneVersion) + ")");
+  if (version->dump() != "1" && version->dump() != std::to_string(kSceneVersion))
+    c.fail("hsi_scene", "unsupported version " + version->dump() + " (this hsi reads versions 1 to " + std::to_string(kSceneVersion) + ")");
+  const int file_version = version->dump() == "1" ? 1 : kSceneVersion;
   Scene s;
   s.base_dir = base_dir;
   s.source = source;
@@ -242,6 +244,13 @@ Scene parse_scene(const std::string& text, const std::filesystem::path& base_dir
                                  " (its vertices plus one per hole)");
         key.coefficients = std::move(m);
       }
+      if (const json* tm = field(kf, "timing")) {
+        if (file_version < 2) c.fail(p + ".timing", "keyframe timing needs \"hsi_scene\": 2 (this file says version 1)");
+        if (!tm->is_string()) c.fail(p + ".timing", "expected a string (" + std::string(kKeyTimingNames) + "), got " + type_name(*tm));
+        const auto timing = parse_key_timing(tm->get<std::string>());
+        if (!timing) c.fail(p + ".timing", "unknown timing \"" + tm->get<std::string>() + "\" (expected one of: " + kKeyTimingNames + ")");
+        key.timing = *timing;
+      }
       if (key.targets.empty() && !key.coefficients && !s.handles.empty())
         c.fail(p, "needs \"targets\" (one per handle) or coefficients \"phi\"/\"psi\"");
       s.keyframes.push_back(std::move(key));
@@ -267,7 +276,8 @@ Scene load_scene(const std::filesystem::path& path) {
 
 std::string scene_to_json(const Scene& s) {
   json j;
-  j["hsi_scene"] = kSceneVersion;
+  const bool timed = std::any_of(s.keyframes.begin(), s.keyframes.end(), [](const Keyframe& k) { return k.timing != KeyTiming::Linear; });
+  j["hsi_scene"] = timed ? kSceneVersion : 1;
   if (!s.name.empty()) j["name"] = s.name;
   j["shape"]["outer"] = to_json(s.shape.outer);
   j["shape"]["holes"] = json::array();
@@ -294,6 +304,7 @@ std::string scene_to_json(const Scene& s) {
         kj["phi"] = to_json(k.coefficients->phi);
         kj["psi"] = to_json(k.coefficients->psi);
       }
+      if (k.timing != KeyTiming::Linear) kj["timing"] = to_string(k.timing);
       j["keyframes"].push_back(kj);
     }
   }

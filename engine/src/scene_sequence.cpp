@@ -1,6 +1,7 @@
 // Scene → certified keyframes → interpolated sequence → report (hsi/scene_sequence.h).
 #include "hsi/scene_sequence.h"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -24,6 +25,13 @@ FrameFile SceneSequence::frame_file() const {
     ff.frames.back().overlaps = f.overlap.overlaps();
   }
   return ff;
+}
+
+std::vector<KeyTiming> scene_timings(const Scene& scene) {
+  std::vector<KeyTiming> t;
+  for (const Keyframe& k : scene.keyframes) t.push_back(k.timing);
+  if (std::all_of(t.begin(), t.end(), [](KeyTiming k) { return k == KeyTiming::Linear; })) t.clear();
+  return t;
 }
 
 std::shared_ptr<const ShapeSetup> scene_setup(Scene& scene, int samples, double hessian_ratio) {
@@ -51,11 +59,13 @@ SceneSequence interpolate_scene(Scene& scene, const SceneSequenceOptions& option
     maps.push_back(*k.coefficients);
   }
   if (!core) core = make_cpu_newton_core(setup->D_G, setup->H);
-  Interpolator interp(*setup, times, maps, options.interpolation, std::move(core));
+  InterpolationOptions io = options.interpolation;
+  if (io.timing.empty()) io.timing = scene_timings(scene);
+  Interpolator interp(*setup, times, maps, io, std::move(core));
   SceneSequence seq;
   seq.setup = setup;
   const auto t0 = std::chrono::steady_clock::now();
-  seq.options = options.interpolation;
+  seq.options = io;
   seq.frames = interp.sequence(options.frames, progress);
   seq.total_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return seq;
@@ -120,6 +130,10 @@ std::string report_json(const Scene& scene, const SceneSequence& seq, const std:
   rep["projection"] = to_string(seq.options.projection);
   rep["tolerance"] = seq.options.tolerance;
   rep["max_iterations"] = seq.options.max_iterations;
+  // How each keyframe interval was travelled (timing.h): one name per keyframe, or one for all.
+  rep["timing"] = nlohmann::json::array();
+  for (KeyTiming k : seq.options.timing) rep["timing"].push_back(to_string(k));
+  if (seq.options.timing.empty()) rep["timing"].push_back(to_string(KeyTiming::Linear));
   rep["distortion_kinds"] = {
       {"sampled",
        "sigma1_max, sigma2_min, conformal_max, isometric_max (also under distortion_sampled), bound, bound_excess: sampled "
@@ -134,6 +148,7 @@ std::string report_json(const Scene& scene, const SceneSequence& seq, const std:
     fr.push_back({{"frame", i},
                   {"t", f.t},
                   {"keyframe", f.keyframe},
+                  {"held", f.held},
                   {"certified", f.certified},
                   {"converged", f.converged},
                   {"iterations", f.iterations},

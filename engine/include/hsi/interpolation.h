@@ -11,6 +11,7 @@
 
 #include "hsi/newton.h"
 #include "hsi/shape_setup.h"
+#include "hsi/timing.h"
 
 namespace hsi {
 
@@ -22,6 +23,10 @@ struct InterpolationOptions {
   // paper's plain projected Newton (which crawls on some inputs, issue #20).
   bool exact_hessian_when_definite = true;
   bool free_rotation = true;
+  // How each keyframe interval is travelled (timing.h): one per keyframe (the interval
+  // leaving it; the last is unused), or one for all; empty: Linear everywhere (the
+  // paper's linear blend of the metrics and the pose).
+  std::vector<KeyTiming> timing;
 };
 
 // Pose of a map: the centroid of the boundary's image (by arc length) and the
@@ -46,6 +51,7 @@ struct FrameResult {
   HarmonicMap map;           // the frame, posed
   Eigen::VectorXd x;         // its reduced coefficients (ModuloRigid gauge), the next warm start
   bool keyframe = false;     // t is a keyframe time: the keyframe itself
+  bool held = false;         // t lies in a Hold interval: the held keyframe itself (timing.h)
   bool certified = false;
   bool converged = false;
   CertificateResult certificate;
@@ -96,7 +102,7 @@ class Interpolator {
   // F frames uniform over [t_begin, t_end], each warm-started from the previous one.
   std::vector<FrameResult> sequence(int frames, const std::function<void(const FrameResult&, int, int)>& progress = {});
 
-  // The blended metric at every sample of G (paper §4.1).
+  // The blended metric at every sample of G (paper §4.1; timing.h for other timings).
   std::vector<Metric> blended_metric(double t) const;
   Pose pose_of(const HarmonicMap& map) const;
   Pose interpolated_pose(double t) const;
@@ -114,6 +120,7 @@ class Interpolator {
   std::vector<HarmonicMap> keys_;
   std::vector<Eigen::VectorXd> key_x_;
   std::vector<std::vector<Metric>> key_metrics_;
+  std::vector<std::vector<Metric>> key_log_metrics_;  // metric_log of key_metrics_, when some interval is Smooth
   std::vector<Pose> key_poses_;  // angles unwrapped across keyframes
   std::vector<Distortion> key_distortion_;
   std::vector<Distortion> key_certified_;

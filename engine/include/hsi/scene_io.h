@@ -1,8 +1,9 @@
 // Scene files: a shape, its cage, its texture, handles and keyframes, as JSON.
 //
-// Format (version 1; coordinates in any unit, y up):
+// Format (version 2; version 1 is read too: the same without "timing"; coordinates in
+// any unit, y up):
 // {
-//   "hsi_scene": 1,                              // required format version
+//   "hsi_scene": 2,                              // required format version (1 or 2)
 //   "name": "annulus",                           // optional
 //   "shape": { "outer": [[x, y], ...],           // required, ≥ 3 vertices, any orientation
 //              "holes": [[[x, y], ...], ...] },  // optional
@@ -19,7 +20,11 @@
 //   "keyframes": [ { "time": 0.0,                // keyframes, in increasing time
 //                    "targets": [[x, y], ...],   //   one per handle, and/or
 //                    "phi": [[re, im], ...],     //   coefficients over the cage (m + N each)
-//                    "psi": [[re, im], ...] } ]
+//                    "psi": [[re, im], ...],
+//                    "timing": "smooth" } ]      //   optional (version 2): how the interval leaving this
+//                                                //   keyframe is travelled: "linear" (default, the
+//                                                //   paper's), "smooth" (C¹ through the keyframes),
+//                                                //   "ease" (in and out), "hold" (timing.h)
 // }
 // Every error names the file, the JSON path and, for syntax errors, line and column.
 #pragma once
@@ -32,15 +37,19 @@
 
 #include "hsi/cage.h"
 #include "hsi/harmonic_map.h"
+#include "hsi/timing.h"
 
 namespace hsi {
 
-inline constexpr int kSceneVersion = 1;
+// The version written: 1 when every keyframe's timing is linear (so files without
+// timing keep their version), 2 otherwise. Both are read.
+inline constexpr int kSceneVersion = 2;
 
 struct Keyframe {
   double time = 0;
   std::vector<cd> targets;             // one per handle (may be empty if coefficients given)
   std::optional<HarmonicMap> coefficients;
+  KeyTiming timing = KeyTiming::Linear;  // the interval leaving this keyframe (timing.h)
 };
 
 struct Scene {

@@ -30,12 +30,17 @@ struct SceneSequence {
   FrameFile frame_file() const;  // cage + posed maps, as hsi interpolate writes them
 };
 
+// The keyframes' timings as InterpolationOptions::timing takes them: one per keyframe,
+// or empty when every one is Linear (the paper's blend).
+std::vector<KeyTiming> scene_timings(const Scene& scene);
+
 // Gives the scene a cage if it has none, then the setup for its sample settings
 // (samples, ratio override the scene's when positive).
 std::shared_ptr<const ShapeSetup> scene_setup(Scene& scene, int samples = 0, double hessian_ratio = 0);
 
 // Needs two or more keyframes (InputError otherwise); keyframes given by targets are
-// solved and their coefficients written into scene.keyframes. `core` = nullptr: the
+// solved and their coefficients written into scene.keyframes. The scene's keyframe
+// timings apply unless options.interpolation.timing gives some. `core` = nullptr: the
 // CPU Newton core. Frames that cannot be certified are reported in the result, not thrown.
 SceneSequence interpolate_scene(Scene& scene, const SceneSequenceOptions& options = {},
                                 const std::function<void(const FrameResult&, int, int)>& progress = {},
