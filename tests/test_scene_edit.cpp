@@ -19,7 +19,7 @@ bool same(const SceneEditState& a, const SceneEditState& b) {
   if (a.handles != b.handles || a.keyframes.size() != b.keyframes.size()) return false;
   for (size_t k = 0; k < a.keyframes.size(); ++k) {
     const Keyframe &x = a.keyframes[k], &y = b.keyframes[k];
-    if (x.time != y.time || x.targets != y.targets || x.coefficients.has_value() != y.coefficients.has_value()) return false;
+    if (x.time != y.time || x.timing != y.timing || x.targets != y.targets || x.coefficients.has_value() != y.coefficients.has_value()) return false;
     if (x.coefficients && (x.coefficients->phi != y.coefficients->phi || x.coefficients->psi != y.coefficients->psi))
       return false;
   }
@@ -268,6 +268,25 @@ TEST_CASE("undo and redo walk back and forth through the exact scenes", "[scene_
   CHECK_FALSE(e.modified());
   REQUIRE(e.undo().done);
   CHECK(e.modified());
+}
+
+TEST_CASE("a keyframe's timing: refusals, one undo step, restored by undo", "[scene_edit][timing]") {
+  const Scene s = bundled("bar_holes");  // keyframes at t = 0, 1, 2
+  SceneEditor e(s);
+  CHECK(e.set_timing(5, KeyTiming::Smooth).message == "no keyframe 5 (the scene has 3)");
+  CHECK(e.set_timing(-1, KeyTiming::Smooth).error);
+  CHECK(e.set_timing(2, KeyTiming::Smooth).message == "keyframe 2 is the last: no interval leaves it, so it has no timing");
+  CHECK(e.set_timing(0, KeyTiming::Linear).message == "keyframe 0 to 1 is linear already");
+  CHECK_FALSE(e.can_undo());
+  const EditOutcome o = e.set_timing(1, KeyTiming::Ease);
+  CHECK(o.done);
+  CHECK(o.message == "keyframe 1 to 2: ease timing");
+  CHECK(e.scene().keyframes[1].timing == KeyTiming::Ease);
+  CHECK(e.modified());
+  CHECK(e.undo().done);
+  CHECK(same(state_of(e.scene()), state_of(s)));
+  CHECK(e.redo().done);
+  CHECK(e.scene().keyframes[1].timing == KeyTiming::Ease);
 }
 
 TEST_CASE("the undo history keeps max_undo steps", "[scene_edit]") {

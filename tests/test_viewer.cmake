@@ -7,7 +7,7 @@
 #  2. a script edits: poses the last keyframe by dragging a handle (the
 #     point-to-point solve), adds a handle by clicking the shape, toggles the
 #     distortion overlay, undoes the handle and saves; the saved scene must hold
-#     the pose and not the undone handle.
+#     the pose and not the undone handle, and the smooth timing the script set.
 # Without xvfb-run it prints SKIP (the test is skipped), unless HSI_REQUIRE_VIEWER is set.
 # -D: HSI_VIEWER, HSI_CHECK, HSI_SCENE, HSI_TEXTURE, HSI_GOLDEN, HSI_WORK_DIR
 find_program(XVFB_RUN xvfb-run)
@@ -36,6 +36,10 @@ add-handle 0.0 -0.45
 key d
 screenshot ${HSI_WORK_DIR}/edit.png
 undo             # the added handle
+timing 0 smooth  # the interval from keyframe 0 to 1 (issue #26)
+seek 15
+screenshot ${HSI_WORK_DIR}/smooth.png   # waits until frame 15 is solved again and drawn
+expect-certified
 save ${HSI_WORK_DIR}/saved.json
 exit
 ")
@@ -52,6 +56,11 @@ string(JSON tx GET "${saved}" keyframes 2 targets 4 0)
 string(JSON ty GET "${saved}" keyframes 2 targets 4 1)
 if(NOT tx EQUAL 1.2 OR NOT ty EQUAL 0.7)
   message(FATAL_ERROR "the saved keyframe 2 has handle 4's target at (${tx}, ${ty}), not the dragged (1.2, 0.7)")
+endif()
+string(JSON timing0 GET "${saved}" keyframes 0 timing)
+string(JSON version GET "${saved}" hsi_scene)
+if(NOT timing0 STREQUAL "smooth" OR NOT version EQUAL 2)
+  message(FATAL_ERROR "the saved scene has keyframe 0's timing '${timing0}' (version ${version}), not the 'smooth' set by the script (version 2)")
 endif()
 string(JSON has_phi ERROR_VARIABLE no_phi GET "${saved}" keyframes 2 phi)
 if(no_phi)

@@ -102,6 +102,22 @@ EditOutcome SceneEditor::remove_handle(int h) {
   return accepted("removed handle " + std::to_string(h), h);
 }
 
+EditOutcome SceneEditor::set_timing(int k, KeyTiming timing) {
+  if (pose_) return {};
+  auto& keys = scene_.keyframes;
+  const int count = static_cast<int>(keys.size());
+  if (k < 0 || k >= count)
+    return refused("no keyframe " + std::to_string(k) + " (the scene has " + std::to_string(count) + ")", true);
+  if (k + 1 == count)
+    return refused("keyframe " + std::to_string(k) + " is the last: no interval leaves it, so it has no timing", false);
+  const std::string interval = "keyframe " + std::to_string(k) + " to " + std::to_string(k + 1);
+  if (keys[static_cast<size_t>(k)].timing == timing)
+    return refused(interval + " is " + std::string(to_string(timing)) + " already", false);
+  push_undo(snapshot());
+  keys[static_cast<size_t>(k)].timing = timing;
+  return accepted(interval + ": " + std::string(to_string(timing)) + " timing", k);
+}
+
 EditOutcome SceneEditor::begin_pose(int h, const EditFrame& at) {
   if (pose_) return {};
   if (at.keyframe < 0 || at.keyframe >= static_cast<int>(scene_.keyframes.size()))

@@ -132,7 +132,7 @@ void App::keyframes_changed() {
     times.push_back(k.time);
     maps.push_back(*k.coefficients);
   }
-  solver_->set_keyframes(times, maps);
+  solver_->set_keyframes(times, maps, scene_timings(editor_->scene()));
   const Framing framing = frame_keyframes(probe_rows_, maps);
   view_.set_box(framing.box);
   dist_hi_ = framing.dist_hi;
@@ -183,6 +183,13 @@ void App::remove_handle(int h) {
   const EditOutcome o = editor_->remove_handle(h);
   if (o.done) hover_handle_ = -1;
   show(o);
+}
+
+std::string App::set_timing(int k, KeyTiming timing) {
+  const EditOutcome o = editor_->set_timing(k, timing);
+  if (o.done) keyframes_changed();
+  show(o);
+  return o.done ? "" : o.message;
 }
 
 std::string App::undo_redo(bool undo) {
@@ -480,6 +487,7 @@ void App::draw_panels() {
   // After drawing: an edit may move the keyframes the panels were given.
   if (req.add_keyframe) add_keyframe();
   if (req.remove_keyframe) remove_keyframe();
+  if (req.timing_keyframe >= 0) set_timing(req.timing_keyframe, req.timing);
   if (req.undo) undo_redo(true);
   if (req.redo) undo_redo(false);
   if (req.save) save(output_path());

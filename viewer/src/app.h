@@ -68,6 +68,7 @@ class App final : public ScriptHost {
   std::string drag(int h, cd target) override;
   bool dragging() const override { return editor_->pose() != nullptr; }
   std::string undo_redo(bool undo) override;
+  std::string set_timing(int k, KeyTiming timing) override;
   bool save(const std::string& path) override;
   bool shown_certified(std::string* reason) override;
   bool current_frame_drawn() override;

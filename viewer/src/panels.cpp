@@ -199,7 +199,7 @@ PanelRequests draw_side_panel(const PanelContext& c) {
 
   ImGui::TextUnformatted("Keyframes");
   const int key = play.keyframe_at(play.current());
-  if (ImGui::BeginTable("keys", 3, ImGuiTableFlags_RowBg | ImGuiTableFlags_SizingStretchProp | ImGuiTableFlags_ScrollY,
+  if (ImGui::BeginTable("keys", 4, ImGuiTableFlags_RowBg | ImGuiTableFlags_SizingStretchProp | ImGuiTableFlags_ScrollY,
                         ImVec2(0, std::min(6.5f, static_cast<float>(scene.keyframes.size()) + 0.5f) *
                                       ImGui::GetTextLineHeightWithSpacing()))) {
     for (size_t k = 0; k < scene.keyframes.size(); ++k) {
@@ -213,6 +213,23 @@ PanelRequests draw_side_panel(const PanelContext& c) {
       ImGui::Text("t = %.3g", scene.keyframes[k].time);
       ImGui::TableNextColumn();
       ImGui::TextDisabled("frame %d", frame);
+      // How the interval leaving this keyframe is travelled (none leaves the last one).
+      ImGui::TableNextColumn();
+      if (k + 1 < scene.keyframes.size()) {
+        static const KeyTiming modes[] = {KeyTiming::Linear, KeyTiming::Smooth, KeyTiming::Ease, KeyTiming::Hold};
+        const KeyTiming now = scene.keyframes[k].timing;
+        ImGui::PushID(static_cast<int>(k));
+        ImGui::SetNextItemWidth(-1);
+        if (ImGui::BeginCombo("##timing", to_string(now))) {
+          for (KeyTiming m : modes)
+            if (ImGui::Selectable(to_string(m), m == now) && m != now) {
+              req.timing_keyframe = static_cast<int>(k);
+              req.timing = m;
+            }
+          ImGui::EndCombo();
+        }
+        ImGui::PopID();
+      }
     }
     ImGui::EndTable();
   }

@@ -62,6 +62,8 @@ struct PanelContext {
 // What the side panel's buttons ask for this frame.
 struct PanelRequests {
   bool add_keyframe = false, remove_keyframe = false, undo = false, redo = false, save = false;
+  int timing_keyframe = -1;  // ≥ 0: set the timing of the interval leaving this keyframe to `timing`
+  KeyTiming timing = KeyTiming::Linear;
 };
 
 void draw_viewport_overlays(const PanelContext& c);

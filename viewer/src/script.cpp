@@ -36,7 +36,7 @@ std::vector<ScriptStep> parse_script(const std::string& path) {
   int n = 0;
   static const std::vector<std::pair<std::string, size_t>> known = {
       {"play", 0},   {"pause", 0}, {"frames", 1}, {"seek", 1},       {"key", 1},        {"drag", 3},  {"add-handle", 2},
-      {"remove-handle", 1}, {"undo", 0}, {"redo", 0}, {"save", 1}, {"screenshot", 1}, {"exit", 0}, {"expect-certified", 0}};
+      {"remove-handle", 1}, {"undo", 0}, {"redo", 0}, {"save", 1}, {"screenshot", 1}, {"exit", 0}, {"expect-certified", 0}, {"timing", 2}};
   while (std::getline(in, line)) {
     ++n;
     if (const size_t c = line.find('#'); c != std::string::npos) line.resize(c);
@@ -121,6 +121,11 @@ void ScriptRunner::run(ScriptHost& host) {
       }
       if (host.dragging()) return;  // until the final pose is committed
       wait_ = 0;
+    } else if (s.op == "timing") {  // timing K MODE: the interval leaving keyframe K
+      const auto mode = parse_key_timing(s.args[1]);
+      if (!mode) return fail("unknown timing '" + s.args[1] + "' (expected one of: " + kKeyTimingNames + ")");
+      const std::string refused = host.set_timing(static_cast<int>(number(s, 0)), *mode);
+      if (!refused.empty()) return fail(refused);
     } else if (s.op == "undo" || s.op == "redo") {
       const std::string refused = host.undo_redo(s.op == "undo");
       if (!refused.empty()) return fail(refused);

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "hsi/domain.h"
+#include "hsi/timing.h"
 
 namespace hsi::viewer {
 
@@ -43,6 +44,8 @@ class ScriptHost {
   virtual bool dragging() const = 0;  // until the final pose is committed
   // Undo (or redo); the refusal's message, or "" when done.
   virtual std::string undo_redo(bool undo) = 0;
+  // Sets the timing of the interval leaving keyframe k; the refusal's message, or "".
+  virtual std::string set_timing(int k, KeyTiming timing) = 0;
   virtual bool save(const std::string& path) = 0;
   virtual bool shown_certified(std::string* reason) = 0;
   // Whether the frame shown is the current one, solved and drawn.

@@ -34,12 +34,13 @@ std::unique_ptr<NewtonCore> Solver::make_core() const {
   return make_cpu_newton_core(setup_->D_G, setup_->H);
 }
 
-void Solver::set_keyframes(std::vector<double> times, std::vector<HarmonicMap> maps) {
+void Solver::set_keyframes(std::vector<double> times, std::vector<HarmonicMap> maps, std::vector<KeyTiming> timings) {
   if (times.empty() || times.size() != maps.size()) throw InputError("viewer: keyframes need a time and a map each");
   {
     std::lock_guard lock(mutex_);
     times_ = std::move(times);
     maps_ = std::move(maps);
+    timings_ = std::move(timings);
     ++generation_;
     rebuild_ = true;
     count_ = std::max(1, static_cast<int>(std::lround((times_.back() - times_.front()) * rate_)) + 1);
@@ -178,13 +179,15 @@ void Solver::run() {
     if (rebuild_) {
       times = times_;
       maps = maps_;
+      InterpolationOptions options = options_;
+      options.timing = timings_;
       const uint64_t gen = generation_;
       rebuild_ = false;
       lock.unlock();
       std::unique_ptr<Interpolator> built;
       std::string error;
       try {
-        if (times.size() >= 2) built = std::make_unique<Interpolator>(*setup_, times, maps, options_, make_core());
+        if (times.size() >= 2) built = std::make_unique<Interpolator>(*setup_, times, maps, options, make_core());
       } catch (const std::exception& e) {
         error = e.what();
       }

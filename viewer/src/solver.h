@@ -69,7 +69,8 @@ class Solver {
   Solver& operator=(const Solver&) = delete;
 
   // New keyframes (times increasing, certified maps): drops every solved frame.
-  void set_keyframes(std::vector<double> times, std::vector<HarmonicMap> maps);
+  // timings: one per keyframe (timing.h), or empty for linear everywhere.
+  void set_keyframes(std::vector<double> times, std::vector<HarmonicMap> maps, std::vector<KeyTiming> timings = {});
   int frame_count() const;
   double time_of(int frame) const;
   int frame_at(double t) const;  // nearest frame
@@ -109,6 +110,7 @@ class Solver {
   uint64_t generation_ = 0;
   std::vector<double> times_;
   std::vector<HarmonicMap> maps_;
+  std::vector<KeyTiming> timings_;
   bool rebuild_ = false;
   int count_ = 1;
   int requested_ = 0, direction_ = 1;

@@ -86,6 +86,11 @@ class SceneEditor {
   void cancel_pose();
   const HandlePose* pose() const { return pose_ ? &*pose_ : nullptr; }
 
+  // How the interval leaving keyframe k is travelled (timing.h). Refused for a keyframe
+  // that does not exist, for the last one (no interval leaves it) and during a pose;
+  // not done (no undo step) when it is the timing already.
+  EditOutcome set_timing(int k, KeyTiming timing);
+
   EditOutcome undo();
   EditOutcome redo();
   bool can_undo() const { return !undo_.empty() && !pose_; }
