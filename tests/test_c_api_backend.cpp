@@ -63,7 +63,7 @@ TEST_CASE("C API: the cpu backend", "[c_api][runtime]") {
   hsi_interpolator_destroy(interp);
 }
 
-TEST_CASE("C API: auto reports the backend used and why it fell back; cuda is refused where it cannot run", "[c_api][runtime]") {
+TEST_CASE("C API: auto reports the backend used and why it fell back, cuda is refused where it cannot run", "[c_api][runtime]") {
   Loaded l;
   const char* why = nullptr;
   const bool cuda = hsi_backend_available(HSI_BACKEND_CUDA, &why) == 1;

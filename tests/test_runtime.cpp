@@ -151,7 +151,7 @@ TEST_CASE("the backend factory on this machine", "[runtime]") {
   CHECK(automatic.core->energy() == Approx(cpu.core->energy()).epsilon(1e-12));
 }
 
-TEST_CASE("certifier names; a bad name is refused; unavailable ones say why", "[runtime][certify]") {
+TEST_CASE("certifier names, a bad name refused, unavailable ones saying why", "[runtime][certify]") {
   const auto& names = runtime::certifier_names();
   CHECK(std::vector<std::string_view>(names.begin(), names.end()) == std::vector<std::string_view>{"cpu", "cuda", "vulkan"});
   const Shape s = test::annulus();
