@@ -13,7 +13,7 @@
 #include <sstream>
 
 #include "bench_scenes.h"
-#include "hsi/cuda/device.h"
+#include "device.h"
 #include "hsi/cuda/newton_core.h"
 #include "hsi/interpolation.h"
 #include "hsi/keyframes.h"

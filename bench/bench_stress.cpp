@@ -22,10 +22,8 @@
 #include "hsi/machine.h"
 #include "hsi/interpolation.h"
 #include "hsi/keyframes.h"
+#include "hsi/runtime/backend.h"
 #include "stress_corpus.h"
-#ifdef HSI_WITH_CUDA
-#include "hsi/cuda/newton_core.h"
-#endif
 
 using namespace hsi;
 using nlohmann::json;
@@ -59,19 +57,6 @@ HessianProjection projection_from(const std::string& s) {
   if (s == "fullproj") return HessianProjection::FullProj;
   if (s == "partproj") return HessianProjection::PartProj;
   throw CLI::ValidationError("--projections", "unknown projection '" + s + "' (delete, fullproj, partproj)");
-}
-
-// The Newton core for a run: CUDA where asked for (or, with auto, where a device is
-// present), else the CPU reference (OpenMP over the samples).
-std::unique_ptr<NewtonCore> make_core(const ShapeSetup& setup, const std::string& backend) {
-  std::unique_ptr<NewtonCore> core;
-  std::string why = "this build has no CUDA";
-#ifdef HSI_WITH_CUDA
-  if (backend != "cpu" && hsi::cuda::device_available(&why)) core = hsi::cuda::make_newton_core(setup);
-#endif
-  if (!core && backend == "cuda") throw std::runtime_error("--backend cuda: no CUDA device (" + why + ")");
-  if (!core) core = make_cpu_newton_core(setup.D_G, setup.H);
-  return core;
 }
 
 // Frames of some runs, pooled (keyframes excluded: they are not solved).
@@ -155,9 +140,9 @@ int main(int argc, char** argv) {
   app.add_option("--max-iterations", max_iterations, "Newton iteration cap per frame")->capture_default_str();
   app.add_flag("--paper-newton", paper_newton,
                "The paper's plain projected Newton (rotation gauged, no exact Hessian): the reference the fix is measured against");
-  app.add_option("--backend", backend, "Newton core: cpu, cuda, or auto (CUDA when a device is present)")
+  app.add_option("--backend", backend, runtime::kBackendHelp)
       ->capture_default_str()
-      ->check(CLI::IsMember({"cpu", "cuda", "auto"}));
+      ->check(CLI::IsMember(runtime::backend_names()));
   app.add_option("--time-limit", time_limit,
                  "Start no new sequence after this many seconds (0: none); the tables cover what ran")
       ->capture_default_str();
@@ -300,9 +285,12 @@ int main(int argc, char** argv) {
             o.exact_hessian_when_definite = o.free_rotation = !paper_newton;
             o.projection = p;
             o.max_iterations = max_iterations;
-            std::unique_ptr<NewtonCore> core = make_core(*setup, backend);
-            if (core_name.empty()) core_name = core->name();
-            Interpolator interp(*setup, a.times, a.maps, o, std::move(core));
+            runtime::NewtonCoreChoice core = runtime::make_newton_core(*setup, runtime::parse_backend(backend));
+            if (core_name.empty()) {
+              core_name = core.core->name();
+              std::printf("Newton core: %s\n", runtime::describe(core.choice).c_str());
+            }
+            Interpolator interp(*setup, a.times, a.maps, o, std::move(core.core));
             const int intervals = static_cast<int>(a.times.size()) - 1;
             for (const FrameResult& f : interp.sequence(F * intervals + 1))
               if (!f.keyframe) s.add(f, max_iterations);

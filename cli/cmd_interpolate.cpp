@@ -11,10 +11,8 @@
 #include "hsi/interpolation.h"
 #include "hsi/keyframes.h"
 #include "hsi/scene_sequence.h"
+#include "hsi/runtime/backend.h"
 #include "plot.h"
-#ifdef HSI_WITH_CUDA
-#include "hsi/cuda/newton_core.h"
-#endif
 
 namespace hsi::cli {
 
@@ -54,9 +52,9 @@ void register_interpolate(CLI::App& app) {
                 "Always use the projected Hessian (the paper's method), not the exact one where it is positive definite");
   cmd->add_flag("--gauged-rotation", o->gauged_rotation,
                 "Keep the global rotation pinned by its gauge in projected systems instead of solving for it (the paper's method)");
-  cmd->add_option("--backend", o->backend, "Newton core: cpu, cuda, or auto (CUDA when a device is present)")
+  cmd->add_option("--backend", o->backend, runtime::kBackendHelp)
       ->capture_default_str()
-      ->check(CLI::IsMember({"cpu", "cuda", "auto"}));
+      ->check(CLI::IsMember(runtime::backend_names()));
   cmd->add_option("--png-frames", o->png_count, "Draw this many evenly spaced frames (0: none)")->capture_default_str();
   cmd->add_flag("--allow-unconverged", o->allow_unconverged,
                 "Exit 0 when certified frames did not converge (still flagged in every output)");
@@ -88,17 +86,9 @@ void register_interpolate(CLI::App& app) {
     io.exact_hessian_when_definite = !o->projected_only;
     io.free_rotation = !o->gauged_rotation;
     io.timing = o->timing.empty() ? scene_timings(scene) : std::vector<KeyTiming>{*parse_key_timing(o->timing)};
-    // The Newton core: the CUDA twin where asked for (or, with auto, where a device
-    // is present), the CPU reference otherwise.
-    std::unique_ptr<NewtonCore> core;
-    std::string why = "this hsi was built without CUDA";
-#ifdef HSI_WITH_CUDA
-    if (o->backend != "cpu" && hsi::cuda::device_available(&why)) core = hsi::cuda::make_newton_core(*setup);
-#endif
-    if (!core && o->backend == "cuda") throw std::runtime_error("--backend cuda: no CUDA device (" + why + ")");
-    if (!core) core = make_cpu_newton_core(setup->D_G, setup->H);
-    std::printf("Newton core: %s\n", core->name());
-    Interpolator interp(*setup, times, maps, io, std::move(core));
+    runtime::NewtonCoreChoice core = runtime::make_newton_core(*setup, runtime::parse_backend(o->backend));
+    std::printf("Newton core: %s\n", runtime::describe(core.choice).c_str());
+    Interpolator interp(*setup, times, maps, io, std::move(core.core));
 
     const std::filesystem::path out(o->out);
     std::filesystem::create_directories(out);

@@ -2,33 +2,29 @@
 // (Vulkan; lavapipe where there is no GPU): the deformed shape with its texture, the
 // chosen overlays, a distortion legend and frame labels (cairo, composited here so
 // that compute/ stays free of text), as a numbered PNG sequence and a contact sheet.
+// Built where compute/ is (cli/CMakeLists.txt); elsewhere cmd_render_unavailable.cpp
+// registers the command with runtime/'s reason.
+#include <cairo.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <memory>
 #include <sstream>
 
 #include "commands.h"
-#include "hsi/frames_io.h"
-#include "hsi/scene_io.h"
-
-#ifdef HSI_WITH_VULKAN
-#include <cairo.h>
-
-#include <algorithm>
-#include <cmath>
-#include <memory>
-
 #include "hsi/basis.h"
 #include "hsi/compute/renderer.h"
+#include "hsi/frames_io.h"
+#include "hsi/scene_io.h"
 #include "hsi/triangulate.h"
 #include "raster.h"
-#endif
 
 namespace hsi::cli {
 
-#ifdef HSI_WITH_VULKAN
 namespace {
 
 using Clock = std::chrono::steady_clock;
@@ -417,21 +413,10 @@ void run_render(const Opts& o) {
 }
 
 }  // namespace
-#endif
 
 void register_render(CLI::App& app) {
-#ifdef HSI_WITH_VULKAN
   auto o = std::make_shared<Opts>();
-#endif
-  CLI::App* cmd = app.add_subcommand(
-      "render",
-      "Render the frames of 'hsi interpolate' offscreen (Vulkan; lavapipe on a machine without a GPU):\n"
-      "the deformed shape with its texture, clipped at its outline and holes, anti-aliased, with optional\n"
-      "overlays. Writes OUT/frame_NNNN.png per frame and OUT/contact_sheet.png. Frames that could not be\n"
-      "certified are tinted red, bordered in red and labelled; frames whose solve did not converge are labelled\n"
-      "NOT CONVERGED in orange; frames that overlap themselves (the image of the boundary crosses itself,\n"
-      "frames.hsif flag 8) get an amber border and label.");
-#ifdef HSI_WITH_VULKAN
+  CLI::App* cmd = app.add_subcommand("render", kRenderHelp);
   cmd->add_option("scene", o->scene, "Scene file (.json) the frames were computed for")->required()->check(CLI::ExistingFile);
   cmd->add_option("frames_dir", o->frames_dir, "Output folder of hsi interpolate (holds frames.hsif)")->required();
   cmd->add_option("-o,--output", o->out, "Output folder (default: FRAMES_DIR/render)");
@@ -457,10 +442,6 @@ void register_render(CLI::App& app) {
       ->check(CLI::IsMember({"auto", "graphics", "compute"}))
       ->capture_default_str();
   cmd->callback([o] { run_render(*o); });
-#else
-  cmd->allow_extras();
-  cmd->callback([] { throw std::runtime_error("this hsi was built without Vulkan (compute/), which hsi render needs"); });
-#endif
 }
 
 }  // namespace hsi::cli

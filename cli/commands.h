@@ -42,6 +42,15 @@ inline constexpr const char* kFlaggedFramesHelp =
     "Exit status: 0 all frames certified and converged; 1 error; 2 bad input; 3 some frame not certified;\n"
     "4 some frame did not converge (certified, but Newton stopped at --max-iterations; --allow-unconverged: 0).";
 
+// hsi render's description (cmd_render.cpp, or cmd_render_unavailable.cpp in a build without Vulkan).
+inline constexpr const char* kRenderHelp =
+    "Render the frames of 'hsi interpolate' offscreen (Vulkan; lavapipe on a machine without a GPU):\n"
+    "the deformed shape with its texture, clipped at its outline and holes, anti-aliased, with optional\n"
+    "overlays. Writes OUT/frame_NNNN.png per frame and OUT/contact_sheet.png. Frames that could not be\n"
+    "certified are tinted red, bordered in red and labelled; frames whose solve did not converge are labelled\n"
+    "NOT CONVERGED in orange; frames that overlap themselves (the image of the boundary crosses itself,\n"
+    "frames.hsif flag 8) get an amber border and label.";
+
 void register_info(CLI::App& app);
 void register_import_png(CLI::App& app);
 void register_import_glyph(CLI::App& app);

@@ -47,7 +47,7 @@ TEST_CASE("the C example reproduces the C++ results", "[c_api]") {
   const std::string log = run(std::string(HSI_C_EXAMPLE) + " " + kScene.string() + " " + dir.string() + " 5 2000", &status);
   INFO(log);
   REQUIRE(status == 0);
-  CHECK_THAT(log, Contains("hsi 0.1.0") && Contains("5 frames, 5 certified") && Contains("loading a missing file: I/O error"));
+  CHECK_THAT(log, Contains("hsi " HSI_VERSION_STRING) && Contains("5 frames, 5 certified") && Contains("loading a missing file: I/O error"));
 
   // The same sequence through the C++ engine.
   Scene scene = load_scene(kScene);

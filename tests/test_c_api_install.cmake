@@ -1,6 +1,6 @@
 # ctest capi_install: installs the "capi" component to a temporary prefix, then
 # configures, builds and runs tests/c_api_consumer against it with find_package(hsi).
-# -D: HSI_BUILD_DIR, HSI_WORK_DIR, HSI_CONSUMER_DIR, HSI_SCENE, HSI_GENERATOR
+# -D: HSI_BUILD_DIR, HSI_WORK_DIR, HSI_CONSUMER_DIR, HSI_SCENE, HSI_GENERATOR, HSI_VERSION (the project's)
 file(REMOVE_RECURSE ${HSI_WORK_DIR})
 function(step name)
   execute_process(COMMAND ${ARGN} RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
@@ -22,7 +22,7 @@ step(configure ${CMAKE_COMMAND} -S ${HSI_CONSUMER_DIR} -B ${HSI_WORK_DIR}/build 
      "-DCMAKE_EXE_LINKER_FLAGS=${HSI_CONSUMER_LINK_FLAGS}")
 step(build ${CMAKE_COMMAND} --build ${HSI_WORK_DIR}/build)
 step(consumer ${HSI_WORK_DIR}/build/consumer ${HSI_SCENE} ${HSI_WORK_DIR}/seq.hsib)
-if(NOT STEP_OUTPUT MATCHES "consumer ok: hsi 0.1.0, 3 frames baked")
+if(NOT STEP_OUTPUT MATCHES "consumer ok: hsi ${HSI_VERSION}, 3 frames baked")
   message(FATAL_ERROR "consumer: unexpected output")
 endif()
 step(player ${HSI_WORK_DIR}/build/player ${HSI_WORK_DIR}/seq.hsib)

@@ -13,7 +13,7 @@
 
 #include "hsi/cuda/certifier.h"
 #include "hsi/cuda/newton_core.h"
-#include "hsi/cuda/sample_math.cuh"
+#include "sample_math.cuh"
 #include "hsi/interpolation.h"
 #include "hsi/newton.h"
 #include "hsi/shape_setup.h"

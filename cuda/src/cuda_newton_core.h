@@ -14,7 +14,7 @@
 #include <utility>
 
 #include "device_certifier.h"
-#include "hsi/cuda/device.h"
+#include "device.h"
 #include "hsi/cuda/newton_core.h"
 #include "hsi/domain.h"
 #include "hsi/shape_setup.h"

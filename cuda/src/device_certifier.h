@@ -8,7 +8,7 @@
 
 #include "certify_kernels.h"
 #include "hsi/certificate.h"
-#include "hsi/cuda/device.h"
+#include "device.h"
 
 namespace hsi::cuda {
 

@@ -7,7 +7,7 @@
 
 #include <cuda_runtime.h>
 
-#include "hsi/cuda/sample_math.cuh"
+#include "sample_math.cuh"
 
 namespace hsi::cuda::kernels {
 

@@ -234,6 +234,24 @@ CertificateResult Certifier::certify(const HarmonicMap& map, const CertificateOp
   return reduce_certificate(I.seg, out, abs_a, abs_b);
 }
 
+namespace {
+class CpuCertifier final : public MapCertifier {
+ public:
+  CpuCertifier(const Shape& shape, const Cage& cage, const BoundarySamples& samples) : certifier_(shape, cage, samples) {}
+  const char* name() const override { return "cpu"; }
+  CertificateResult certify(const HarmonicMap& map, const CertificateOptions& options = {}) override {
+    return certifier_.certify(map, options);
+  }
+
+ private:
+  Certifier certifier_;
+};
+}  // namespace
+
+std::unique_ptr<MapCertifier> make_cpu_certifier(const Shape& shape, const Cage& cage, const BoundarySamples& samples) {
+  return std::make_unique<CpuCertifier>(shape, cage, samples);
+}
+
 CertificateResult reduce_certificate(const CertificateSegments& seg, std::span<const SegmentCertificate> out,
                                      std::span<const double> abs_a, std::span<const double> abs_b) {
   const size_t S = seg.size();

@@ -94,15 +94,12 @@ void App::load() {
   std::fflush(stdout);
   solve_scene_keyframes(scene, *setup_);
 
-  if (o_.backend != "auto" && o_.backend != "cpu" && o_.backend != "cuda")
-    throw InputError("--backend: '" + o_.backend + "' is not auto, cpu or cuda");
-#ifndef HSI_WITH_CUDA
-  if (o_.backend == "cuda") throw InputError("--backend cuda: this hsi-viewer was built without CUDA");
-#endif
-  solver_ = std::make_unique<Solver>(setup_, o_.rate, o_.backend != "cpu");
-  if (o_.backend == "cuda" && std::string(solver_->backend()).find("CUDA") == std::string::npos &&
-      std::string(solver_->backend()).find("cuda") == std::string::npos)
-    throw InputError("--backend cuda: no CUDA device");
+  try {
+    solver_ = std::make_unique<Solver>(setup_, o_.rate, runtime::parse_backend(o_.backend));
+  } catch (const runtime::BackendUnavailable& e) {
+    throw InputError(e.what());  // an option this machine cannot honour: exit status 2, as any bad option
+  }
+  std::printf("hsi-viewer: Newton core: %s\n", runtime::describe(solver_->backend_choice()).c_str());
 
   // Texture (or a checkerboard), render mesh, picking and probe points.
   {

@@ -14,6 +14,7 @@
 #include "app.h"
 #include "hsi/compute/vulkan_context.h"
 #include "hsi/domain.h"
+#include "hsi/runtime/backend.h"
 #include "hsi/scene_io.h"
 
 namespace hsi::viewer {
@@ -103,8 +104,8 @@ int main(int argc, char** argv) {
   app.add_option("--speed", o.speed, "Playback speed")->capture_default_str()->check(CLI::Range(0.125, 8.0));
   app.add_flag("!--no-loop", o.loop, "Stop at the end instead of looping");
   app.add_flag("!--paused", o.play, "Start paused");
-  app.add_option("--backend", o.backend, "Newton core: auto (CUDA when a device is present), cpu or cuda")
-      ->capture_default_str()->check(CLI::IsMember({"auto", "cpu", "cuda"}));
+  app.add_option("--backend", o.backend, hsi::runtime::kBackendHelp)
+      ->capture_default_str()->check(CLI::IsMember(hsi::runtime::backend_names()));
   app.add_option("--samples", o.samples, "Boundary samples |G| (default: the scene's)")->check(CLI::Range(100, 1000000));
   app.add_option("--mesh-vertices", o.mesh_vertices, "Render mesh size")->capture_default_str()->check(CLI::Range(100, 2000000));
   app.add_option("--overlays", o.overlays,

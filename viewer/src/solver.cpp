@@ -5,16 +5,14 @@
 #include <chrono>
 #include <cmath>
 
-#ifdef HSI_WITH_CUDA
-#include "hsi/cuda/newton_core.h"
-#endif
-
 namespace hsi::viewer {
 
-Solver::Solver(std::shared_ptr<const ShapeSetup> setup, double rate, bool use_cuda, InterpolationOptions options)
-    : setup_(std::move(setup)), rate_(rate), use_cuda_(use_cuda), options_(options) {
+Solver::Solver(std::shared_ptr<const ShapeSetup> setup, double rate, runtime::Backend backend, InterpolationOptions options)
+    : setup_(std::move(setup)), rate_(rate), options_(options) {
   if (!(rate_ > 0)) throw InputError("viewer: the frame rate must be positive");
-  backend_ = make_core()->name();
+  runtime::NewtonCoreChoice first = runtime::make_newton_core(*setup_, backend);
+  choice_ = first.choice;
+  backend_ = first.core->name();
   thread_ = std::thread([this] { run(); });
 }
 
@@ -27,12 +25,7 @@ Solver::~Solver() {
   if (thread_.joinable()) thread_.join();  // after the solve in progress, if any
 }
 
-std::unique_ptr<NewtonCore> Solver::make_core() const {
-#ifdef HSI_WITH_CUDA
-  if (use_cuda_ && hsi::cuda::device_available()) return hsi::cuda::make_newton_core(*setup_);
-#endif
-  return make_cpu_newton_core(setup_->D_G, setup_->H);
-}
+std::unique_ptr<NewtonCore> Solver::make_core() const { return runtime::make_newton_core(*setup_, choice_.used).core; }
 
 void Solver::set_keyframes(std::vector<double> times, std::vector<HarmonicMap> maps, std::vector<KeyTiming> timings) {
   if (times.empty() || times.size() != maps.size()) throw InputError("viewer: keyframes need a time and a map each");

@@ -26,6 +26,7 @@
 
 #include "hsi/interpolation.h"
 #include "hsi/keyframes.h"
+#include "hsi/runtime/backend.h"
 #include "hsi/shape_setup.h"
 
 namespace hsi::viewer {
@@ -62,8 +63,9 @@ struct PoseResult {
 
 class Solver {
  public:
-  // use_cuda: the CUDA Newton core when the build has CUDA and a device is present.
-  Solver(std::shared_ptr<const ShapeSetup> setup, double rate, bool use_cuda, InterpolationOptions options = {});
+  // backend: the Newton core (hsi/runtime/backend.h); cuda that cannot be had throws
+  // runtime::BackendUnavailable, auto may fall back to the CPU (backend_choice() says why).
+  Solver(std::shared_ptr<const ShapeSetup> setup, double rate, runtime::Backend backend, InterpolationOptions options = {});
   ~Solver();
   Solver(const Solver&) = delete;
   Solver& operator=(const Solver&) = delete;
@@ -90,6 +92,7 @@ class Solver {
   bool posing() const;  // a pose request is queued or running
 
   std::string backend() const { return backend_; }
+  const runtime::BackendChoice& backend_choice() const { return choice_; }
   // The solve time of the most recent frame, ms.
   double last_solve_ms() const { return last_ms_.load(); }
 
@@ -100,7 +103,7 @@ class Solver {
 
   std::shared_ptr<const ShapeSetup> setup_;
   double rate_;
-  bool use_cuda_;
+  runtime::BackendChoice choice_;  // fixed at construction: every later core is of choice_.used
   InterpolationOptions options_;
   std::string backend_;
 

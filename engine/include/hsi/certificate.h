@@ -44,7 +44,7 @@ struct CertificateResult {
 };
 
 // --- The certificate's parts, shared by every backend (the CPU Certifier below and
-// the GPU one in compute/include/hsi/compute/dense_certify.h), so that both work on
+// the Vulkan backend's dense certify), so that both work on
 // the same segments and reduce to the same verdict.
 
 // The boundary broken at polygon vertices and samples (a sample equal to its edge's
@@ -83,6 +83,18 @@ CertificateResult reduce_certificate(const CertificateSegments& segments, std::s
 // text, the winding number (argument principle) and the conformal bound.
 CertificateResult finish_certificate(CertificateResult partial, double arg_total);
 
+// The certificate as every backend gives it: the CPU reference (make_cpu_certifier
+// below, over Certifier), the CUDA backend's and the Vulkan backend's dense certify.
+// The runtime layer makes one by name (hsi/runtime/certifiers.h). Each gives the CPU's
+// verdict, failing place and bounds (up to the round-off its header states); none is
+// thread-safe.
+class MapCertifier {
+ public:
+  virtual ~MapCertifier() = default;
+  virtual const char* name() const = 0;  // "cpu", "cuda", "vulkan"
+  virtual CertificateResult certify(const HarmonicMap& map, const CertificateOptions& options = {}) = 0;
+};
+
 // Precomputed per shape and cage: the boundary broken at polygon vertices and
 // samples, the basis rows there, and the distance weights of the Lipschitz bound.
 class Certifier {
@@ -100,5 +112,8 @@ class Certifier {
   struct Impl;
   std::unique_ptr<Impl> impl_;
 };
+
+// The CPU reference behind the MapCertifier interface: a Certifier of its own.
+std::unique_ptr<MapCertifier> make_cpu_certifier(const Shape& shape, const Cage& cage, const BoundarySamples& samples);
 
 }  // namespace hsi

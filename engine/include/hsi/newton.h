@@ -8,7 +8,7 @@
 // stagnation) for every backend. The arithmetic sits behind two interfaces:
 //   NewtonCore     per-sample work (energy and gradient over G, the PSD Hessian over
 //                  H, line-search evaluations): the CPU core here, the readable
-//                  reference, and its CUDA twin in cuda/;
+//                  reference, and its CUDA twin (the CUDA backend, made by runtime's factory);
 //   NewtonStepper  one solve's reduced-space work (the system, its factorisation, the
 //                  trial points, the certificate): a host stepper over any NewtonCore
 //                  (newton.cpp), or a core's own (the CUDA core keeps x, the system

@@ -54,7 +54,8 @@ enum class SegmentStatus : uint32_t {
   kStopped = 4,    // interrupted: another segment had failed (stop_at_first_failure)
 };
 
-class DenseCertifier {
+// Vulkan's MapCertifier (certificate.h): hsi/runtime/certifiers.h makes one by name.
+class DenseCertifier : public MapCertifier {
  public:
   // Precomputes the segments and uploads them. The context must outlive this.
   // Throws VulkanError if the device has no shaderFloat64.
@@ -63,7 +64,8 @@ class DenseCertifier {
 
   // As Certifier::certify. The map must have m + N coefficients (else InputError);
   // options.max_depth must be in [0, kMaxDepth] (else InputError).
-  CertificateResult certify(const HarmonicMap& map, const CertificateOptions& options = {});
+  CertificateResult certify(const HarmonicMap& map, const CertificateOptions& options = {}) override;
+  const char* name() const override { return "vulkan"; }
   // certify() in two halves, for a caller that puts the certificate in its own
   // command buffer (e.g. one submission per frame with the evaluation and drawing):
   // record() packs and uploads the map and records both passes and the barrier to

@@ -1,8 +1,8 @@
 // The local injectivity certificate on the GPU: the same Lipschitz test with adaptive
 // subdivision and the same argument-principle check as hsi::Certifier (the CPU
 // reference, certificate.h), one thread per boundary segment, reduced on the device.
-// The CUDA Newton core uses it inside its line search; this class exposes it on its
-// own for tests and benchmarks.
+// The CUDA Newton core uses it inside its line search; this class is CUDA's
+// MapCertifier (hsi/runtime/certifiers.h makes one by name).
 #pragma once
 
 #include <memory>
@@ -12,7 +12,7 @@
 
 namespace hsi::cuda {
 
-class Certifier {
+class Certifier final : public MapCertifier {
  public:
   // Uploads the setup's segments, basis rows and distance weights once. Throws
   // hsi::cuda::Error if the device cannot be used.
@@ -24,7 +24,8 @@ class Certifier {
 
   // The verdict, failing place and bounds, as hsi::Certifier::certify would give them
   // (up to round-off in the bounds). options.max_depth is at most 24 here.
-  CertificateResult certify(const HarmonicMap& map, const CertificateOptions& options = {});
+  CertificateResult certify(const HarmonicMap& map, const CertificateOptions& options = {}) override;
+  const char* name() const override { return "cuda"; }
 
  private:
   struct Impl;

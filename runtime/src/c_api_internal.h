@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "hsi/hsi.h"
+#include "hsi/runtime/backend.h"
 #include "hsi/scene_sequence.h"
 
 struct hsi_scene {
@@ -19,6 +20,7 @@ struct hsi_interpolator {
   std::shared_ptr<const hsi::Scene> scene;
   std::shared_ptr<const hsi::ShapeSetup> setup;  // outlives `interp`, which refers to it
   std::unique_ptr<hsi::Interpolator> interp;
+  hsi::runtime::BackendChoice backend;  // the Newton core interp runs on, and why
   Eigen::VectorXd warm;
 };
 

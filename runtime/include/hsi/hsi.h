@@ -40,11 +40,13 @@ extern "C" {
 #endif
 
 #define HSI_VERSION_MAJOR 0
-#define HSI_VERSION_MINOR 1
+#define HSI_VERSION_MINOR 2
 #define HSI_VERSION_PATCH 0
-/* major * 10000 + minor * 100 + patch, comparable with hsi_version(). */
+/* major * 10000 + minor * 100 + patch, comparable with hsi_version(). Before 1.0 the
+ * minor version is the ABI: a struct that grows (0.2: hsi_interpolation_options gained
+ * its backend) bumps it, and so the library's soname (libhsi.so.0.2). */
 #define HSI_VERSION (HSI_VERSION_MAJOR * 10000 + HSI_VERSION_MINOR * 100 + HSI_VERSION_PATCH)
-#define HSI_VERSION_STRING "0.1.0"
+#define HSI_VERSION_STRING "0.2.0"
 
 typedef enum hsi_status {
   HSI_OK = 0,
@@ -154,10 +156,24 @@ HSI_API hsi_status hsi_scene_save_file(hsi_scene* scene, const char* path);
 
 typedef enum hsi_projection { HSI_PROJECTION_PARTPROJ = 0, HSI_PROJECTION_FULLPROJ = 1, HSI_PROJECTION_DELETE = 2 } hsi_projection;
 
+/* Which Newton core solves the frames (the same choice as `hsi interpolate --backend`).
+ * CPU: the reference (OpenMP over the samples). CUDA: the GPU core, the whole solve on
+ * the device; an error (HSI_ERROR_UNSUPPORTED, saying why) where this library was built
+ * without CUDA or no device can run it. AUTO: CUDA where it can run, else the CPU, and
+ * hsi_interpolator_backend says why it fell back. Keyframes are solved on the CPU. */
+typedef enum hsi_backend { HSI_BACKEND_CPU = 0, HSI_BACKEND_AUTO = 1, HSI_BACKEND_CUDA = 2 } hsi_backend;
+/* [any thread] "cpu", "auto", "cuda" ("unknown backend" for another value). */
+HSI_API const char* hsi_backend_name(hsi_backend backend);
+/* [any thread] 1 when this library can run the backend here (CPU and AUTO always),
+ * else 0; *why (may be NULL) gets the reason when 0, valid until the next call on this
+ * thread. */
+HSI_API int hsi_backend_available(hsi_backend backend, const char** why);
+
 typedef struct hsi_interpolation_options {
   double tolerance;        /* stop a frame when E_k - E_k+1 < tolerance * E_k (relative); default 5e-8 */
   int max_iterations;      /* Newton iterations per frame; default 100 */
   hsi_projection projection; /* default HSI_PROJECTION_PARTPROJ */
+  hsi_backend backend;     /* default HSI_BACKEND_CPU (0.1's only core) */
 } hsi_interpolation_options;
 /* [any thread] */
 HSI_API void hsi_interpolation_options_default(hsi_interpolation_options* options);
@@ -169,6 +185,15 @@ HSI_API hsi_status hsi_interpolator_create(hsi_scene* scene, const hsi_interpola
 HSI_API void hsi_interpolator_destroy(hsi_interpolator* interpolator);
 /* [per handle] The keyframes' time range. */
 HSI_API hsi_status hsi_interpolator_time_range(hsi_interpolator* interpolator, double* t_begin, double* t_end);
+
+typedef struct hsi_backend_info {
+  hsi_backend requested; /* as in the options */
+  hsi_backend used;      /* HSI_BACKEND_CPU or HSI_BACKEND_CUDA: the core that solves the frames */
+  char device[128];      /* with CUDA: the device, e.g. "NVIDIA H100 80GB HBM3 (sm_90)"; else "" */
+  char fallback[256];    /* why AUTO did not use CUDA (e.g. "no CUDA device (...)"); "" when it did or was not asked */
+} hsi_backend_info;
+/* [per handle, const] Which Newton core this interpolator uses, and why. */
+HSI_API hsi_status hsi_interpolator_backend(const hsi_interpolator* interpolator, hsi_backend_info* info);
 
 /* [per handle] One frame at time t (clamped to the range), warm-started from this
  * interpolator's previous frame if it made one: a one-frame sequence. A frame that

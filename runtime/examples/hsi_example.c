@@ -3,7 +3,10 @@
  * mesh's vertices), bakes the sequence, then authors two keyframes of its own on a
  * shape given as JSON text and interpolates those.
  *
- *   hsi_example SCENE OUT_DIR [FRAMES [SAMPLES]]
+ *   hsi_example SCENE OUT_DIR [FRAMES [SAMPLES [BACKEND]]]
+ *
+ * BACKEND: cpu (default), auto or cuda: the Newton core that solves the frames (auto
+ * takes a CUDA GPU where this library has CUDA and one is present, and says why not).
  *
  * Writes OUT_DIR/points.txt ("frame t certified x0 y0 x1 y1 ..." per frame, the
  * handles' images), OUT_DIR/report.json, OUT_DIR/sequence.hsib and, where the
@@ -79,12 +82,27 @@ static int author_and_interpolate(uint32_t samples) {
 
 int main(int argc, char** argv) {
   if (argc < 3) {
-    fprintf(stderr, "usage: %s SCENE OUT_DIR [FRAMES [SAMPLES]]\n", argv[0]);
+    fprintf(stderr, "usage: %s SCENE OUT_DIR [FRAMES [SAMPLES [cpu|auto|cuda]]]\n", argv[0]);
     return 2;
   }
   const char* out_dir = argv[2];
   const uint32_t frames = argc > 3 ? (uint32_t)strtoul(argv[3], NULL, 10) : 9;
   const uint32_t samples = argc > 4 ? (uint32_t)strtoul(argv[4], NULL, 10) : 0;
+  hsi_interpolation_options options;
+  hsi_interpolation_options_default(&options);
+  if (argc > 5) {
+    const hsi_backend all[] = {HSI_BACKEND_CPU, HSI_BACKEND_AUTO, HSI_BACKEND_CUDA};
+    int found = 0;
+    for (int b = 0; b < 3; ++b)
+      if (strcmp(argv[5], hsi_backend_name(all[b])) == 0) {
+        options.backend = all[b];
+        found = 1;
+      }
+    if (!found) {
+      fprintf(stderr, "hsi_example: backend '%s' is not cpu, auto or cuda\n", argv[5]);
+      return 2;
+    }
+  }
   printf("hsi %s (header %s)\n", hsi_version_string(), HSI_VERSION_STRING);
   if (hsi_version() / 100 != HSI_VERSION / 100) {
     fprintf(stderr, "hsi_example: library %s does not match the header %s\n", hsi_version_string(), HSI_VERSION_STRING);
@@ -100,7 +118,13 @@ int main(int argc, char** argv) {
          info.cage_vertex_count, info.handle_count, info.keyframe_count, info.samples, info.size);
 
   hsi_interpolator* interp = NULL;
-  CHECK(hsi_interpolator_create(scene, NULL, &interp));
+  CHECK(hsi_interpolator_create(scene, &options, &interp));
+  hsi_backend_info backend;
+  CHECK(hsi_interpolator_backend(interp, &backend));
+  printf("Newton core: %s", hsi_backend_name(backend.used));
+  if (backend.device[0]) printf(" on %s", backend.device);
+  if (backend.fallback[0]) printf(" (auto: CUDA not used: %s)", backend.fallback);
+  printf("\n");
   hsi_sequence* seq = NULL;
   CHECK(hsi_interpolator_sequence(interp, frames, on_frame, NULL, &seq));
   hsi_sequence_summary sum;

@@ -1,6 +1,7 @@
 // Checked CUDA calls and RAII owners of device resources (memory, pinned memory,
-// streams, events, cuBLAS handles): the building blocks of the CUDA backend, also used
-// by its benchmark. Host code only; needs the CUDA toolkit's headers.
+// streams, events, cuBLAS handles): the building blocks of the CUDA backend, defined
+// once here. Private to cuda/ (its benchmark reaches it through hsi_cuda_internals).
+// Host code only; needs the CUDA toolkit's headers.
 #pragma once
 
 #include <cublas_v2.h>

@@ -10,10 +10,12 @@
 #include <filesystem>
 #include <new>
 
+#include "built.h"
 #include "c_api_internal.h"
 #include "hsi/baked.h"
 #include "hsi/baked_runtime.h"
 #include "hsi/keyframes.h"
+#include "hsi/runtime/backend.h"
 
 using namespace hsi;
 using hsi::capi::ApiError;
@@ -364,12 +366,41 @@ hsi_status hsi_scene_save_file(hsi_scene* s, const char* path) {
 
 // ---------------------------------------------------------------- interpolation
 
+const char* hsi_backend_name(hsi_backend b) {
+  switch (b) {
+    case HSI_BACKEND_CPU: return "cpu";
+    case HSI_BACKEND_AUTO: return "auto";
+    case HSI_BACKEND_CUDA: return "cuda";
+  }
+  return "unknown backend";
+}
+
+int hsi_backend_available(hsi_backend b, const char** why) {
+  static thread_local std::string reason;
+  reason.clear();
+  try {
+    if (b == HSI_BACKEND_CPU || b == HSI_BACKEND_AUTO) return 1;
+    if (b == HSI_BACKEND_CUDA) {
+      const runtime::CudaStatus cuda = runtime::cuda_status();
+      if (cuda.available) return 1;
+      reason = cuda.detail;
+    } else {
+      reason = "unknown backend " + std::to_string(static_cast<int>(b));
+    }
+  } catch (...) {
+    reason = "the backend could not be queried";
+  }
+  if (why) *why = reason.c_str();
+  return 0;
+}
+
 void hsi_interpolation_options_default(hsi_interpolation_options* o) {
   if (!o) return;
   const InterpolationOptions d;
   o->tolerance = d.tolerance;
   o->max_iterations = d.max_iterations;
   o->projection = HSI_PROJECTION_PARTPROJ;
+  o->backend = HSI_BACKEND_CPU;
 }
 
 hsi_status hsi_interpolator_create(hsi_scene* s, const hsi_interpolation_options* options, hsi_interpolator** out) {
@@ -381,6 +412,9 @@ hsi_status hsi_interpolator_create(hsi_scene* s, const hsi_interpolation_options
     if (options) o = *options;
     if (!(o.tolerance >= 0) || o.max_iterations < 1 || o.projection < HSI_PROJECTION_PARTPROJ || o.projection > HSI_PROJECTION_DELETE)
       fail(HSI_ERROR_INVALID_ARGUMENT, "hsi_interpolator_create: tolerance must be >= 0, max_iterations >= 1, projection 0, 1 or 2");
+    if (o.backend != HSI_BACKEND_CPU && o.backend != HSI_BACKEND_AUTO && o.backend != HSI_BACKEND_CUDA)
+      fail(HSI_ERROR_INVALID_ARGUMENT, "hsi_interpolator_create: backend " + std::to_string(static_cast<int>(o.backend)) +
+                                           " is not HSI_BACKEND_CPU (0), HSI_BACKEND_AUTO (1) or HSI_BACKEND_CUDA (2)");
     if (s->scene.keyframes.size() < 2)
       fail(HSI_ERROR_INPUT, "scene '" + s->scene.name + "': interpolation needs at least two keyframes (it has " +
                                 std::to_string(s->scene.keyframes.size()) + ")");
@@ -402,7 +436,15 @@ hsi_status hsi_interpolator_create(hsi_scene* s, const hsi_interpolation_options
     try {
       h->scene = std::make_shared<const Scene>(s->scene);
       h->setup = s->setup;
-      h->interp = std::make_unique<Interpolator>(*h->setup, times, maps, io, make_cpu_newton_core(h->setup->D_G, h->setup->H));
+      const runtime::Backend requested = o.backend == HSI_BACKEND_CUDA ? runtime::Backend::Cuda
+                                         : o.backend == HSI_BACKEND_AUTO ? runtime::Backend::Auto
+                                                                         : runtime::Backend::Cpu;
+      runtime::NewtonCoreChoice core = runtime::make_newton_core(*h->setup, requested);
+      h->backend = core.choice;
+      h->interp = std::make_unique<Interpolator>(*h->setup, times, maps, io, std::move(core.core));
+    } catch (const runtime::BackendUnavailable& e) {
+      delete_handle(h);
+      fail(HSI_ERROR_UNSUPPORTED, std::string("hsi_interpolator_create: ") + e.what());
     } catch (...) {
       delete_handle(h);
       throw;
@@ -418,6 +460,21 @@ hsi_status hsi_interpolator_time_range(hsi_interpolator* i, double* t_begin, dou
     require(i, "hsi_interpolator_time_range", "interpolator is NULL");
     if (t_begin) *t_begin = i->interp->t_begin();
     if (t_end) *t_end = i->interp->t_end();
+  });
+}
+
+hsi_status hsi_interpolator_backend(const hsi_interpolator* i, hsi_backend_info* info) {
+  return guard([&] {
+    require(i && info, "hsi_interpolator_backend", "interpolator or info is NULL");
+    auto to_c = [](runtime::Backend b) {
+      return b == runtime::Backend::Cuda ? HSI_BACKEND_CUDA : b == runtime::Backend::Auto ? HSI_BACKEND_AUTO : HSI_BACKEND_CPU;
+    };
+    hsi_backend_info r{};
+    r.requested = to_c(i->backend.requested);
+    r.used = to_c(i->backend.used);
+    std::snprintf(r.device, sizeof r.device, "%s", i->backend.device.c_str());
+    std::snprintf(r.fallback, sizeof r.fallback, "%s", i->backend.fallback.c_str());
+    *info = r;
   });
 }
 
@@ -600,7 +657,7 @@ int hsi_render_available(const char** why) {
   if (why) *why = reason.c_str();
   return 0;
 #else
-  if (why) *why = "this hsi library was built without Vulkan (HSI_WITH_VULKAN=OFF)";
+  if (why) *why = runtime::built::kNoVulkan;
   return 0;
 #endif
 }
@@ -619,7 +676,7 @@ hsi_status hsi_sequence_render(hsi_sequence* s, uint32_t frame, const hsi_render
 #ifdef HSI_CAPI_RENDER
     hsi::capi::render_frame(*s, frame, o, rgba, row_stride ? row_stride : 4 * static_cast<size_t>(o.width));
 #else
-    fail(HSI_ERROR_UNSUPPORTED, "hsi_sequence_render: this hsi library was built without Vulkan (HSI_WITH_VULKAN=OFF)");
+    fail(HSI_ERROR_UNSUPPORTED, std::string("hsi_sequence_render: ") + runtime::built::kNoVulkan);
 #endif
   });
 }

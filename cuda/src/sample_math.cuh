@@ -1,7 +1,8 @@
 // The per-sample isometric energy, gradient and projected Hessian (paper Eq. 5, 10,
 // 15–21, Appendix B) on plain doubles, line for line the twin of engine/src/energy.cpp,
 // as __host__ __device__ code: the CUDA kernels call it, and the tests compile it for
-// the host and check it against the CPU reference without a GPU.
+// the host and check it against the CPU reference without a GPU (private to cuda/;
+// the tests reach it through hsi_cuda_internals).
 #pragma once
 
 #include <cfloat>

@@ -1,0 +1,73 @@
+// The one backend factory (issue #21): which Newton core (hsi/newton.h) runs a solve,
+// picked by name (auto | cpu | cuda) here and nowhere else. auto takes the CUDA core
+// where this build has one and a device can run it, else the CPU reference, and says
+// why it fell back (as tiny-cuda-nn's create_network does); cuda that cannot be had is
+// an error with that reason. Front-ends (the CLI, the viewer, the C API, benchmarks)
+// parse the name, call make_newton_core and print the fallback.
+#pragma once
+
+#include <memory>
+#include <stdexcept>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "hsi/newton.h"
+#include "hsi/shape_setup.h"
+
+namespace hsi::runtime {
+
+enum class Backend { Auto, Cpu, Cuda };
+
+// "auto", "cpu", "cuda": every name parse_backend accepts, in this order (for an
+// option's check, e.g. CLI::IsMember(backend_names())).
+const std::vector<std::string>& backend_names();
+std::string_view to_string(Backend backend);
+// Throws InputError naming `name` and the valid names for anything else.
+Backend parse_backend(std::string_view name);
+// The help text of every --backend option (the CLI's commands, the viewer).
+extern const char* const kBackendHelp;
+
+// The CUDA backend can be neither built nor run here, or it can.
+struct CudaStatus {
+  bool available = false;
+  std::string detail;  // available: the device ("NVIDIA H100 (sm_90)"); else why not
+};
+// Never throws: "this hsi was built without CUDA", "no CUDA device (cudaGetDeviceCount: ...)", ...
+CudaStatus cuda_status();
+
+// What a request gave.
+struct BackendChoice {
+  Backend requested = Backend::Auto;
+  Backend used = Backend::Cpu;  // Cpu or Cuda, never Auto
+  std::string fallback;         // why auto did not use CUDA; empty when it did, or for cpu / cuda
+  std::string device;           // with Cuda: the device
+};
+
+// cuda asked for but not to be had: the reason, worded for a front-end's message.
+class BackendUnavailable : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+// The decision alone, for a CUDA status (tests give any): cpu gives cpu; cuda gives
+// cuda or throws BackendUnavailable ("--backend cuda: <why>"); auto gives cuda where
+// available, else cpu with `fallback` set to why.
+BackendChoice choose_backend(Backend requested, const CudaStatus& cuda);
+
+// The core for a request, as used by `hsi interpolate`, `hsi compare`, hsi-viewer, the
+// C API and bench_stress. The CUDA core is made for `setup` (which must outlive it) and
+// runs whole solves on the device; if making it fails (out of device memory, say), auto
+// falls back to the CPU with that reason and cuda throws BackendUnavailable.
+struct NewtonCoreChoice {
+  std::unique_ptr<NewtonCore> core;
+  BackendChoice choice;
+};
+NewtonCoreChoice make_newton_core(const ShapeSetup& setup, Backend requested);
+// The same, the CUDA status already known (a front-end that makes many cores asks once).
+NewtonCoreChoice make_newton_core(const ShapeSetup& setup, Backend requested, const CudaStatus& cuda);
+
+// One line for a log: "cpu", "cuda (NVIDIA H100 (sm_90))" or "cpu (CUDA not used: <why>)".
+std::string describe(const BackendChoice& choice);
+
+}  // namespace hsi::runtime

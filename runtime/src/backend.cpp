@@ -1,0 +1,109 @@
+// The backend factory (see backend.h). The only place that knows whether this build
+// has CUDA: HSI_RUNTIME_CUDA is set by runtime/CMakeLists.txt when cuda/ is built.
+#include "hsi/runtime/backend.h"
+
+#include "built.h"
+#include "hsi/domain.h"
+#if HSI_RUNTIME_CUDA
+#include "hsi/cuda/newton_core.h"
+#endif
+
+namespace hsi::runtime {
+
+
+const char* const kBackendHelp =
+    "Newton core: auto (CUDA when this build has it and a device is present, else the CPU, saying why), cpu or cuda";
+
+const std::vector<std::string>& backend_names() {
+  static const std::vector<std::string> names = {"auto", "cpu", "cuda"};
+  return names;
+}
+
+std::string_view to_string(Backend backend) {
+  switch (backend) {
+    case Backend::Auto: return "auto";
+    case Backend::Cpu: return "cpu";
+    case Backend::Cuda: return "cuda";
+  }
+  return "?";
+}
+
+Backend parse_backend(std::string_view name) {
+  if (name == "auto") return Backend::Auto;
+  if (name == "cpu") return Backend::Cpu;
+  if (name == "cuda") return Backend::Cuda;
+  std::string valid;
+  for (const std::string& n : backend_names()) valid += (valid.empty() ? "" : ", ") + n;
+  throw InputError("backend '" + std::string(name) + "' is not one of " + valid);
+}
+
+CudaStatus cuda_status() {
+  CudaStatus s;
+#if HSI_RUNTIME_CUDA
+  try {
+    s.available = hsi::cuda::device_available(&s.detail);
+  } catch (const std::exception& e) {  // device_available never throws; stay safe if that changes
+    s.available = false;
+    s.detail = e.what();
+  }
+#else
+  s.detail = built::kNoCuda;
+#endif
+  return s;
+}
+
+BackendChoice choose_backend(Backend requested, const CudaStatus& cuda) {
+  BackendChoice c;
+  c.requested = requested;
+  switch (requested) {
+    case Backend::Cpu:
+      c.used = Backend::Cpu;
+      break;
+    case Backend::Cuda:
+      if (!cuda.available) throw BackendUnavailable("--backend cuda: " + cuda.detail);
+      c.used = Backend::Cuda;
+      c.device = cuda.detail;
+      break;
+    case Backend::Auto:
+      c.used = cuda.available ? Backend::Cuda : Backend::Cpu;
+      (cuda.available ? c.device : c.fallback) = cuda.detail;
+      break;
+  }
+  return c;
+}
+
+NewtonCoreChoice make_newton_core(const ShapeSetup& setup, Backend requested) {
+  // cpu never asks the CUDA runtime anything.
+  return make_newton_core(setup, requested, requested == Backend::Cpu ? CudaStatus{} : cuda_status());
+}
+
+NewtonCoreChoice make_newton_core(const ShapeSetup& setup, Backend requested, const CudaStatus& cuda) {
+  NewtonCoreChoice r;
+  r.choice = choose_backend(requested, cuda);
+#if HSI_RUNTIME_CUDA
+  if (r.choice.used == Backend::Cuda) {
+    try {
+      r.core = hsi::cuda::make_newton_core(setup);
+      return r;
+    } catch (const hsi::cuda::Error& e) {
+      if (requested == Backend::Cuda) throw BackendUnavailable(std::string("--backend cuda: the CUDA core could not be made: ") + e.what());
+      r.choice.used = Backend::Cpu;
+      r.choice.fallback = std::string("the CUDA core could not be made on ") + r.choice.device + ": " + e.what();
+      r.choice.device.clear();
+    }
+  }
+#else
+  if (r.choice.used == Backend::Cuda) throw BackendUnavailable(std::string("--backend cuda: ") + built::kNoCuda);
+#endif
+  r.core = make_cpu_newton_core(setup.D_G, setup.H);
+  return r;
+}
+
+std::string describe(const BackendChoice& c) {
+  std::string s(to_string(c.used));
+  if (!c.device.empty()) s += " (" + c.device + ")";
+  if (!c.fallback.empty()) s += " (--backend auto: CUDA not used: " + c.fallback + ")";
+  return s;
+}
+
+}  // namespace hsi::runtime
