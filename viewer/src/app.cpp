@@ -19,6 +19,7 @@
 
 #include "hsi/basis.h"
 #include "hsi/compute/renderer.h"
+#include "hsi/scene_texture.h"
 #include "hsi/keyframes.h"
 #include "hsi/scene_io.h"
 #include "hsi/scene_sequence.h"
@@ -86,7 +87,7 @@ ImU32 rgba(float r, float g, float b, float a = 1) { return ImGui::ColorConvertF
 
 class App {
  public:
-  App(const Options& o, GLFWwindow* window, vk::Context& ctx);
+  App(const Options& o, GLFWwindow* window, compute::Context& ctx);
   ~App();
   bool frame();  // one UI frame; false: quit
   int script_status() const { return script_failed_ ? 4 : 0; }
@@ -131,7 +132,7 @@ class App {
 
   Options o_;
   GLFWwindow* window_;
-  vk::Context& ctx_;
+  compute::Context& ctx_;
   Scene scene_;
   std::string scene_path_;
   std::shared_ptr<const ShapeSetup> setup_;
@@ -139,10 +140,10 @@ class App {
   VectorXcd overlap_phi_, overlap_psi_;
   std::unique_ptr<Solver> solver_;
   std::unique_ptr<Presenter> presenter_;
-  std::unique_ptr<vk::Renderer> renderer_;
+  std::unique_ptr<compute::Renderer> renderer_;
   TriMesh mesh_, pick_mesh_;
   BasisRows pick_rows_, probe_rows_;
-  vk::RgbaImage texture_;
+  RgbaImage texture_;
   std::array<double, 4> texture_rect_{};
   std::vector<EditState> undo_, redo_;
   bool dirty_ = false, title_dirty_ = false;
@@ -154,7 +155,7 @@ class App {
   BoundingBox box_{};
   double zoom_ = 1;
   cd pan_{0, 0};
-  vk::View view_;
+  compute::View view_;
   double dist_hi_ = 2;
   uint32_t overlays_ = 0;
   bool show_cage_ = false, show_handles_ = true, show_status_ = true, show_help_ = false;
@@ -204,14 +205,14 @@ class App {
   std::string capture_path_;
 };
 
-App::App(const Options& o, GLFWwindow* window, vk::Context& ctx) : o_(o), window_(window), ctx_(ctx) {
+App::App(const Options& o, GLFWwindow* window, compute::Context& ctx) : o_(o), window_(window), ctx_(ctx) {
   loop_ = o.loop;
   speed_ = o.speed;
   for (std::stringstream ss(o.overlays); ss.good();) {
     std::string s;
     std::getline(ss, s, ',');
-    if (s == "distortion") overlays_ |= vk::kOverlayDistortion;
-    else if (s == "boundary") overlays_ |= vk::kOverlayBoundary;
+    if (s == "distortion") overlays_ |= compute::kOverlayDistortion;
+    else if (s == "boundary") overlays_ |= compute::kOverlayBoundary;
     else if (s == "cage") show_cage_ = true;
     else if (s == "handles") show_handles_ = true;
     else if (s == "status") show_status_ = true;
@@ -297,7 +298,7 @@ void App::load() {
 
   // Texture (or a checkerboard), render mesh, picking mesh and probe points.
   {
-    vk::SceneTexture st = vk::scene_texture(scene_, o_.scene, false, false);
+    SceneTexture st = scene_texture(scene_, o_.scene, false, false);
     texture_ = std::move(st.image);
     texture_rect_ = st.rect;
   }
@@ -340,7 +341,7 @@ void App::keyframes_changed() {
   const cd pad = 0.06 * (box_.hi - box_.lo);
   box_.lo -= cd(pad.real(), pad.imag());
   box_.hi += cd(pad.real(), pad.imag());
-  dist_hi_ = vk::round_distortion_hi(std::max(kappa * 1.1, 1.2));
+  dist_hi_ = compute::round_distortion_hi(std::max(kappa * 1.1, 1.2));
   cur_ = std::clamp(cur_, 0, solver_->frame_count() - 1);
   shown_.reset();
   shown_index_ = -1;
@@ -640,12 +641,12 @@ void App::update_renderer_and_render() {
   if (!renderer_ || renderer_->width() != w || renderer_->height() != h) {
     presenter_->wait_idle();
     renderer_.reset();
-    renderer_ = std::make_unique<vk::Renderer>(ctx_, w, h);
+    renderer_ = std::make_unique<compute::Renderer>(ctx_, w, h);
     renderer_->set_mesh(mesh_, scene_.handles);
     renderer_->set_texture(texture_, texture_rect_);
     rendered_map_ = nullptr;
   }
-  view_ = vk::View::fit(box_, w, h, 16.0 * scale_ * fb_scale_.x);
+  view_ = compute::View::fit(box_, w, h, 16.0 * scale_ * fb_scale_.x);
   view_.pixels_per_unit *= zoom_;
   view_.world_center += pan_;
 
@@ -672,8 +673,8 @@ void App::update_renderer_and_render() {
     mix(map->psi(i).imag());
   }
   if (rendered_map_ && sig == rendered_sig_) return;
-  vk::RenderStyle style;
-  style.overlays = overlays_ & (vk::kOverlayDistortion | vk::kOverlayBoundary);
+  compute::RenderStyle style;
+  style.overlays = overlays_ & (compute::kOverlayDistortion | compute::kOverlayBoundary);
   style.background = {0.97f, 0.97f, 0.98f, 1};
   style.distortion_lo = 1;
   style.distortion_hi = dist_hi_;
@@ -752,8 +753,8 @@ void App::handle_keys() {
   if (pressed(GLFW_KEY_L)) loop_ = !loop_;
   if (pressed(GLFW_KEY_LEFT_BRACKET)) speed_ = std::max(0.125, speed_ / 2);
   if (pressed(GLFW_KEY_RIGHT_BRACKET)) speed_ = std::min(8.0, speed_ * 2);
-  if (pressed(GLFW_KEY_D)) overlays_ ^= vk::kOverlayDistortion;
-  if (pressed(GLFW_KEY_B)) overlays_ ^= vk::kOverlayBoundary;
+  if (pressed(GLFW_KEY_D)) overlays_ ^= compute::kOverlayDistortion;
+  if (pressed(GLFW_KEY_B)) overlays_ ^= compute::kOverlayBoundary;
   if (pressed(GLFW_KEY_C)) show_cage_ = !show_cage_;
   if (pressed(GLFW_KEY_P)) show_handles_ = !show_handles_;
   if (pressed(GLFW_KEY_G)) show_status_ = !show_status_;
@@ -777,7 +778,7 @@ void App::handle_input() {
   if (in_vp && io.MouseWheel != 0 && renderer_) {
     const cd before = to_world(m);
     zoom_ = std::clamp(zoom_ * std::pow(1.15, io.MouseWheel), 0.1, 50.0);
-    view_.pixels_per_unit = vk::View::fit(box_, renderer_->width(), renderer_->height(), 16.0 * scale_ * fb_scale_.x).pixels_per_unit * zoom_;
+    view_.pixels_per_unit = compute::View::fit(box_, renderer_->width(), renderer_->height(), 16.0 * scale_ * fb_scale_.x).pixels_per_unit * zoom_;
     const cd after = to_world(m);
     pan_ += before - after;
     view_.world_center += before - after;
@@ -894,7 +895,7 @@ void App::draw_viewport_overlays() {
     dl->AddText(ImVec2(p.x + pad, p.y + pad / 2), rgba(1, 1, 1), text.c_str());
   }
 
-  if (overlays_ & vk::kOverlayDistortion) {  // legend, bottom left
+  if (overlays_ & compute::kOverlayDistortion) {  // legend, bottom left
     const float w = std::min(260.0f * scale_, vp_size_.x - 2 * pad), h = 12 * scale_;
     const float fs = ImGui::GetFontSize();
     const ImVec2 p(a.x + pad, b.y - pad - h - fs * 2.4f);
@@ -904,7 +905,7 @@ void App::draw_viewport_overlays() {
     const float y0 = p.y + fs * 1.2f;
     const int n = 32;
     for (int i = 0; i < n; ++i) {
-      const auto c0 = vk::colormap(i / double(n)), c1 = vk::colormap((i + 1) / double(n));
+      const auto c0 = compute::colormap(i / double(n)), c1 = compute::colormap((i + 1) / double(n));
       const ImU32 u0 = rgba(float(c0[0]), float(c0[1]), float(c0[2])), u1 = rgba(float(c1[0]), float(c1[1]), float(c1[2]));
       dl->AddRectFilledMultiColor(ImVec2(p.x + w * float(i) / float(n), y0), ImVec2(p.x + w * float(i + 1) / float(n), y0 + h), u0, u1, u1, u0);
     }
@@ -976,10 +977,10 @@ void App::draw_side_panel() {
   ImGui::Separator();
 
   ImGui::TextUnformatted("Overlays");
-  bool d = overlays_ & vk::kOverlayDistortion, bnd = overlays_ & vk::kOverlayBoundary;
-  if (ImGui::Checkbox("distortion (D)", &d)) overlays_ ^= vk::kOverlayDistortion;
+  bool d = overlays_ & compute::kOverlayDistortion, bnd = overlays_ & compute::kOverlayBoundary;
+  if (ImGui::Checkbox("distortion (D)", &d)) overlays_ ^= compute::kOverlayDistortion;
   ImGui::SameLine();
-  if (ImGui::Checkbox("boundary (B)", &bnd)) overlays_ ^= vk::kOverlayBoundary;
+  if (ImGui::Checkbox("boundary (B)", &bnd)) overlays_ ^= compute::kOverlayBoundary;
   ImGui::Checkbox("cage (C)", &show_cage_);
   ImGui::SameLine();
   ImGui::Checkbox("handles (P)", &show_handles_);
@@ -1306,7 +1307,7 @@ bool App::frame() {
   draw_help();
   ImGui::Render();
 
-  vk::RgbaImage shot;
+  RgbaImage shot;
   const bool capturing = capture_next_;
   const bool presented = presenter_->present(ImGui::GetDrawData(), capturing ? &shot : nullptr);
   if (presented) {
@@ -1316,7 +1317,7 @@ bool App::frame() {
     frame_ready_ = shown_index_ == cur_;
   }
   if (capturing && presented) {
-    vk::write_png(capture_path_, shot);
+    write_png(capture_path_, shot);
     // Where the viewport is in the image, and what it shows (for tests).
     std::ofstream meta(capture_path_ + ".json");
     bool cert = true, is_key = false;
@@ -1342,7 +1343,7 @@ int run(const Options& o) {
   struct GlfwGuard {
     ~GlfwGuard() { glfwTerminate(); }
   } glfw_guard;
-  if (!glfwVulkanSupported()) throw vk::VulkanUnavailable("hsi-viewer: GLFW finds no Vulkan loader/driver for windows");
+  if (!glfwVulkanSupported()) throw compute::VulkanUnavailable("hsi-viewer: GLFW finds no Vulkan loader/driver for windows");
   glfwWindowHint(GLFW_CLIENT_API, GLFW_NO_API);
   glfwWindowHint(GLFW_SCALE_TO_MONITOR, GLFW_TRUE);
   GLFWwindow* window = glfwCreateWindow(o.width, o.height, "hsi viewer", nullptr, nullptr);
@@ -1352,7 +1353,7 @@ int run(const Options& o) {
     ~WindowGuard() { glfwDestroyWindow(w); }
   } window_guard{window};
 
-  vk::ContextOptions co;
+  compute::ContextOptions co;
   co.validation = o.validation;
   co.device_name = o.device;
   co.application_name = "hsi-viewer";
@@ -1362,13 +1363,13 @@ int run(const Options& o) {
   co.make_surface = [window](VkInstance instance) {
     VkSurfaceKHR surface = VK_NULL_HANDLE;
     const VkResult r = glfwCreateWindowSurface(instance, window, nullptr, &surface);
-    if (r != VK_SUCCESS) throw vk::VulkanError(std::string("glfwCreateWindowSurface failed with ") + vk::result_name(r), r);
+    if (r != VK_SUCCESS) throw compute::VulkanError(std::string("glfwCreateWindowSurface failed with ") + compute::result_name(r), r);
     return surface;
   };
-  std::shared_ptr<vk::ValidationLog> log;
+  std::shared_ptr<compute::ValidationLog> log;
   int status = 0;
   {
-    vk::Context ctx(co);
+    compute::Context ctx(co);
     log = ctx.validation_log();
     IMGUI_CHECKVERSION();
     ImGui::CreateContext();

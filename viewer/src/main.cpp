@@ -49,7 +49,7 @@ int main(int argc, char** argv) {
     // message is the scene's problem, not a missing display's.
     (void)hsi::load_scene(o.scene);
     return hsi::viewer::run(o);
-  } catch (const hsi::vk::VulkanUnavailable& e) {
+  } catch (const hsi::compute::VulkanUnavailable& e) {
     std::fprintf(stderr, "hsi-viewer: needs Vulkan for a window: %s\n", e.what());
     return 1;
   } catch (const hsi::InputError& e) {
