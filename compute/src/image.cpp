@@ -11,6 +11,18 @@ uint32_t mip_levels(uint32_t width, uint32_t height) {
   return mips;
 }
 
+DeviceHandle<VkImageView> make_image_view(const Context& context, VkImage image, VkFormat format, uint32_t mips) {
+  VkImageViewCreateInfo view{};
+  view.sType = VK_STRUCTURE_TYPE_IMAGE_VIEW_CREATE_INFO;
+  view.image = image;
+  view.viewType = VK_IMAGE_VIEW_TYPE_2D;
+  view.format = format;
+  view.subresourceRange = {VK_IMAGE_ASPECT_COLOR_BIT, 0, mips, 0, 1};
+  VkImageView raw = VK_NULL_HANDLE;
+  check(vkCreateImageView(context.device(), &view, nullptr, &raw), "vkCreateImageView");
+  return DeviceHandle<VkImageView>(context.device(), raw, [](VkDevice d, VkImageView v) { vkDestroyImageView(d, v, nullptr); });
+}
+
 Image::Image(const Context& context, const ImageInfo& info) : info_(info) {
   const VkDevice dev = context.device();
   VkImageCreateInfo ci{};
@@ -33,15 +45,7 @@ Image::Image(const Context& context, const ImageInfo& info) : info_(info) {
   memory_ = allocate_memory(context, req, 0, VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT | info.preferred_memory);
   check(vkBindImageMemory(dev, raw, memory_.get(), 0), "vkBindImageMemory");
 
-  VkImageViewCreateInfo view{};
-  view.sType = VK_STRUCTURE_TYPE_IMAGE_VIEW_CREATE_INFO;
-  view.image = raw;
-  view.viewType = VK_IMAGE_VIEW_TYPE_2D;
-  view.format = info.format;
-  view.subresourceRange = {VK_IMAGE_ASPECT_COLOR_BIT, 0, info.mips, 0, 1};
-  VkImageView raw_view = VK_NULL_HANDLE;
-  check(vkCreateImageView(dev, &view, nullptr, &raw_view), "vkCreateImageView");
-  view_ = DeviceHandle<VkImageView>(dev, raw_view, [](VkDevice d, VkImageView v) { vkDestroyImageView(d, v, nullptr); });
+  view_ = make_image_view(context, raw, info.format, info.mips);
 }
 
 Image& Image::operator=(Image&& o) noexcept {

@@ -8,6 +8,7 @@
 #include "hsi/compute/renderer.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <string>
@@ -39,6 +40,22 @@ Buffer static_buffer(const Context& ctx, VkBufferUsageFlags usage, const void* d
                    VK_ACCESS_VERTEX_ATTRIBUTE_READ_BIT | VK_ACCESS_INDEX_READ_BIT | VK_ACCESS_SHADER_READ_BIT);
   });
   return b;
+}
+
+// The vertex indices of a mesh's triangles or boundary edges, flattened; InputError
+// naming the item (`what` and its index) with an index outside 0..vertices-1.
+template <size_t K>
+std::vector<uint32_t> vertex_indices(const std::vector<std::array<int, K>>& items, int vertices, const char* what) {
+  std::vector<uint32_t> out;
+  out.reserve(items.size() * K);
+  for (size_t i = 0; i < items.size(); ++i)
+    for (int v : items[i]) {
+      if (v < 0 || v >= vertices)
+        throw InputError(std::string("renderer: ") + what + " " + std::to_string(i) + " has vertex index " +
+                         std::to_string(v) + " outside 0.." + std::to_string(vertices - 1));
+      out.push_back(static_cast<uint32_t>(v));
+    }
+  return out;
 }
 
 // A sampled, mipmapped texture from straight-alpha RGBA (premultiplied on upload,
@@ -140,25 +157,8 @@ void Renderer::set_mesh(const TriMesh& mesh, std::span<const cd> handles) {
   if (mesh.vertices.empty() || mesh.triangles.empty())
     throw InputError("renderer: the mesh is empty (" + std::to_string(mesh.vertices.size()) + " vertices, " +
                      std::to_string(mesh.triangles.size()) + " triangles)");
-  const int n = mesh.vertex_count();
-  std::vector<uint32_t> indices;
-  indices.reserve(mesh.triangles.size() * 3);
-  for (size_t t = 0; t < mesh.triangles.size(); ++t)
-    for (int v : mesh.triangles[t]) {
-      if (v < 0 || v >= n)
-        throw InputError("renderer: triangle " + std::to_string(t) + " has vertex index " + std::to_string(v) +
-                         " outside 0.." + std::to_string(n - 1));
-      indices.push_back(static_cast<uint32_t>(v));
-    }
-  std::vector<uint32_t> segments;
-  segments.reserve(mesh.boundary_edges.size() * 2);
-  for (size_t e = 0; e < mesh.boundary_edges.size(); ++e)
-    for (int v : mesh.boundary_edges[e]) {
-      if (v < 0 || v >= n)
-        throw InputError("renderer: boundary edge " + std::to_string(e) + " has vertex index " + std::to_string(v) +
-                         " outside 0.." + std::to_string(n - 1));
-      segments.push_back(static_cast<uint32_t>(v));
-    }
+  const std::vector<uint32_t> indices = vertex_indices(mesh.triangles, mesh.vertex_count(), "triangle");
+  const std::vector<uint32_t> segments = vertex_indices(mesh.boundary_edges, mesh.vertex_count(), "boundary edge");
   for (size_t k = 0; k < handles.size(); ++k)
     if (!std::isfinite(handles[k].real()) || !std::isfinite(handles[k].imag()))
       throw InputError("renderer: handle " + std::to_string(k) + " is not finite");

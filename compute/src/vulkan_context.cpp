@@ -11,6 +11,8 @@
 #include <cstring>
 #include <sstream>
 
+#include "hsi/compute/sync.h"
+
 namespace hsi::compute {
 
 namespace {
@@ -483,11 +485,8 @@ void Context::submit_and_wait(const std::function<void(VkCommandBuffer)>& record
   if (timestamps_) vkCmdWriteTimestamp(cmd, VK_PIPELINE_STAGE_BOTTOM_OF_PIPE_BIT, timestamps_, 1);
   check(vkEndCommandBuffer(cmd), "vkEndCommandBuffer");
 
-  VkFenceCreateInfo fence_info{};
-  fence_info.sType = VK_STRUCTURE_TYPE_FENCE_CREATE_INFO;
-  VkFence raw_fence = VK_NULL_HANDLE;
-  check(vkCreateFence(device_, &fence_info, nullptr, &raw_fence), "vkCreateFence");
-  const DeviceHandle<VkFence> fence(device_, raw_fence, [](VkDevice d, VkFence f) { vkDestroyFence(d, f, nullptr); });
+  const DeviceHandle<VkFence> fence = make_fence(*this);
+  const VkFence raw_fence = fence.get();
 
   VkSubmitInfo submit{};
   submit.sType = VK_STRUCTURE_TYPE_SUBMIT_INFO;

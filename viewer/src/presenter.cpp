@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "hsi/compute/command_buffer.h"
 #include "hsi/compute/descriptor_set.h"
 #include "hsi/compute/framebuffer.h"
 #include "hsi/compute/graphics_pipeline.h"
@@ -18,6 +19,7 @@
 #include "hsi/compute/pipeline_layout.h"
 #include "hsi/compute/render_pass.h"
 #include "hsi/compute/sampler.h"
+#include "hsi/compute/sync.h"
 #include "hsi/viewer/spirv/viewer_ui_frag.h"
 #include "hsi/viewer/spirv/viewer_ui_vert.h"
 
@@ -73,8 +75,7 @@ struct Presenter::Impl {
   compute::Image font, frame, blank;
 
   struct Frame {
-    Owned<VkCommandPool> pool;
-    VkCommandBuffer cmd = VK_NULL_HANDLE;
+    compute::CommandBuffer cmd;
     Owned<VkFence> fence;
     Owned<VkSemaphore> acquired;
     compute::Buffer vertices, indices, staging;
@@ -124,30 +125,9 @@ void Presenter::Impl::create_fixed() {
   frame_set = compute::DescriptorSet(ctx, layout);
 
   for (Frame& f : frames) {
-    VkCommandPoolCreateInfo cp{};
-    cp.sType = VK_STRUCTURE_TYPE_COMMAND_POOL_CREATE_INFO;
-    cp.flags = VK_COMMAND_POOL_CREATE_RESET_COMMAND_BUFFER_BIT;
-    cp.queueFamilyIndex = ctx.queue_family();
-    VkCommandPool cpool = VK_NULL_HANDLE;
-    compute::check(vkCreateCommandPool(dev, &cp, nullptr, &cpool), "vkCreateCommandPool (viewer)");
-    f.pool = Owned<VkCommandPool>(dev, cpool, [](VkDevice d, VkCommandPool x) { vkDestroyCommandPool(d, x, nullptr); });
-    VkCommandBufferAllocateInfo ca{};
-    ca.sType = VK_STRUCTURE_TYPE_COMMAND_BUFFER_ALLOCATE_INFO;
-    ca.commandPool = cpool;
-    ca.level = VK_COMMAND_BUFFER_LEVEL_PRIMARY;
-    ca.commandBufferCount = 1;
-    compute::check(vkAllocateCommandBuffers(dev, &ca, &f.cmd), "vkAllocateCommandBuffers (viewer)");
-    VkFenceCreateInfo fi{};
-    fi.sType = VK_STRUCTURE_TYPE_FENCE_CREATE_INFO;
-    fi.flags = VK_FENCE_CREATE_SIGNALED_BIT;
-    VkFence fence = VK_NULL_HANDLE;
-    compute::check(vkCreateFence(dev, &fi, nullptr, &fence), "vkCreateFence (viewer)");
-    f.fence = Owned<VkFence>(dev, fence, [](VkDevice d, VkFence x) { vkDestroyFence(d, x, nullptr); });
-    VkSemaphoreCreateInfo sem{};
-    sem.sType = VK_STRUCTURE_TYPE_SEMAPHORE_CREATE_INFO;
-    VkSemaphore s2 = VK_NULL_HANDLE;
-    compute::check(vkCreateSemaphore(dev, &sem, nullptr, &s2), "vkCreateSemaphore (viewer)");
-    f.acquired = Owned<VkSemaphore>(dev, s2, [](VkDevice d, VkSemaphore x) { vkDestroySemaphore(d, x, nullptr); });
+    f.cmd = compute::CommandBuffer(ctx);
+    f.fence = compute::make_fence(ctx, true);  // signaled: nothing pending in this slot yet
+    f.acquired = compute::make_semaphore(ctx);
   }
 
   // Until the first frame arrives, the frame set shows a 1 × 1 white texture.
@@ -253,21 +233,10 @@ void Presenter::Impl::create_swapchain() {
   }
 
   for (VkImage image : images) {
-    VkImageViewCreateInfo vi{};
-    vi.sType = VK_STRUCTURE_TYPE_IMAGE_VIEW_CREATE_INFO;
-    vi.image = image;
-    vi.viewType = VK_IMAGE_VIEW_TYPE_2D;
-    vi.format = format.format;
-    vi.subresourceRange = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 1, 0, 1};
-    VkImageView v = VK_NULL_HANDLE;
-    compute::check(vkCreateImageView(dev, &vi, nullptr, &v), "vkCreateImageView (swapchain)");
-    views.emplace_back(dev, v, [](VkDevice d, VkImageView x) { vkDestroyImageView(d, x, nullptr); });
+    views.push_back(compute::make_image_view(ctx, image, format.format));
+    const VkImageView v = views.back().get();
     framebuffers.emplace_back(ctx, render_pass, std::span(&v, 1), extent);
-    VkSemaphoreCreateInfo sem{};
-    sem.sType = VK_STRUCTURE_TYPE_SEMAPHORE_CREATE_INFO;
-    VkSemaphore s = VK_NULL_HANDLE;
-    compute::check(vkCreateSemaphore(dev, &sem, nullptr, &s), "vkCreateSemaphore (viewer)");
-    rendered.emplace_back(dev, s, [](VkDevice d, VkSemaphore x) { vkDestroySemaphore(d, x, nullptr); });
+    rendered.push_back(compute::make_semaphore(ctx));
   }
 }
 
@@ -425,12 +394,8 @@ bool Presenter::present(ImDrawData* data, RgbaImage* capture) {
     upload = true;
   }
 
-  const VkCommandBuffer cmd = f.cmd;
-  compute::check(vkResetCommandBuffer(cmd, 0), "vkResetCommandBuffer (viewer)");
-  VkCommandBufferBeginInfo begin{};
-  begin.sType = VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO;
-  begin.flags = VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT;
-  compute::check(vkBeginCommandBuffer(cmd, &begin), "vkBeginCommandBuffer (viewer)");
+  const VkCommandBuffer cmd = f.cmd.handle();
+  f.cmd.begin();
   if (upload) record_upload(cmd, f.staging, r.frame, upload_from);
 
   r.render_pass.begin(cmd, r.framebuffers[image_index], {0.10f, 0.11f, 0.13f, 1.0f});
@@ -455,7 +420,7 @@ bool Presenter::present(ImDrawData* data, RgbaImage* capture) {
     compute::memory_barrier(cmd, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_ACCESS_TRANSFER_WRITE_BIT, VK_PIPELINE_STAGE_HOST_BIT,
                        VK_ACCESS_HOST_READ_BIT);
   }
-  compute::check(vkEndCommandBuffer(cmd), "vkEndCommandBuffer (viewer)");
+  f.cmd.end();
 
   const VkSemaphore wait = f.acquired.get(), signal = r.rendered[image_index].get();
   const VkPipelineStageFlags wait_stage = VK_PIPELINE_STAGE_COLOR_ATTACHMENT_OUTPUT_BIT | VK_PIPELINE_STAGE_TRANSFER_BIT;

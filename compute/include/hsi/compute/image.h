@@ -23,6 +23,10 @@ struct ImageInfo {
 // Levels of a full mip chain down to 1 × 1.
 uint32_t mip_levels(uint32_t width, uint32_t height);
 
+// A 2D colour view of `image`'s first `mips` levels (an Image's own, or a swapchain
+// image's, which the swapchain owns).
+DeviceHandle<VkImageView> make_image_view(const Context& context, VkImage image, VkFormat format, uint32_t mips = 1);
+
 class Image {
  public:
   Image() = default;

@@ -2,8 +2,9 @@
 // queue, optional validation layer whose messages are recorded), RAII owners for
 // device handles and buffers, one-shot command submission and barriers. The other
 // GPU objects have a header each: image.h, sampler.h, render_pass.h, framebuffer.h,
-// shader_module.h, pipeline_layout.h, descriptor_set.h, compute_pipeline.h and
-// graphics_pipeline.h (whose fixed-function state is pipeline_state.h).
+// shader_module.h, pipeline_layout.h, descriptor_set.h, compute_pipeline.h,
+// graphics_pipeline.h (whose fixed-function state is pipeline_state.h),
+// command_buffer.h and sync.h (fences, semaphores).
 //
 // Vulkan is loaded at run time through volk (VK_NO_PROTOTYPES): a machine without a
 // Vulkan loader or device gets a VulkanUnavailable exception, not a link error.
