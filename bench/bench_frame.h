@@ -24,8 +24,8 @@
 
 namespace hsi::bench {
 
-inline void frame_table(const vk::Context& ctx, const std::vector<std::string>& scenes, const std::vector<int>& sizes,
-                        int frames, int msaa, const std::vector<vk::Rasterizer>& rasterizers, bool boundary = true) {
+inline void frame_table(const compute::Context& ctx, const std::vector<std::string>& scenes, const std::vector<int>& sizes,
+                        int frames, int msaa, const std::vector<compute::Rasterizer>& rasterizers, bool boundary = true) {
   using Clock = std::chrono::steady_clock;
   auto ms_since = [](Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); };
   auto median = [](std::vector<double> v) {
@@ -53,7 +53,7 @@ inline void frame_table(const vk::Context& ctx, const std::vector<std::string>& 
   // device, which has no such clocks and would take minutes.)
   if (!ctx.info().is_cpu())
     for (const auto until = Clock::now() + std::chrono::milliseconds(2000); Clock::now() < until;)
-      vk::probe_fma_throughput(ctx, false, 65536, 4096);
+      compute::probe_fma_throughput(ctx, false, 65536, 4096);
   std::printf("| scene | n | precision | raster | segments | pieces | eval ms | certify ms | mesh ms | draw ms | "
               "frame dev ms | frame wall ms | certified |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
   for (const std::string& path : scenes) {
@@ -61,27 +61,27 @@ inline void frame_table(const vk::Context& ctx, const std::vector<std::string>& 
     const Scene& scene = v.scene;
     const Cage& cage = v.cage;
     const HarmonicMap& map = v.map;
-    vk::DenseCertifier certifier(ctx, scene.shape, cage, sample_boundary(scene.shape, scene.samples));
+    compute::DenseCertifier certifier(ctx, scene.shape, cage, sample_boundary(scene.shape, scene.samples));
     for (int n : sizes) {
       const TriMesh mesh = render_mesh(scene.shape, n);
-      const vk::View view = frame_view(v, mesh, n);
-      for (const vk::Precision precision : {vk::Precision::kFloat, vk::Precision::kDouble})
-      for (const vk::Rasterizer rasterizer : rasterizers) {
-        vk::DenseEvalOptions eo;
+      const compute::View view = frame_view(v, mesh, n);
+      for (const compute::Precision precision : {compute::Precision::kFloat, compute::Precision::kDouble})
+      for (const compute::Rasterizer rasterizer : rasterizers) {
+        compute::DenseEvalOptions eo;
         eo.precision = precision;
         eo.skip_outside = true;
         eo.max_points_per_pass = std::max<uint32_t>(eo.max_points_per_pass, static_cast<uint32_t>(n) * static_cast<uint32_t>(n));
-        vk::DenseEvaluator grid_eval(ctx, eo);
-        vk::RendererOptions ro;
+        compute::DenseEvaluator grid_eval(ctx, eo);
+        compute::RendererOptions ro;
         ro.evaluation.precision = precision;
         ro.msaa_samples = msaa;
         ro.rasterizer = rasterizer;
-        vk::Renderer renderer(ctx, n, n, ro);
+        compute::Renderer renderer(ctx, n, n, ro);
         renderer.set_mesh(mesh, scene.handles);
         renderer.set_texture(v.texture, v.rect);
-        vk::RenderStyle style;
-        style.overlays = boundary ? vk::kOverlayBoundary : vk::kOverlayNone;
-        const vk::Grid grid = vk::Grid::covering(bounding_box(scene.shape), n, n);
+        compute::RenderStyle style;
+        style.overlays = boundary ? compute::kOverlayBoundary : compute::kOverlayNone;
+        const compute::Grid grid = compute::Grid::covering(bounding_box(scene.shape), n, n);
         std::vector<double> parts[4], frame_dev, wall;
         bool certified = true;
         double pieces = 0;
@@ -118,7 +118,7 @@ inline void frame_table(const vk::Context& ctx, const std::vector<std::string>& 
         auto part = [&](int k) { return parts[k].empty() ? -1.0 : median(parts[k]); };
         std::printf("| %s | %d | %s | %s | %d | %.3f | %.3f | %.3f | %.3f | %.3f | %.3f | %.2f | %s |\n", v.name.c_str(),
                     n, grid_eval.double_precision() ? "double" : "float",
-                    renderer.rasterizer() == vk::Rasterizer::kCompute ? "compute" : "graphics",
+                    renderer.rasterizer() == compute::Rasterizer::kCompute ? "compute" : "graphics",
                     certifier.breakpoint_count(), pieces, part(0),
                     part(1), part(2), part(3), median(frame_dev), median(wall), certified ? "yes" : "no");
         std::fflush(stdout);

@@ -40,7 +40,7 @@ struct VulkanScene {
   Scene scene;
   Cage cage;
   HarmonicMap map;
-  vk::RgbaImage texture;
+  RgbaImage texture;
   std::array<double, 4> rect{0, 0, 1, 1};
 };
 
@@ -53,7 +53,7 @@ inline VulkanScene load_vulkan_scene(const std::string& path, bool with_texture 
   for (const Keyframe& k : v.scene.keyframes)
     if (k.coefficients) v.map = *k.coefficients;
   if (with_texture && !v.scene.texture.empty()) {
-    v.texture = vk::read_png(v.scene.texture_path());
+    v.texture = read_png(v.scene.texture_path());
     v.rect = v.scene.texture_rect_or_bounds();
   }
   return v;
@@ -67,7 +67,7 @@ inline TriMesh render_mesh(const Shape& shape, int n) {
 }
 
 // The view that frames the mesh's image under the map in an n × n image.
-inline vk::View frame_view(const VulkanScene& v, const TriMesh& mesh, int n) {
+inline compute::View frame_view(const VulkanScene& v, const TriMesh& mesh, int n) {
   std::vector<cd> f;
   cpu_mesh_eval(v.cage, v.map, mesh.vertices, f);
   BoundingBox box{f[0], f[0]};
@@ -75,10 +75,10 @@ inline vk::View frame_view(const VulkanScene& v, const TriMesh& mesh, int n) {
     box.lo = {std::min(box.lo.real(), z.real()), std::min(box.lo.imag(), z.imag())};
     box.hi = {std::max(box.hi.real(), z.real()), std::max(box.hi.imag(), z.imag())};
   }
-  return vk::View::fit(box, n, n, 0.04 * n);
+  return compute::View::fit(box, n, n, 0.04 * n);
 }
 
-inline void render_table(const vk::Context& ctx, const std::vector<std::string>& scenes, const std::vector<int>& sizes,
+inline void render_table(const compute::Context& ctx, const std::vector<std::string>& scenes, const std::vector<int>& sizes,
                          int frames, bool use_float) {
   using Clock = std::chrono::steady_clock;
   auto ms_since = [](Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); };
@@ -94,11 +94,11 @@ inline void render_table(const vk::Context& ctx, const std::vector<std::string>&
               "reference evaluate_map at the same mesh vertices, mean; CPU / draw: its ratio to the draw.\n\n");
   std::printf("| scene | image | mesh vertices | grid eval ms | draw ms | render ms | readback ms | grid eval + draw ms | "
               "CPU mesh eval ms | CPU / draw |\n|---|---|---|---|---|---|---|---|---|---|\n");
-  vk::RendererOptions ro;
-  ro.evaluation.precision = use_float ? vk::Precision::kFloat : vk::Precision::kAuto;
-  vk::DenseEvalOptions eo = ro.evaluation;
+  compute::RendererOptions ro;
+  ro.evaluation.precision = use_float ? compute::Precision::kFloat : compute::Precision::kAuto;
+  compute::DenseEvalOptions eo = ro.evaluation;
   eo.skip_outside = true;
-  vk::DenseEvaluator grid_eval(ctx, eo);
+  compute::DenseEvaluator grid_eval(ctx, eo);
   for (const std::string& path : scenes) {
     const VulkanScene v = load_vulkan_scene(path);
     const Scene& scene = v.scene;
@@ -106,13 +106,13 @@ inline void render_table(const vk::Context& ctx, const std::vector<std::string>&
     const HarmonicMap& map = v.map;
     for (int n : sizes) {
       const TriMesh mesh = render_mesh(scene.shape, n);
-      vk::Renderer renderer(ctx, n, n, ro);
+      compute::Renderer renderer(ctx, n, n, ro);
       renderer.set_mesh(mesh, scene.handles);
       renderer.set_texture(v.texture, v.rect);
-      const vk::View view = frame_view(v, mesh, n);
-      vk::RenderStyle style;
-      style.overlays = vk::kOverlayBoundary;
-      const vk::Grid grid = vk::Grid::covering(bounding_box(scene.shape), n, n);
+      const compute::View view = frame_view(v, mesh, n);
+      compute::RenderStyle style;
+      style.overlays = compute::kOverlayBoundary;
+      const compute::Grid grid = compute::Grid::covering(bounding_box(scene.shape), n, n);
 
       grid_eval.evaluate_grid(cage, map, grid, &scene.shape);  // warm-ups
       renderer.draw(cage, map, view, style);

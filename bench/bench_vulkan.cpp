@@ -56,7 +56,7 @@ void cpu_evaluate(const Cage& cage, const HarmonicMap& map, const std::vector<cd
 
 // Dense certification vs the CPU Certifier on each scene's keyframes: median ms per
 // map over `frames` runs of every keyframe, both backends in the same run.
-void certification_table(const vk::Context& ctx, const std::vector<std::string>& scenes, int frames, int samples) {
+void certification_table(const compute::Context& ctx, const std::vector<std::string>& scenes, int frames, int samples) {
   std::printf("\nCertification: the injectivity certificate of each keyframe map (breakpoint values, Lipschitz\n"
               "bounds with adaptive subdivision, argument principle). GPU ms/map: median certify() wall time\n"
               "(upload, both dispatches, readback, reduction); dispatch ms: submit to fence. CPU ms/map: median\n"
@@ -73,7 +73,7 @@ void certification_table(const vk::Context& ctx, const std::vector<std::string>&
       if (k.coefficients) maps.push_back(*k.coefficients);
     if (maps.empty()) maps.push_back(affine_map(cage, {1.1, 0.2}, {0.1, 0.0}, {0.0, 0.0}));
     const Certifier cpu(scene.shape, cage, g);
-    vk::DenseCertifier gpu(ctx, scene.shape, cage, g);
+    compute::DenseCertifier gpu(ctx, scene.shape, cage, g);
     std::vector<double> gpu_ms, dispatch_ms, cpu_ms;
     int certified = 0, agree = 0;
     double bound_diff = 0;
@@ -111,23 +111,23 @@ void certification_table(const vk::Context& ctx, const std::vector<std::string>&
 // timestamps: the frame's pass (mask + evaluation inside), every point evaluated
 // without a mask, and the mask alone (the shape moved off the grid, so every point
 // runs the outer loop's crossing test and nothing is evaluated).
-void eval_breakdown(const vk::Context& ctx, const std::vector<std::string>& scenes, int n) {
+void eval_breakdown(const compute::Context& ctx, const std::vector<std::string>& scenes, int n) {
   std::printf("\nGrid evaluation breakdown at %d x %d (device ms, median of 5):\n\n"
               "| scene | precision | inside | masked + inside evaluated | all evaluated, no mask | mask only |\n"
               "|---|---|---|---|---|---|\n", n, n);
   for (const std::string& path : scenes) {
     const bench::VulkanScene v = bench::load_vulkan_scene(path, false);
-    const vk::Grid grid = vk::Grid::covering(bounding_box(v.scene.shape), n, n);
+    const compute::Grid grid = compute::Grid::covering(bounding_box(v.scene.shape), n, n);
     Shape away = v.scene.shape;
     const cd shift = 10.0 * (bounding_box(away).hi - bounding_box(away).lo);
     for (int l = 0; l < away.loop_count(); ++l)
       for (cd& z : away.loop(l)) z += shift;
-    for (const vk::Precision precision : {vk::Precision::kFloat, vk::Precision::kDouble}) {
-      vk::DenseEvalOptions eo;
+    for (const compute::Precision precision : {compute::Precision::kFloat, compute::Precision::kDouble}) {
+      compute::DenseEvalOptions eo;
       eo.precision = precision;
       eo.skip_outside = true;
       eo.max_points_per_pass = std::max<uint32_t>(eo.max_points_per_pass, static_cast<uint32_t>(n * n));
-      vk::DenseEvaluator ev(ctx, eo);
+      compute::DenseEvaluator ev(ctx, eo);
       const Shape* masks[3] = {&v.scene.shape, nullptr, &away};
       double t[3];
       for (int k = 0; k < 3; ++k) {
@@ -139,7 +139,7 @@ void eval_breakdown(const vk::Context& ctx, const std::vector<std::string>& scen
         std::sort(ms.begin(), ms.end());
         t[k] = ms[ms.size() / 2];
       }
-      const vk::DenseField f = ev.evaluate_grid(v.cage, v.map, grid, &v.scene.shape);
+      const compute::DenseField f = ev.evaluate_grid(v.cage, v.map, grid, &v.scene.shape);
       size_t inside = 0;
       for (uint8_t b : f.inside) inside += b;
       std::printf("| %s | %s | %.0f%% | %.3f | %.3f | %.3f |\n", v.name.c_str(), ev.double_precision() ? "double" : "float",
@@ -150,7 +150,7 @@ void eval_breakdown(const vk::Context& ctx, const std::vector<std::string>& scen
 
 // FMA throughput reached by compute work on the context's queue, for comparison with
 // the GPU's peak (an H100 SXM: ~67 TFLOP/s float, ~34 double).
-void probe_table(const vk::Context& ctx) {
+void probe_table(const compute::Context& ctx) {
   const VkPhysicalDeviceMemoryProperties& mp = ctx.memory_properties();
   std::printf("\nMemory types (heap: flags):");
   for (uint32_t i = 0; i < mp.memoryTypeCount; ++i)
@@ -158,8 +158,8 @@ void probe_table(const vk::Context& ctx) {
   std::printf("\nHeaps:");
   for (uint32_t i = 0; i < mp.memoryHeapCount; ++i)
     std::printf(" %u:%.0fMiB:0x%x", i, static_cast<double>(mp.memoryHeaps[i].size) / 1048576.0, mp.memoryHeaps[i].flags);
-  for (const vk::MemoryUse use : {vk::MemoryUse::kDeviceLocal, vk::MemoryUse::kUpload, vk::MemoryUse::kReadback}) {
-    const vk::Buffer b(ctx, 4096, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, use);
+  for (const compute::MemoryUse use : {compute::MemoryUse::kDeviceLocal, compute::MemoryUse::kUpload, compute::MemoryUse::kReadback}) {
+    const compute::Buffer b(ctx, 4096, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, use);
     std::printf("\nMemoryUse %d -> flags 0x%x", static_cast<int>(use), b.memory_flags());
   }
   std::printf("\n");
@@ -168,7 +168,7 @@ void probe_table(const vk::Context& ctx) {
   for (const bool dbl : {false, true}) {
     if (dbl && !ctx.info().float64) continue;
     for (const uint32_t wg : {1024u, 16384u}) {
-      const vk::ThroughputProbe p = vk::probe_fma_throughput(ctx, dbl, wg, dbl ? 1024u : 4096u);
+      const compute::ThroughputProbe p = compute::probe_fma_throughput(ctx, dbl, wg, dbl ? 1024u : 4096u);
       std::printf("| %u | %s | %u | %.3f | %.0f |\n", ctx.info().queue_family, dbl ? "double" : "float", wg,
                   p.device_ms, p.gflops);
     }
@@ -216,19 +216,19 @@ int main(int argc, char** argv) {
   app.add_flag("--probe", probe, "Also measure the FMA throughput that compute work reaches (float, double)");
   CLI11_PARSE(app, argc, argv);
 
-  vk::ContextOptions co;
+  compute::ContextOptions co;
   co.validation = validation;
   co.device_name = device;
-  std::unique_ptr<vk::Context> ctx;
+  std::unique_ptr<compute::Context> ctx;
   try {
-    ctx = std::make_unique<vk::Context>(co);
-  } catch (const vk::VulkanError& e) {
+    ctx = std::make_unique<compute::Context>(co);
+  } catch (const compute::VulkanError& e) {
     std::fprintf(stderr, "bench_vulkan: %s\n", e.what());
     return 2;
   }
-  vk::DenseEvalOptions eo;
-  eo.precision = use_float ? vk::Precision::kFloat : vk::Precision::kAuto;
-  vk::DenseEvaluator eval(*ctx, eo);
+  compute::DenseEvalOptions eo;
+  eo.precision = use_float ? compute::Precision::kFloat : compute::Precision::kAuto;
+  compute::DenseEvaluator eval(*ctx, eo);
   const char* lp = std::getenv("LP_NUM_THREADS");
   std::printf("Vulkan device: %s (%s, Vulkan %u.%u), shader precision: %s\n", ctx->info().name.c_str(),
               ctx->info().type_name().c_str(), VK_API_VERSION_MAJOR(ctx->info().api_version),
@@ -249,8 +249,8 @@ int main(int argc, char** argv) {
     const HarmonicMap& map = v.map;
     const std::string& name = v.name;
     for (int n : sizes) {
-      const vk::Grid grid = vk::Grid::covering(bounding_box(scene.shape), n, n);
-      vk::DenseField field = eval.evaluate_grid(cage, map, grid, &scene.shape);  // warm-up
+      const compute::Grid grid = compute::Grid::covering(bounding_box(scene.shape), n, n);
+      compute::DenseField field = eval.evaluate_grid(cage, map, grid, &scene.shape);  // warm-up
       std::vector<double> wall, dispatch_ms;
       for (int i = 0; i < std::max(frames, 1); ++i) {
         const auto t0 = Clock::now();
@@ -289,10 +289,10 @@ int main(int argc, char** argv) {
     certification_table(*ctx, scenes, certify_frames, certify_samples);
   if (render_frames > 0) bench::render_table(*ctx, scenes, sizes, render_frames, use_float);
   if (frame_frames > 0) {
-    std::vector<vk::Rasterizer> rasterizers;
-    if (raster == "graphics" || raster == "both") rasterizers.push_back(vk::Rasterizer::kGraphics);
-    if (raster == "compute" || raster == "both") rasterizers.push_back(vk::Rasterizer::kCompute);
-    if (raster == "auto") rasterizers.push_back(vk::Rasterizer::kAuto);
+    std::vector<compute::Rasterizer> rasterizers;
+    if (raster == "graphics" || raster == "both") rasterizers.push_back(compute::Rasterizer::kGraphics);
+    if (raster == "compute" || raster == "both") rasterizers.push_back(compute::Rasterizer::kCompute);
+    if (raster == "auto") rasterizers.push_back(compute::Rasterizer::kAuto);
     bench::frame_table(*ctx, scenes, sizes, frame_frames, msaa, rasterizers, !no_boundary);
   }
   if (probe) probe_table(*ctx);

@@ -49,6 +49,7 @@
 #include "hsi/baselines/ccw16.h"
 #include "hsi/compute/dense_eval.h"
 #include "hsi/compute/renderer.h"
+#include "hsi/scene_texture.h"
 #include "raster.h"
 #endif
 
@@ -299,7 +300,7 @@ json run_json(const OurRun& r) {
 struct Column {
   std::string name, stats;
   bool stats_alarm = false;  // stats in red (a broken or folded result)
-  vk::RgbaImage image;
+  RgbaImage image;
 };
 
 // The side-by-side figure: title, per column a name and a line of numbers, the
@@ -380,21 +381,21 @@ void run_compare(const Opts& o) {
   }
   const Machine machine = this_machine();
 
-  vk::ContextOptions co;
+  compute::ContextOptions co;
   co.validation = o.validation;
   co.device_name = o.device;
-  std::unique_ptr<vk::Context> ctx;
+  std::unique_ptr<compute::Context> ctx;
   try {
-    ctx = std::make_unique<vk::Context>(co);
-  } catch (const vk::VulkanUnavailable& e) {
+    ctx = std::make_unique<compute::Context>(co);
+  } catch (const compute::VulkanUnavailable& e) {
     throw std::runtime_error(std::string("hsi compare renders with Vulkan and needs a device (a GPU, or lavapipe on the CPU): ") +
                              e.what());
   }
   const std::string vulkan_device = ctx->info().name + " (" + ctx->info().type_name() + ")";
 
   // Texture: the scene's, or a checkerboard.
-  const vk::SceneTexture scene_tex = vk::scene_texture(scene, o.scene);
-  const vk::RgbaImage& texture = scene_tex.image;
+  const SceneTexture scene_tex = scene_texture(scene, o.scene);
+  const RgbaImage& texture = scene_tex.image;
   const std::array<double, 4>& rect = scene_tex.rect;
 
   Outputs out(o.out);
@@ -615,7 +616,7 @@ void run_compare(const Opts& o) {
       if (std::isfinite(k)) range_hi = std::max(range_hi, std::min(k, s.ours.bound.conformal_max));
     snaps.push_back(std::move(s));
   }
-  range_hi = vk::round_distortion_hi(range_hi);
+  range_hi = compute::round_distortion_hi(range_hi);
 
   // One view for every panel (same scale and place), panels fitted to its aspect.
   const cd ext = box.hi - box.lo;
@@ -628,22 +629,22 @@ void run_compare(const Opts& o) {
     pw = std::clamp(static_cast<int>(std::ceil((panel - 2 * margin) * aspect + 2 * margin)), panel / 3, panel);
   pw += pw % 2;
   ph += ph % 2;
-  const vk::View view = vk::View::fit(box, pw, ph, margin);
-  vk::Renderer welded(*ctx, pw, ph), flat(*ctx, pw, ph);
+  const compute::View view = compute::View::fit(box, pw, ph, margin);
+  compute::Renderer welded(*ctx, pw, ph), flat(*ctx, pw, ph);
   welded.set_mesh(mesh);
   welded.set_texture(texture, rect);
-  const vk::UnweldedMesh unwelded = vk::unweld(mesh);
+  const compute::UnweldedMesh unwelded = compute::unweld(mesh);
   flat.set_mesh(unwelded.mesh);
   flat.set_texture(texture, rect);
   // CCW16 (boundary metric) on its own, coarser mesh when the render mesh's rows were too large.
-  std::unique_ptr<vk::Renderer> coarse;
+  std::unique_ptr<compute::Renderer> coarse;
   if (bm.applies && bm.own_mesh) {
-    coarse = std::make_unique<vk::Renderer>(*ctx, pw, ph);
+    coarse = std::make_unique<compute::Renderer>(*ctx, pw, ph);
     coarse->set_mesh(*bm.mesh);
     coarse->set_texture(texture, rect);
   }
-  vk::RenderStyle style;
-  style.overlays = vk::kOverlayDistortion | vk::kOverlayBoundary;  // no handles: the baselines have none
+  compute::RenderStyle style;
+  style.overlays = compute::kOverlayDistortion | compute::kOverlayBoundary;  // no handles: the baselines have none
   style.distortion_lo = 1;
   style.distortion_hi = range_hi;
   style.distortion_opacity = 0.7f;
@@ -651,7 +652,7 @@ void run_compare(const Opts& o) {
   for (Snapshot& s : snaps) {
     std::vector<Column> cols;
     {
-      vk::RenderStyle st = style;
+      compute::RenderStyle st = style;
       st.uncertified = !s.ours.certified;
       Column c{"Ours (harmonic, certified)", "", false, welded.render(cage, s.ours.map, view, st)};
       c.stats = "max \xce\xba " + fixed(s.ours.distortion.conformal_max, 3) + " sampled, \xe2\x89\xa4 " +
@@ -689,7 +690,7 @@ void run_compare(const Opts& o) {
       cols.push_back(std::move(c));
     }
     if (bm.applies) {
-      vk::Renderer& r = coarse ? *coarse : welded;
+      compute::Renderer& r = coarse ? *coarse : welded;
       Column c{"CCW16 (boundary metric)", "", false, r.render(s.bm.positions, vertex_kappa(s.bm), view, style)};
       c.stats = "max \xce\xba " + fixed(s.bm.max_kappa, 3) + ", rigid gap to ours " + sci(s.bm_gap.rigid) + " \xc3\x97 size";
       if (bm.own_mesh) c.stats += ", " + std::to_string(bm.mesh->vertex_count()) + "-vertex mesh";
@@ -808,7 +809,7 @@ void run_compare(const Opts& o) {
   // its vertices. ARAP: one sparse solve per frame on the mesh, after a factorisation.
   std::vector<size_t> timed;  // frames of the sequence whose maps and times are used
   for (int k = 0; k < o.timing_frames; ++k) timed.push_back(static_cast<size_t>(k + 1) * (F - 1) / static_cast<size_t>(o.timing_frames + 1));
-  vk::DenseEvaluator dense(*ctx);
+  compute::DenseEvaluator dense(*ctx);
   json table3_json = json::array();
   struct T3 {
     int vertices, triangles;
@@ -836,7 +837,7 @@ void run_compare(const Opts& o) {
       const std::vector<cd> f = map_points_chunked(cage, ours[i].map, m.vertices);
       cpu_sum += ms_since(t0);
       t0 = Clock::now();
-      const vk::DenseField d = dense.evaluate_points(cage, ours[i].map, m.vertices);
+      const compute::DenseField d = dense.evaluate_points(cage, ours[i].map, m.vertices);
       vk_sum += ms_since(t0);
       if (p.size() != f.size() || d.size() != f.size()) throw std::logic_error("table 3: sizes disagree");
     }

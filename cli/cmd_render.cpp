@@ -20,6 +20,7 @@
 #include "hsi/compute/renderer.h"
 #include "hsi/frames_io.h"
 #include "hsi/scene_io.h"
+#include "hsi/scene_texture.h"
 #include "hsi/triangulate.h"
 #include "raster.h"
 
@@ -89,9 +90,9 @@ uint32_t parse_overlays(const std::vector<std::string>& items) {
     std::stringstream ss(list);
     std::string s;
     while (std::getline(ss, s, ',')) {
-      if (s == "distortion") o |= vk::kOverlayDistortion;
-      else if (s == "boundary") o |= vk::kOverlayBoundary;
-      else if (s == "handles") o |= vk::kOverlayHandles;
+      if (s == "distortion") o |= compute::kOverlayDistortion;
+      else if (s == "boundary") o |= compute::kOverlayBoundary;
+      else if (s == "handles") o |= compute::kOverlayHandles;
       else if (s == "none" || s.empty()) continue;
       else throw InputError("--overlay: unknown overlay '" + s + "' (distortion, boundary, handles or none)");
     }
@@ -157,8 +158,8 @@ void run_render(const Opts& o) {
     throw InputError("--distortion-range needs two numbers LO HI with HI > LO");
 
   // Texture: the scene's, or a checkerboard with --no-texture / when the scene has none.
-  const vk::SceneTexture st = vk::scene_texture(scene, o.scene, o.no_texture, true, "render with --no-texture");
-  const vk::RgbaImage& texture = st.image;
+  const SceneTexture st = scene_texture(scene, o.scene, o.no_texture, true, "render with --no-texture");
+  const RgbaImage& texture = st.image;
   const std::array<double, 4>& rect = st.rect;
   if (st.checker && !o.no_texture) std::printf("scene %s has no texture: drawing a checkerboard instead\n", scene.name.c_str());
 
@@ -191,7 +192,7 @@ void run_render(const Opts& o) {
   }
   if (!std::isfinite(box.lo.real())) throw InputError(frames_path.string() + ": the selected frames map the shape to non-finite points");
   const double lo = o.distortion_range.empty() ? 1.0 : o.distortion_range[0];
-  const double hi = o.distortion_range.empty() ? vk::round_distortion_hi(kappa_max) : o.distortion_range[1];
+  const double hi = o.distortion_range.empty() ? compute::round_distortion_hi(kappa_max) : o.distortion_range[1];
 
   // Image size and layout: margins for the labels, a strip for the legend.
   int W = 0, H = 0;
@@ -208,7 +209,7 @@ void run_render(const Opts& o) {
   }
   if (W < 64 || H < 64 || W > 8192 || H > 8192)
     throw InputError("--size: '" + o.size + "' is not a size between 64 and 8192 (e.g. 1024 or 1280x720)");
-  const bool legend = (overlays & vk::kOverlayDistortion) != 0;
+  const bool legend = (overlays & compute::kOverlayDistortion) != 0;
   const int longer = std::max(W, H);
   const double font = std::max(11.0, longer / 56.0);
   const double margin = std::max(12.0, 0.05 * longer) + (o.no_labels ? 0 : 0.5 * font);
@@ -224,37 +225,37 @@ void run_render(const Opts& o) {
       W = std::clamp(W + W % 2, std::min(H, static_cast<int>(2 * margin + 30 * font)), H);
     }
   }
-  const vk::View view = vk::View::fit(box, W, H, margin, strip);
+  const compute::View view = compute::View::fit(box, W, H, margin, strip);
 
   // Vulkan.
-  vk::ContextOptions co;
+  compute::ContextOptions co;
   co.validation = o.validation;
   co.device_name = o.device;
-  std::unique_ptr<vk::Context> ctx;
+  std::unique_ptr<compute::Context> ctx;
   try {
-    ctx = std::make_unique<vk::Context>(co);
-  } catch (const vk::VulkanUnavailable& e) {
+    ctx = std::make_unique<compute::Context>(co);
+  } catch (const compute::VulkanUnavailable& e) {
     throw std::runtime_error(std::string("hsi render needs a Vulkan device (a GPU, or lavapipe on the CPU): ") + e.what());
   }
-  vk::RendererOptions ro;
-  ro.rasterizer = o.rasterizer == "graphics" ? vk::Rasterizer::kGraphics
-                  : o.rasterizer == "compute" ? vk::Rasterizer::kCompute
-                                              : vk::Rasterizer::kAuto;
-  vk::Renderer renderer(*ctx, W, H, ro);
+  compute::RendererOptions ro;
+  ro.rasterizer = o.rasterizer == "graphics" ? compute::Rasterizer::kGraphics
+                  : o.rasterizer == "compute" ? compute::Rasterizer::kCompute
+                                              : compute::Rasterizer::kAuto;
+  compute::Renderer renderer(*ctx, W, H, ro);
   renderer.set_mesh(mesh, scene.handles);
   renderer.set_texture(texture, rect);
   std::printf("rendering %zu of %zu frames at %d x %d on %s (%s, %s precision, %dx MSAA, %s rasterizer); mesh %d "
               "vertices, %d triangles\n",
               selected.size(), ff.frames.size(), W, H, ctx->info().name.c_str(), ctx->info().type_name().c_str(),
               renderer.double_precision() ? "double" : "float", renderer.msaa_samples(),
-              renderer.rasterizer() == vk::Rasterizer::kCompute ? "compute" : "graphics", mesh.vertex_count(),
+              renderer.rasterizer() == compute::Rasterizer::kCompute ? "compute" : "graphics", mesh.vertex_count(),
               mesh.triangle_count());
   if (legend) std::printf("distortion colour map over [%.3f, %.3f] (largest in these frames: %.4f)\n", lo, hi, kappa_max);
   std::fflush(stdout);
 
   const std::filesystem::path out(o.out.empty() ? (dir / "render").string() : o.out);
   std::filesystem::create_directories(out);
-  vk::RenderStyle style;
+  compute::RenderStyle style;
   style.overlays = overlays;
   style.background = background;
   style.distortion_lo = lo;
@@ -296,7 +297,7 @@ void run_render(const Opts& o) {
     uncertified += !fr.certified;
     overlapping += fr.overlaps;
     not_converged += !fr.converged;
-    const vk::RgbaImage img = renderer.render(ff.cage, fr.map, view, style);
+    const RgbaImage img = renderer.render(ff.cage, fr.map, view, style);
     render_ms += renderer.last_stats().gpu_ms + renderer.last_stats().upload_ms + renderer.last_stats().readback_ms;
     const Surface surf = surface_from(img);
     if (fr.overlaps) {  // an amber border (inside the red one of an uncertified frame): not globally injective

@@ -19,7 +19,7 @@ Surface make_surface(int w, int h) {
   return s;
 }
 
-Surface surface_from(const vk::RgbaImage& img) {
+Surface surface_from(const RgbaImage& img) {
   Surface s = make_surface(img.width, img.height);
   cairo_surface_flush(s.surf.get());
   unsigned char* data = cairo_image_surface_get_data(s.surf.get());
@@ -91,7 +91,7 @@ void draw_legend(cairo_t* cr, int W, int H, double area, double lo, double hi, d
   const double y0 = H - 0.5 * area - (beside ? 1.05 : 0.2) * font;  // bar + tick labels: 2.1 font tall
   cairo_pattern_t* grad = cairo_pattern_create_linear(x0, 0, x0 + bar_w, 0);
   for (int i = 0; i <= 32; ++i) {
-    const auto c = vk::colormap(i / 32.0);
+    const auto c = compute::colormap(i / 32.0);
     cairo_pattern_add_color_stop_rgb(grad, i / 32.0, c[0], c[1], c[2]);
   }
   cairo_rectangle(cr, x0, y0, bar_w, bar_h);

@@ -1,7 +1,7 @@
 // Compositing rendered frames with cairo (hsi render, hsi compare): cairo surfaces
 // from the renderer's RGBA images, PNG output, text with a halo, the distortion
 // colour bar. Kept in the CLI so that compute/ stays free of text. (The checkerboard
-// for scenes without a texture is vk::checker_texture, compute/image.h.)
+// for scenes without a texture is checker_texture, hsi/scene_texture.h.)
 #pragma once
 
 #include <cairo.h>
@@ -11,8 +11,8 @@
 #include <memory>
 #include <string>
 
-#include "hsi/compute/image.h"
 #include "hsi/domain.h"
+#include "hsi/png.h"
 
 namespace hsi::cli {
 
@@ -23,7 +23,7 @@ struct Surface {
   cairo_t* cr() const { return ctx.get(); }
 };
 Surface make_surface(int w, int h);             // transparent; throws if cairo cannot allocate it
-Surface surface_from(const vk::RgbaImage& img);  // straight-alpha RGBA in
+Surface surface_from(const RgbaImage& img);  // straight-alpha RGBA in
 // PNG, written atomically (a failed write leaves nothing behind).
 void write_surface(const Surface& s, const std::filesystem::path& png);
 

@@ -20,9 +20,9 @@
 
 #include <nlohmann/json.hpp>
 
-#include "hsi/compute/image.h"
+#include "hsi/png.h"
 
-using hsi::vk::RgbaImage;
+using hsi::RgbaImage;
 
 namespace {
 
@@ -53,7 +53,7 @@ int main(int argc, char** argv) {
   const std::filesystem::path shot_path = argv[1], golden_path = argv[2], texture_path = argv[3];
   const int expect_frame = std::atoi(argv[4]);
   try {
-    const RgbaImage shot = hsi::vk::read_png(shot_path);
+    const RgbaImage shot = hsi::read_png(shot_path);
     std::ifstream meta_file(shot_path.string() + ".json");
     check(static_cast<bool>(meta_file), "the viewer wrote " + shot_path.string() + ".json");
     if (!meta_file) return 1;
@@ -79,7 +79,7 @@ int main(int argc, char** argv) {
     check(bg[0] > 200 && bg[1] > 200 && bg[2] > 200, "the viewport's background is light (" + std::to_string(bg[0]) + ", " +
                                                          std::to_string(bg[1]) + ", " + std::to_string(bg[2]) + ")");
     // The texture's colours, quantised to 16 levels per channel.
-    const RgbaImage tex = hsi::vk::read_png(texture_path);
+    const RgbaImage tex = hsi::read_png(texture_path);
     std::vector<bool> palette(4096, false);
     auto bin = [](const uint8_t* p) { return (p[0] / 16) * 256 + (p[1] / 16) * 16 + p[2] / 16; };
     for (int y = 0; y < tex.height; ++y)
@@ -140,13 +140,13 @@ int main(int argc, char** argv) {
     check(nl > 0 && nr > 0 && left[2] > left[0] + 40 && right[0] > right[2] + 40 && right[1] > right[2] + 40, buf);
 
     if (const char* u = std::getenv("HSI_UPDATE_GOLDEN"); u && *u && std::string(u) != "0") {
-      hsi::vk::write_png(golden_path, view);
+      hsi::write_png(golden_path, view);
       std::printf("HSI_UPDATE_GOLDEN: wrote %s (look at it before committing)\n", golden_path.string().c_str());
       return failures ? 1 : 0;
     }
     check(std::filesystem::exists(golden_path), "golden " + golden_path.string() + " exists (HSI_UPDATE_GOLDEN=1 writes it)");
     if (failures) return 1;
-    const RgbaImage ref = hsi::vk::read_png(golden_path);
+    const RgbaImage ref = hsi::read_png(golden_path);
     check(ref.width == vw && ref.height == vh, "the golden is " + std::to_string(ref.width) + " x " + std::to_string(ref.height) +
                                                    ", the viewport " + std::to_string(vw) + " x " + std::to_string(vh));
     if (failures) return 1;
@@ -172,7 +172,7 @@ int main(int argc, char** argv) {
     check(mean <= 2.0 && out <= 0.01, buf);
     if (mean > 2.0 || out > 0.01) {
       const std::filesystem::path d = shot_path.parent_path() / (shot_path.stem().string() + "_diff.png");
-      hsi::vk::write_png(d, diff);
+      hsi::write_png(d, diff);
       std::printf("     the difference is in %s\n", d.string().c_str());
     }
   } catch (const std::exception& e) {

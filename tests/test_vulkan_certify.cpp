@@ -33,10 +33,10 @@ namespace {
 // on one without, the certifier must refuse with VulkanError, and the test is skipped.
 template <class Body>
 void with_vulkan(Body&& body) {
-  test::with_vulkan([&](vk::Context& ctx) {
+  test::with_vulkan([&](compute::Context& ctx) {
     if (!ctx.info().float64) {
-      CHECK_THROWS_AS(vk::DenseCertifier(ctx, test::disc(), build_cage(test::disc()), sample_boundary(test::disc(), 64)),
-                      vk::VulkanError);
+      CHECK_THROWS_AS(compute::DenseCertifier(ctx, test::disc(), build_cage(test::disc()), sample_boundary(test::disc(), 64)),
+                      compute::VulkanError);
       WARN("skipping: " << ctx.info().name << " has no shaderFloat64");
       return;
     }
@@ -45,8 +45,8 @@ void with_vulkan(Body&& body) {
 }
 
 // Forces the per-map values from the cage (mode 0) instead of the basis matrix.
-vk::DenseCertifyOptions direct_options() {
-  vk::DenseCertifyOptions o;
+compute::DenseCertifyOptions direct_options() {
+  compute::DenseCertifyOptions o;
   o.max_basis_bytes = 0;
   return o;
 }
@@ -140,15 +140,15 @@ HarmonicMap blend(const HarmonicMap& a, const HarmonicMap& b, double t) {
 }  // namespace
 
 TEST_CASE("dense certificate agrees with the CPU on every bundled scene's keyframes", "[vulkan][certify]") {
-  with_vulkan([](vk::Context& ctx) {
+  with_vulkan([](compute::Context& ctx) {
     Agreement agree;
     for (const auto& path : test::asset_scenes()) {
       const Scene scene = load_scene(path);
       const Cage cage = scene_cage(scene);
       const BoundarySamples samples = sample_boundary(scene.shape, scene.samples);
       const Certifier cpu(scene.shape, cage, samples);
-      vk::DenseCertifier gpu(ctx, scene.shape, cage, samples);
-      vk::DenseCertifier direct(ctx, scene.shape, cage, samples, direct_options());
+      compute::DenseCertifier gpu(ctx, scene.shape, cage, samples);
+      compute::DenseCertifier direct(ctx, scene.shape, cage, samples, direct_options());
       CHECK(gpu.uses_basis());
       CHECK_FALSE(direct.uses_basis());
       REQUIRE(gpu.breakpoint_count() == cpu.breakpoint_count());
@@ -185,7 +185,7 @@ TEST_CASE("dense certificate agrees with the CPU on every bundled scene's keyfra
 }
 
 TEST_CASE("dense certificate agrees with the CPU on interpolated frames", "[vulkan][certify]") {
-  with_vulkan([](vk::Context& ctx) {
+  with_vulkan([](compute::Context& ctx) {
     Agreement agree;
     for (const char* name : {"annulus.json", "bar_holes.json"}) {
       const Scene scene = load_scene(std::filesystem::path(HSI_ASSETS_DIR) / name);
@@ -197,7 +197,7 @@ TEST_CASE("dense certificate agrees with the CPU on interpolated frames", "[vulk
         keys.push_back(*k.coefficients);
       }
       Interpolator interp(*setup, times, keys);
-      vk::DenseCertifier gpu(ctx, setup->shape, setup->cage, setup->G);
+      compute::DenseCertifier gpu(ctx, setup->shape, setup->cage, setup->G);
       const double t0 = times.front(), t1 = times.back();
       for (double s : {0.3, 0.55}) {
         const FrameResult f = interp.frame(t0 + s * (t1 - t0));
@@ -213,13 +213,13 @@ TEST_CASE("dense certificate agrees with the CPU on interpolated frames", "[vulk
 }
 
 TEST_CASE("dense certificate agrees with the CPU on the folded-map corpus", "[vulkan][certify]") {
-  with_vulkan([](vk::Context& ctx) {
+  with_vulkan([](compute::Context& ctx) {
     Agreement agree;
     SECTION("an orientation-reversing map fails at the same place") {
       const Shape s = test::annulus();
       const Cage cage = build_cage(s);
       const BoundarySamples g = sample_boundary(s, 500);
-      vk::DenseCertifier gpu(ctx, s, cage, g);
+      compute::DenseCertifier gpu(ctx, s, cage, g);
       const HarmonicMap m = affine_map(cage, 1.0, 1.2, 0.0);
       const CertificateResult c = Certifier(s, cage, g).certify(m), r = gpu.certify(m);
       CHECK_FALSE(r.certified);
@@ -227,7 +227,7 @@ TEST_CASE("dense certificate agrees with the CPU on the folded-map corpus", "[vu
       CHECK(r.reason.find("folds") != std::string::npos);
       // The failing segment says why: a real fold at a breakpoint.
       const auto& st = gpu.last_status();
-      CHECK(std::count(st.begin(), st.end(), vk::SegmentStatus::kFolds) > 0);
+      CHECK(std::count(st.begin(), st.end(), compute::SegmentStatus::kFolds) > 0);
     }
     SECTION("a zero of f_z inside fails by the argument principle on both") {
       for (const auto& [shape, w0] : {std::pair<Shape, cd>{test::disc(1.0, 128), cd(0.2, -0.1)},
@@ -238,7 +238,7 @@ TEST_CASE("dense certificate agrees with the CPU on the folded-map corpus", "[vu
         int j = 0;
         for (const Loop& l : cage.loops)
           for (const cd& z : l) m.phi(j++) = (z - w0) * (z - w0) / 2.0;
-        vk::DenseCertifier gpu(ctx, shape, cage, g);
+        compute::DenseCertifier gpu(ctx, shape, cage, g);
         const CertificateResult c = Certifier(shape, cage, g).certify(m), r = gpu.certify(m);
         CHECK_FALSE(r.certified);
         CHECK(r.winding == 1);
@@ -259,7 +259,7 @@ TEST_CASE("dense certificate agrees with the CPU on the folded-map corpus", "[vu
       HarmonicMap m = identity_map(cage);
       m.psi(j) = 1.01 / peak_val;
       const BoundarySamples g = sample_boundary(s, 32);
-      vk::DenseCertifier gpu(ctx, s, cage, g);
+      compute::DenseCertifier gpu(ctx, s, cage, g);
       const CertificateResult c = Certifier(s, cage, g).certify(m), r = gpu.certify(m);
       CHECK_FALSE(r.certified);
       CHECK(r.observed_sigma2_min > 0);  // every breakpoint looks fine
@@ -277,8 +277,8 @@ TEST_CASE("dense certificate agrees with the CPU on the folded-map corpus", "[vu
         const Cage cage = build_cage(s);
         const BoundarySamples g = sample_boundary(s, 400);
         const Certifier cpu(s, cage, g);
-        vk::DenseCertifier gpu(ctx, s, cage, g);
-        vk::DenseCertifier direct(ctx, s, cage, g, direct_options());
+        compute::DenseCertifier gpu(ctx, s, cage, g);
+        compute::DenseCertifier direct(ctx, s, cage, g, direct_options());
         for (unsigned seed = 0; seed < 24; ++seed) {
           const double amp = 0.02 + 0.03 * (seed % 12);
           const HarmonicMap m = random_perturbation(cage, 1000 + seed, amp);
@@ -297,7 +297,7 @@ TEST_CASE("dense certificate agrees with the CPU on the folded-map corpus", "[vu
       const Cage cage = build_cage(s);
       const BoundarySamples g = sample_boundary(s, 8);  // coarse: subdivision is needed
       const Certifier cpu(s, cage, g);
-      vk::DenseCertifier gpu(ctx, s, cage, g);
+      compute::DenseCertifier gpu(ctx, s, cage, g);
       const HarmonicMap m = random_perturbation(cage, 77, 0.15);
       for (const auto& [depth, pieces] : {std::pair{14, 4096L}, std::pair{3, 4096L}, std::pair{14, 5L}, std::pair{0, 1L}}) {
         CertificateOptions o;
@@ -312,7 +312,7 @@ TEST_CASE("dense certificate agrees with the CPU on the folded-map corpus", "[vu
       o.max_depth = 3;
       CHECK_FALSE(gpu.certify(m, o).certified);
       const auto& st = gpu.last_status();
-      CHECK(std::count(st.begin(), st.end(), vk::SegmentStatus::kUndecided) > 0);
+      CHECK(std::count(st.begin(), st.end(), compute::SegmentStatus::kUndecided) > 0);
     }
     UNSCOPED_INFO("folded-map corpus: " << agree.summary());
     CHECK(agree.verdict_mismatch == 0);
@@ -320,12 +320,12 @@ TEST_CASE("dense certificate agrees with the CPU on the folded-map corpus", "[vu
 }
 
 TEST_CASE("dense certificate: stop at first failure, refusals", "[vulkan][certify]") {
-  with_vulkan([](vk::Context& ctx) {
+  with_vulkan([](compute::Context& ctx) {
     const Shape s = test::annulus(1.0, 0.4, 96);
     const Cage cage = build_cage(s);
     const BoundarySamples g = sample_boundary(s, 400);
     const Certifier cpu(s, cage, g);
-    vk::DenseCertifier gpu(ctx, s, cage, g);
+    compute::DenseCertifier gpu(ctx, s, cage, g);
 
     SECTION("stop_at_first_failure keeps the verdict (the line search's mode)") {
       CertificateOptions fast;
@@ -344,7 +344,7 @@ TEST_CASE("dense certificate: stop at first failure, refusals", "[vulkan][certif
     SECTION("wrong sizes, too deep, non-finite") {
       CHECK_THROWS_AS(gpu.certify(HarmonicMap{VectorXcd::Zero(2), VectorXcd::Zero(2)}), InputError);
       CertificateOptions deep;
-      deep.max_depth = vk::DenseCertifier::kMaxDepth + 1;
+      deep.max_depth = compute::DenseCertifier::kMaxDepth + 1;
       CHECK_THROWS_AS(gpu.certify(identity_map(cage), deep), InputError);
       HarmonicMap m = identity_map(cage);
       m.psi(3) = cd(0, INFINITY);
@@ -354,7 +354,7 @@ TEST_CASE("dense certificate: stop at first failure, refusals", "[vulkan][certif
       // Still works after the refusals.
       CHECK(gpu.certify(identity_map(cage)).certified);
       // A cage that does not belong to the shape.
-      CHECK_THROWS_AS(vk::DenseCertifier(ctx, test::bar_with_holes(), cage, sample_boundary(test::bar_with_holes(), 100)),
+      CHECK_THROWS_AS(compute::DenseCertifier(ctx, test::bar_with_holes(), cage, sample_boundary(test::bar_with_holes(), 100)),
                       InputError);
     }
     SECTION("identity: certified with σ1 = σ2 = 1") {

@@ -66,31 +66,31 @@ constexpr double kFloatTol = 1e-3;   // the stated float-fallback tolerance (rel
 }  // namespace
 
 TEST_CASE("Vulkan context: device, validation layer live, clear errors", "[vulkan]") {
-  SECTION("device and RAII buffers") with_vulkan([](vk::Context& ctx) {
+  SECTION("device and RAII buffers") with_vulkan([](compute::Context& ctx) {
     INFO("device: " << ctx.info().name << " (" << ctx.info().type_name() << ")");
     CHECK(!ctx.info().name.empty());
     CHECK(ctx.validation_enabled());
     CHECK(ctx.info().api_version >= VK_API_VERSION_1_2);
     // A buffer whose size is not a multiple of anything still works through RAII.
-    vk::Buffer b(ctx, 100, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, vk::MemoryUse::kUpload);
+    compute::Buffer b(ctx, 100, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, compute::MemoryUse::kUpload);
     const std::vector<uint8_t> bytes(100, 7);
     b.write(bytes.data(), 100);
     std::vector<uint8_t> back(100);
     b.read(back.data(), 100);
     CHECK(back == bytes);
-    CHECK_THROWS_AS(b.write(bytes.data(), 100, 1), vk::VulkanError);
-    vk::Buffer moved = std::move(b);
+    CHECK_THROWS_AS(b.write(bytes.data(), 100, 1), compute::VulkanError);
+    compute::Buffer moved = std::move(b);
     CHECK(!b);
     CHECK(moved.size() == 100);
   });
 
   SECTION("the messenger records a real validation error") {
-    vk::ContextOptions o;
+    compute::ContextOptions o;
     o.validation = true;
-    std::unique_ptr<vk::Context> ctx;
+    std::unique_ptr<compute::Context> ctx;
     try {
-      ctx = std::make_unique<vk::Context>(o);
-    } catch (const vk::VulkanUnavailable& e) {
+      ctx = std::make_unique<compute::Context>(o);
+    } catch (const compute::VulkanUnavailable& e) {
       if (test::env_set("HSI_REQUIRE_VULKAN")) FAIL(e.what());
       WARN("skipping: " << e.what());
       return;
@@ -107,7 +107,7 @@ TEST_CASE("Vulkan context: device, validation layer live, clear errors", "[vulka
 
     // Synchronization validation is on too: two writes without a barrier are a hazard.
     ctx->validation_log()->clear();
-    vk::Buffer b(*ctx, 256, VK_BUFFER_USAGE_TRANSFER_DST_BIT, vk::MemoryUse::kDeviceLocal);
+    compute::Buffer b(*ctx, 256, VK_BUFFER_USAGE_TRANSFER_DST_BIT, compute::MemoryUse::kDeviceLocal);
     ctx->submit_and_wait([&](VkCommandBuffer cmd) {
       vkCmdFillBuffer(cmd, b.handle(), 0, 256, 0u);
       vkCmdFillBuffer(cmd, b.handle(), 0, 256, 1u);
@@ -117,26 +117,26 @@ TEST_CASE("Vulkan context: device, validation layer live, clear errors", "[vulka
 
   SECTION("asking for a device that does not exist names the devices found") {
     try {
-      const vk::Context probe;
-    } catch (const vk::VulkanUnavailable& e) {
+      const compute::Context probe;
+    } catch (const compute::VulkanUnavailable& e) {
       if (test::env_set("HSI_REQUIRE_VULKAN")) FAIL(e.what());
       WARN("skipping: " << e.what());
       return;
     }
-    vk::ContextOptions o;
+    compute::ContextOptions o;
     o.device_name = "no-such-device-hsi";
     try {
-      vk::Context ctx(o);
+      compute::Context ctx(o);
       FAIL("a context was created for a device that does not exist");
-    } catch (const vk::VulkanUnavailable& e) {
+    } catch (const compute::VulkanUnavailable& e) {
       CHECK(std::string(e.what()).find("no-such-device-hsi") != std::string::npos);
     }
   }
 }
 
 TEST_CASE("Vulkan dense evaluation matches the CPU map on every asset", "[vulkan]") {
-  with_vulkan([](vk::Context& ctx) {
-    vk::DenseEvaluator eval(ctx);
+  with_vulkan([](compute::Context& ctx) {
+    compute::DenseEvaluator eval(ctx);
     INFO("device: " << ctx.info().name << ", double: " << eval.double_precision());
     REQUIRE(eval.double_precision());  // lavapipe and desktop GPUs have shaderFloat64
     for (const auto& path : test::asset_scenes()) {
@@ -146,7 +146,7 @@ TEST_CASE("Vulkan dense evaluation matches the CPU map on every asset", "[vulkan
         INFO(s.name << " map " << k);
         const HarmonicMap& map = s.maps[k];
         const MapValues cpu = evaluate_map(s.cage, map, points);
-        const vk::DenseField gpu = eval.evaluate_points(s.cage, map, points);
+        const compute::DenseField gpu = eval.evaluate_points(s.cage, map, points);
         REQUIRE(gpu.size() == points.size());
         CHECK(gpu.inside.empty());
         const double ef = relative_error(gpu.f, cpu.f), ez = relative_error(gpu.f_z, cpu.f_z),
@@ -182,14 +182,14 @@ TEST_CASE("Vulkan dense evaluation matches the CPU map on every asset", "[vulkan
 }
 
 TEST_CASE("Vulkan grid evaluation: agrees with points, CPU and the inside mask", "[vulkan]") {
-  with_vulkan([](vk::Context& ctx) {
-    vk::DenseEvaluator eval(ctx);
+  with_vulkan([](compute::Context& ctx) {
+    compute::DenseEvaluator eval(ctx);
     for (const auto& path : test::asset_scenes()) {
       const SceneMaps s = load_asset(path);
       const HarmonicMap& map = s.maps.back();
-      const vk::Grid grid = vk::Grid::covering(bounding_box(s.shape), 96);
+      const compute::Grid grid = compute::Grid::covering(bounding_box(s.shape), 96);
       INFO(s.name << ": grid " << grid.width << " x " << grid.height);
-      const vk::DenseField g = eval.evaluate_grid(s.cage, map, grid, &s.shape);
+      const compute::DenseField g = eval.evaluate_grid(s.cage, map, grid, &s.shape);
       REQUIRE(g.size() == grid.size());
       REQUIRE(g.inside.size() == grid.size());
       CHECK(g.width == grid.width);
@@ -214,7 +214,7 @@ TEST_CASE("Vulkan grid evaluation: agrees with points, CPU and the inside mask",
 
       // Grid evaluation = point evaluation at the same coordinates (the same shader
       // arithmetic, so equal to rounding).
-      const vk::DenseField p = eval.evaluate_points(s.cage, map, pts);
+      const compute::DenseField p = eval.evaluate_points(s.cage, map, pts);
       double worst = 0;
       for (size_t k = 0; k < pts.size(); ++k) {
         const double sc = std::abs(p.f[k]) + std::abs(p.f_z[k]) + std::abs(p.fzbar_conj[k]);
@@ -241,14 +241,14 @@ TEST_CASE("Vulkan grid evaluation: agrees with points, CPU and the inside mask",
 }
 
 TEST_CASE("Vulkan dense evaluation: known maps, folds, passes, skipping, errors", "[vulkan]") {
-  with_vulkan([](vk::Context& ctx) {
+  with_vulkan([](compute::Context& ctx) {
     const Shape shape = test::bar_with_holes();
     const Cage cage = build_cage(shape);
     const std::vector<cd> points = test::interior_points(shape, 5000, 11);
 
     SECTION("identity: f = w, f_z = 1, f_zbar = 0, no distortion") {
-      vk::DenseEvaluator eval(ctx);
-      const vk::DenseField d = eval.evaluate_points(cage, identity_map(cage), points);
+      compute::DenseEvaluator eval(ctx);
+      const compute::DenseField d = eval.evaluate_points(cage, identity_map(cage), points);
       for (size_t i = 0; i < points.size(); ++i) {
         CHECK(std::abs(d.f[i] - points[i]) <= 1e-11);
         CHECK(std::abs(d.f_z[i] - 1.0) <= 1e-11);
@@ -260,9 +260,9 @@ TEST_CASE("Vulkan dense evaluation: known maps, folds, passes, skipping, errors"
     }
 
     SECTION("an orientation-reversing affine map has det J < 0 everywhere") {
-      vk::DenseEvaluator eval(ctx);
+      compute::DenseEvaluator eval(ctx);
       const cd a(0.3, 0.1), b(1.2, -0.4), c(2.0, 1.0);
-      const vk::DenseField d = eval.evaluate_points(cage, affine_map(cage, a, b, c), points);
+      const compute::DenseField d = eval.evaluate_points(cage, affine_map(cage, a, b, c), points);
       for (size_t i = 0; i < points.size(); ++i) {
         CHECK(std::abs(d.f[i] - (a * points[i] + b * std::conj(points[i]) + c)) <= 1e-10);
         CHECK(d.det_sign[i] == -1);
@@ -271,29 +271,29 @@ TEST_CASE("Vulkan dense evaluation: known maps, folds, passes, skipping, errors"
     }
 
     SECTION("many passes give the same result as one") {
-      vk::DenseEvalOptions o;
+      compute::DenseEvalOptions o;
       o.max_points_per_pass = 1000;
-      vk::DenseEvaluator small(ctx, o), big(ctx);
+      compute::DenseEvaluator small(ctx, o), big(ctx);
       const HarmonicMap map = affine_map(cage, {0.9, 0.2}, {0.1, 0.05}, {0.0, 0.0});
-      const vk::DenseField a = small.evaluate_points(cage, map, points), b = big.evaluate_points(cage, map, points);
+      const compute::DenseField a = small.evaluate_points(cage, map, points), b = big.evaluate_points(cage, map, points);
       CHECK(small.last_stats().passes == 5);
       CHECK(big.last_stats().passes == 1);
       CHECK(a.f == b.f);
       CHECK(a.dirichlet == b.dirichlet);
       // A grid in passes too (the row-major index crosses pass boundaries mid-row).
-      const vk::Grid grid = vk::Grid::covering(bounding_box(shape), 77);
-      const vk::DenseField ga = small.evaluate_grid(cage, map, grid, &shape), gb = big.evaluate_grid(cage, map, grid, &shape);
+      const compute::Grid grid = compute::Grid::covering(bounding_box(shape), 77);
+      const compute::DenseField ga = small.evaluate_grid(cage, map, grid, &shape), gb = big.evaluate_grid(cage, map, grid, &shape);
       CHECK(ga.f == gb.f);
       CHECK(ga.inside == gb.inside);
     }
 
     SECTION("staged readback (the discrete-GPU path) gives the same result") {
-      vk::DenseEvalOptions o;
+      compute::DenseEvalOptions o;
       o.force_staging = true;
       o.max_points_per_pass = 2048;
-      vk::DenseEvaluator staged(ctx, o), direct(ctx);
+      compute::DenseEvaluator staged(ctx, o), direct(ctx);
       const HarmonicMap map = affine_map(cage, {0.9, 0.2}, {0.1, 0.05}, {0.3, 0.0});
-      const vk::DenseField a = staged.evaluate_points(cage, map, points), b = direct.evaluate_points(cage, map, points);
+      const compute::DenseField a = staged.evaluate_points(cage, map, points), b = direct.evaluate_points(cage, map, points);
       CHECK(staged.last_stats().passes == 3);
       CHECK(a.f == b.f);
       CHECK(a.f_z == b.f_z);
@@ -304,12 +304,12 @@ TEST_CASE("Vulkan dense evaluation: known maps, folds, passes, skipping, errors"
     }
 
     SECTION("skip_outside leaves points outside the shape unevaluated") {
-      vk::DenseEvalOptions o;
+      compute::DenseEvalOptions o;
       o.skip_outside = true;
-      vk::DenseEvaluator skip(ctx, o), full(ctx);
+      compute::DenseEvaluator skip(ctx, o), full(ctx);
       const HarmonicMap map = identity_map(cage);
-      const vk::Grid grid = vk::Grid::covering(bounding_box(shape), 64);
-      const vk::DenseField a = skip.evaluate_grid(cage, map, grid, &shape), b = full.evaluate_grid(cage, map, grid, &shape);
+      const compute::Grid grid = compute::Grid::covering(bounding_box(shape), 64);
+      const compute::DenseField a = skip.evaluate_grid(cage, map, grid, &shape), b = full.evaluate_grid(cage, map, grid, &shape);
       REQUIRE(a.inside == b.inside);
       int outside = 0;
       for (size_t k = 0; k < a.size(); ++k) {
@@ -325,15 +325,15 @@ TEST_CASE("Vulkan dense evaluation: known maps, folds, passes, skipping, errors"
     }
 
     SECTION("float fallback agrees to its stated tolerance on every asset") {
-      vk::DenseEvalOptions o;
-      o.precision = vk::Precision::kFloat;
-      vk::DenseEvaluator eval(ctx, o);
+      compute::DenseEvalOptions o;
+      o.precision = compute::Precision::kFloat;
+      compute::DenseEvaluator eval(ctx, o);
       CHECK(!eval.double_precision());
       for (const auto& path : test::asset_scenes()) {
         const SceneMaps s = load_asset(path);
         const std::vector<cd> pts = test::interior_points(s.shape, 1000);
         const MapValues cpu = evaluate_map(s.cage, s.maps.back(), pts);
-        const vk::DenseField gpu = eval.evaluate_points(s.cage, s.maps.back(), pts);
+        const compute::DenseField gpu = eval.evaluate_points(s.cage, s.maps.back(), pts);
         CHECK(!gpu.double_precision);
         const double ef = relative_error(gpu.f, cpu.f), ez = relative_error(gpu.f_z, cpu.f_z);
         INFO(s.name << ": float relative errors f " << ef << ", f_z " << ez);
@@ -343,7 +343,7 @@ TEST_CASE("Vulkan dense evaluation: known maps, folds, passes, skipping, errors"
     }
 
     SECTION("a map of the wrong size is refused with a clear message") {
-      vk::DenseEvaluator eval(ctx);
+      compute::DenseEvaluator eval(ctx);
       HarmonicMap bad = identity_map(cage);
       bad.phi.conservativeResize(bad.phi.size() - 1);
       try {
@@ -355,7 +355,7 @@ TEST_CASE("Vulkan dense evaluation: known maps, folds, passes, skipping, errors"
         CHECK(msg.find("coefficients") != std::string::npos);
         CHECK(msg.find(std::to_string(basis_size(cage))) != std::string::npos);
       }
-      vk::Grid grid = vk::Grid::covering(bounding_box(shape), 8);
+      compute::Grid grid = compute::Grid::covering(bounding_box(shape), 8);
       grid.spacing = {0.0, 1.0};
       CHECK_THROWS_AS(eval.evaluate_grid(cage, identity_map(cage), grid), InputError);
       // The evaluator still works after a refusal.
@@ -363,8 +363,8 @@ TEST_CASE("Vulkan dense evaluation: known maps, folds, passes, skipping, errors"
     }
 
     SECTION("no points: an empty field and no GPU work") {
-      vk::DenseEvaluator eval(ctx);
-      const vk::DenseField d = eval.evaluate_points(cage, identity_map(cage), {});
+      compute::DenseEvaluator eval(ctx);
+      const compute::DenseField d = eval.evaluate_points(cage, identity_map(cage), {});
       CHECK(d.size() == 0);
       CHECK(eval.last_stats().passes == 0);
     }
@@ -372,7 +372,7 @@ TEST_CASE("Vulkan dense evaluation: known maps, folds, passes, skipping, errors"
 }
 
 TEST_CASE("Vulkan grid mask: rows with many crossings and shapes with many holes fall back exactly", "[vulkan]") {
-  with_vulkan([](vk::Context& ctx) {
+  with_vulkan([](compute::Context& ctx) {
     // A comb: 40 teeth, so a row through them crosses 80 edges (over the 64 a row
     // keeps); and a plate with 40 square holes (over the 32 loops of the row mask).
     Shape comb;
@@ -395,9 +395,9 @@ TEST_CASE("Vulkan grid mask: rows with many crossings and shapes with many holes
       const cd lo = box.lo - cd(5, 5), hi = box.hi + cd(5, 5);
       cage.loops = {{lo, {hi.real(), lo.imag()}, hi, {lo.real(), hi.imag()}}};
       const HarmonicMap map = identity_map(cage);
-      vk::DenseEvaluator eval(ctx);
-      const vk::Grid grid = vk::Grid::covering(box, 400, 97);
-      const vk::DenseField g = eval.evaluate_grid(cage, map, grid, s);
+      compute::DenseEvaluator eval(ctx);
+      const compute::Grid grid = compute::Grid::covering(box, 400, 97);
+      const compute::DenseField g = eval.evaluate_grid(cage, map, grid, s);
       const std::vector<cd> pts = grid.points();
       int mismatch = 0, inside = 0;
       for (size_t k = 0; k < pts.size(); ++k) {

@@ -41,8 +41,8 @@ Shape framed_shape() {
 constexpr std::array<double, 4> kRect = {-1, -0.75, 1, 0.75};
 
 // A linear gradient: R grows left to right, G top to bottom, B = 128.
-vk::RgbaImage gradient(int w, int h) {
-  vk::RgbaImage img(w, h);
+RgbaImage gradient(int w, int h) {
+  RgbaImage img(w, h);
   for (int y = 0; y < h; ++y)
     for (int x = 0; x < w; ++x) {
       uint8_t* p = img.at(x, y);
@@ -55,7 +55,7 @@ vk::RgbaImage gradient(int w, int h) {
 }
 
 // The world point at the centre of pixel (x, y).
-cd world_at(const vk::View& v, int x, int y) {
+cd world_at(const compute::View& v, int x, int y) {
   return {v.world_center.real() + (x + 0.5 - v.pixel_center.real()) / v.pixels_per_unit,
           v.world_center.imag() - (y + 0.5 - v.pixel_center.imag()) / v.pixels_per_unit};
 }
@@ -72,14 +72,14 @@ int max_channel_diff(const uint8_t* a, const uint8_t* b) {
 // Every pixel test runs with both rasterizers (renderer.h): they must draw the same picture.
 #define FOR_EACH_RASTERIZER()                                                                               \
   const bool use_compute = GENERATE(false, true);                                                        \
-  const vk::Rasterizer rasterizer = use_compute ? vk::Rasterizer::kCompute : vk::Rasterizer::kGraphics; \
+  const compute::Rasterizer rasterizer = use_compute ? compute::Rasterizer::kCompute : compute::Rasterizer::kGraphics; \
   INFO("rasterizer: " << rasterizer_name(rasterizer))
 
-const char* rasterizer_name(vk::Rasterizer r) {
-  return r == vk::Rasterizer::kCompute ? "compute" : r == vk::Rasterizer::kGraphics ? "graphics" : "auto";
+const char* rasterizer_name(compute::Rasterizer r) {
+  return r == compute::Rasterizer::kCompute ? "compute" : r == compute::Rasterizer::kGraphics ? "graphics" : "auto";
 }
 
-vk::RendererOptions with_rasterizer(vk::Rasterizer r, vk::RendererOptions o = {}) {
+compute::RendererOptions with_rasterizer(compute::Rasterizer r, compute::RendererOptions o = {}) {
   o.rasterizer = r;
   return o;
 }
@@ -111,7 +111,7 @@ cd affine_inverse(cd a, cd b, cd c, cd q) {
 struct Difference {
   double mean_abs = 0, outlier_fraction = 0;
 };
-Difference compare(const vk::RgbaImage& a, const vk::RgbaImage& b) {
+Difference compare(const RgbaImage& a, const RgbaImage& b) {
   Difference d;
   size_t outliers = 0, n = static_cast<size_t>(a.width) * a.height;
   double sum = 0;
@@ -126,31 +126,31 @@ Difference compare(const vk::RgbaImage& a, const vk::RgbaImage& b) {
   return d;
 }
 
-void check_golden(const vk::RgbaImage& img, const std::string& name) {
+void check_golden(const RgbaImage& img, const std::string& name) {
   const std::filesystem::path golden = std::filesystem::path(HSI_TESTS_DIR) / "golden" / (name + ".png");
   if (env_set("HSI_UPDATE_GOLDEN")) {
     std::filesystem::create_directories(golden.parent_path());
-    vk::write_png(golden, img);
+    write_png(golden, img);
     WARN("HSI_UPDATE_GOLDEN: wrote " << golden.string());
     return;
   }
   INFO("golden " << golden.string() << " (regenerate with HSI_UPDATE_GOLDEN=1, see tests/golden/README.md)");
   REQUIRE(std::filesystem::exists(golden));
-  const vk::RgbaImage ref = vk::read_png(golden);
+  const RgbaImage ref = read_png(golden);
   REQUIRE(ref.width == img.width);
   REQUIRE(ref.height == img.height);
   const Difference d = compare(img, ref);
   if (d.mean_abs > 1.5 || d.outlier_fraction > 0.01) {
     const std::filesystem::path dir = std::filesystem::path(HSI_TEST_TMP) / "golden";
     std::filesystem::create_directories(dir);
-    vk::write_png(dir / (name + ".actual.png"), img);
-    vk::RgbaImage diff(img.width, img.height, {0, 0, 0, 255});
+    write_png(dir / (name + ".actual.png"), img);
+    RgbaImage diff(img.width, img.height, {0, 0, 0, 255});
     for (int y = 0; y < img.height; ++y)
       for (int x = 0; x < img.width; ++x) {
         const int m = std::min(255, 4 * max_channel_diff(img.at(x, y), ref.at(x, y)));
         diff.at(x, y)[0] = static_cast<uint8_t>(m);
       }
-    vk::write_png(dir / (name + ".diff.png"), diff);
+    write_png(dir / (name + ".diff.png"), diff);
     INFO("wrote " << (dir / (name + ".actual.png")).string() << " and .diff.png");
   }
   INFO("mean abs diff " << d.mean_abs << "/255, pixels off by > 48: " << 100 * d.outlier_fraction << "%");
@@ -160,7 +160,7 @@ void check_golden(const vk::RgbaImage& img, const std::string& name) {
 
 // A view showing where the map sends the shape (its boundary and handles), as the
 // hsi tool frames it.
-vk::View frame_view(const Shape& shape, const Cage& cage, const HarmonicMap& map, int w, int h, double margin) {
+compute::View frame_view(const Shape& shape, const Cage& cage, const HarmonicMap& map, int w, int h, double margin) {
   std::vector<cd> pts;
   for (int l = 0; l < shape.loop_count(); ++l)
     for (const cd& z : subdivide_edges(shape.loop(l), bounding_box(shape).diagonal() / 200)) pts.push_back(z);
@@ -170,27 +170,27 @@ vk::View frame_view(const Shape& shape, const Cage& cage, const HarmonicMap& map
     box.lo = {std::min(box.lo.real(), v.f(k).real()), std::min(box.lo.imag(), v.f(k).imag())};
     box.hi = {std::max(box.hi.real(), v.f(k).real()), std::max(box.hi.imag(), v.f(k).imag())};
   }
-  return vk::View::fit(box, w, h, margin);
+  return compute::View::fit(box, w, h, margin);
 }
 
 }  // namespace
 
 TEST_CASE("render: the identity map shows the texture unchanged, clipped at the outline and the hole", "[vulkan][render]") {
   FOR_EACH_RASTERIZER();
-  with_vulkan([&](vk::Context& ctx) {
+  with_vulkan([&](compute::Context& ctx) {
     const Setup s;
     const int W = 256, H = 192;
-    const vk::RgbaImage tex = gradient(W, H);
-    vk::Renderer r(ctx, W, H, with_rasterizer(rasterizer));
+    const RgbaImage tex = gradient(W, H);
+    compute::Renderer r(ctx, W, H, with_rasterizer(rasterizer));
     CHECK(r.msaa_samples() >= 1);
     r.set_mesh(s.mesh);
     r.set_texture(tex, kRect);
     // The texture's rectangle fills the image exactly: texel (x, y) lies under pixel (x, y).
-    const vk::View view = vk::View::fit({{-1, -0.75}, {1, 0.75}}, W, H);
+    const compute::View view = compute::View::fit({{-1, -0.75}, {1, 0.75}}, W, H);
     REQUIRE(view.pixels_per_unit == Approx(128.0));
-    vk::RenderStyle style;
+    compute::RenderStyle style;
     style.background = {1, 1, 1, 1};
-    const vk::RgbaImage img = r.render(s.cage, identity_map(s.cage), view, style);
+    const RgbaImage img = r.render(s.cage, identity_map(s.cage), view, style);
     REQUIRE(img.width == W);
     REQUIRE(img.height == H);
     int inside = 0, hole = 0, worst_inside = 0, worst_hole = 0;
@@ -215,19 +215,19 @@ TEST_CASE("render: the identity map shows the texture unchanged, clipped at the 
 
 TEST_CASE("render: an affine map moves the texture with the shape, holes stay empty", "[vulkan][render]") {
   FOR_EACH_RASTERIZER();
-  with_vulkan([&](vk::Context& ctx) {
+  with_vulkan([&](compute::Context& ctx) {
     const Setup s;
     const int W = 240, H = 240;
-    const vk::RgbaImage tex = gradient(200, 150);
+    const RgbaImage tex = gradient(200, 150);
     const cd a(0.8, 0.35), b(0.12, -0.05), c(0.3, -0.2);
     const HarmonicMap map = affine_map(s.cage, a, b, c);
-    vk::Renderer r(ctx, W, H, with_rasterizer(rasterizer));
+    compute::Renderer r(ctx, W, H, with_rasterizer(rasterizer));
     r.set_mesh(s.mesh);
     r.set_texture(tex, kRect);
-    const vk::View view = frame_view(s.shape, s.cage, map, W, H, 10);
-    vk::RenderStyle style;
+    const compute::View view = frame_view(s.shape, s.cage, map, W, H, 10);
+    compute::RenderStyle style;
     style.background = {0, 0, 0, 0};  // transparent
-    const vk::RgbaImage img = r.render(s.cage, map, view, style);
+    const RgbaImage img = r.render(s.cage, map, view, style);
     const double sigma2 = std::abs(a) - std::abs(b);
     // The expected colour: the gradient's value at the rest point, as texel centres define it.
     auto expected = [&](cd w, int channel) {
@@ -264,23 +264,23 @@ TEST_CASE("render: an affine map moves the texture with the shape, holes stay em
 
 TEST_CASE("render: the distortion overlay shows sigma1/sigma2 through the colour map", "[vulkan][render]") {
   FOR_EACH_RASTERIZER();
-  with_vulkan([&](vk::Context& ctx) {
+  with_vulkan([&](compute::Context& ctx) {
     const Setup s(0.1);
     const cd a(1.1, 0.2), b(0.3, 0.1);
     const double kappa = (std::abs(a) + std::abs(b)) / (std::abs(a) - std::abs(b));
     const HarmonicMap map = affine_map(s.cage, a, b, 0);
-    vk::Renderer r(ctx, 160, 160, with_rasterizer(rasterizer));
+    compute::Renderer r(ctx, 160, 160, with_rasterizer(rasterizer));
     r.set_mesh(s.mesh);
     r.set_texture(gradient(64, 48), kRect);
-    const vk::View view = frame_view(s.shape, s.cage, map, 160, 160, 8);
+    const compute::View view = frame_view(s.shape, s.cage, map, 160, 160, 8);
     for (const double t : {0.0, 0.3, 0.75}) {
-      vk::RenderStyle style;
-      style.overlays = vk::kOverlayDistortion;
+      compute::RenderStyle style;
+      style.overlays = compute::kOverlayDistortion;
       style.distortion_opacity = 1;
       style.distortion_lo = kappa - t;  // κ lands at t of the range [κ − t, κ − t + 1]
       style.distortion_hi = kappa - t + 1;
-      const vk::RgbaImage img = r.render(s.cage, map, view, style);
-      const auto cm = vk::colormap(t);
+      const RgbaImage img = r.render(s.cage, map, view, style);
+      const auto cm = compute::colormap(t);
       const cd centre = view.to_pixel(a * cd(-0.5, 0) + b * std::conj(cd(-0.5, 0)));
       const uint8_t* p = img.at(static_cast<int>(centre.real()), static_cast<int>(centre.imag()));
       INFO("t = " << t << ": pixel " << int(p[0]) << "," << int(p[1]) << "," << int(p[2]) << " colour map "
@@ -289,7 +289,7 @@ TEST_CASE("render: the distortion overlay shows sigma1/sigma2 through the colour
     }
   });
   // The host colour map is viridis: dark purple to yellow.
-  const auto lo = vk::colormap(0), hi = vk::colormap(1);
+  const auto lo = compute::colormap(0), hi = compute::colormap(1);
   CHECK(lo[2] > lo[1]);
   CHECK(hi[0] > 0.9);
   CHECK(hi[1] > 0.85);
@@ -298,25 +298,25 @@ TEST_CASE("render: the distortion overlay shows sigma1/sigma2 through the colour
 
 TEST_CASE("render: boundary lines, handle discs, and the red of an uncertified frame", "[vulkan][render]") {
   FOR_EACH_RASTERIZER();
-  with_vulkan([&](vk::Context& ctx) {
+  with_vulkan([&](compute::Context& ctx) {
     const Setup s;
     const int W = 200, H = 160;
-    vk::Renderer r(ctx, W, H, with_rasterizer(rasterizer));
+    compute::Renderer r(ctx, W, H, with_rasterizer(rasterizer));
     const std::vector<cd> handles = {{-0.6, 0.4}, {0.4, 0.5}};
     r.set_mesh(s.mesh, handles);
     const HarmonicMap id = identity_map(s.cage);
-    const vk::View view = vk::View::fit({{-1, -0.75}, {1, 0.75}}, W, H, 16);
-    auto px = [&](const vk::RgbaImage& img, cd w) {
+    const compute::View view = compute::View::fit({{-1, -0.75}, {1, 0.75}}, W, H, 16);
+    auto px = [&](const RgbaImage& img, cd w) {
       const cd q = view.to_pixel(w);
       return img.at(static_cast<int>(q.real()), static_cast<int>(q.imag()));
     };
-    vk::RenderStyle style;
+    compute::RenderStyle style;
     style.fill = {0.5f, 0.5f, 0.5f, 1};  // no texture: a grey fill
-    style.overlays = vk::kOverlayBoundary | vk::kOverlayHandles;
+    style.overlays = compute::kOverlayBoundary | compute::kOverlayHandles;
     style.boundary_width_px = 3;
     style.handle_radius_px = 8;
     style.handle_outline_px = 3;
-    const vk::RgbaImage img = r.render(s.cage, id, view, style);
+    const RgbaImage img = r.render(s.cage, id, view, style);
     CHECK(!r.has_texture());
     const uint8_t* grey = px(img, {-0.5, -0.3});
     CHECK(std::abs(grey[0] - 128) <= 1);
@@ -336,13 +336,13 @@ TEST_CASE("render: boundary lines, handle discs, and the red of an uncertified f
       CHECK(ring[0] < 100);
     }
     // Without overlays, those pixels are the fill or the background.
-    style.overlays = vk::kOverlayNone;
-    const vk::RgbaImage plain = r.render(s.cage, id, view, style);
+    style.overlays = compute::kOverlayNone;
+    const RgbaImage plain = r.render(s.cage, id, view, style);
     CHECK(max_channel_diff(px(plain, handles[0]), grey) <= 1);
 
     // Uncertified: red border around the image, the shape tinted red.
     style.uncertified = true;
-    const vk::RgbaImage red = r.render(s.cage, id, view, style);
+    const RgbaImage red = r.render(s.cage, id, view, style);
     for (const auto& [x, y] : std::vector<std::pair<int, int>>{{0, 0}, {W - 1, H - 1}, {W / 2, 1}, {1, H / 2}, {W - 2, H / 2}}) {
       const uint8_t* p = red.at(x, y);
       INFO("border pixel " << x << ", " << y);
@@ -360,43 +360,43 @@ TEST_CASE("render: boundary lines, handle discs, and the red of an uncertified f
 
 TEST_CASE("render: float precision, 1 sample, refusals", "[vulkan][render]") {
   FOR_EACH_RASTERIZER();
-  with_vulkan([&](vk::Context& ctx) {
+  with_vulkan([&](compute::Context& ctx) {
     const Setup s(0.1);
-    vk::RendererOptions o;
+    compute::RendererOptions o;
     o.msaa_samples = 1;
-    o.evaluation.precision = vk::Precision::kFloat;
-    vk::Renderer r(ctx, 96, 72, with_rasterizer(rasterizer, o));
+    o.evaluation.precision = compute::Precision::kFloat;
+    compute::Renderer r(ctx, 96, 72, with_rasterizer(rasterizer, o));
     CHECK(r.msaa_samples() == 1);
     CHECK(r.rasterizer() == rasterizer);
     CHECK(!r.double_precision());
-    const vk::View view = vk::View::fit({{-1, -0.75}, {1, 0.75}}, 96, 72);
+    const compute::View view = compute::View::fit({{-1, -0.75}, {1, 0.75}}, 96, 72);
     CHECK_THROWS_WITH(r.render(s.cage, identity_map(s.cage), view, {}), Contains("no mesh"));
     r.set_mesh(s.mesh);
     r.set_texture(gradient(96, 72), kRect);
-    const vk::RgbaImage img = r.render(s.cage, identity_map(s.cage), view, {});
+    const RgbaImage img = r.render(s.cage, identity_map(s.cage), view, {});
     CHECK(max_channel_diff(img.at(20, 36), gradient(96, 72).at(20, 36)) <= 2);
     HarmonicMap bad = identity_map(s.cage);
     bad.phi.conservativeResize(bad.phi.size() - 1);
     CHECK_THROWS_AS(r.render(s.cage, bad, view, {}), InputError);
-    vk::RenderStyle style;
+    compute::RenderStyle style;
     style.distortion_hi = style.distortion_lo;
     CHECK_THROWS_WITH(r.render(s.cage, identity_map(s.cage), view, style), Contains("hi > lo"));
     CHECK_THROWS_AS(r.set_texture(gradient(8, 8), {1, 0, 0, 1}), InputError);
     TriMesh broken = s.mesh;
     broken.triangles[0][1] = broken.vertex_count();
     CHECK_THROWS_WITH(r.set_mesh(broken), Contains("outside"));
-    CHECK_THROWS_AS(vk::Renderer(ctx, 0, 10), InputError);
+    CHECK_THROWS_AS(compute::Renderer(ctx, 0, 10), InputError);
   });
-  CHECK_THROWS_AS(vk::View::fit({{0, 0}, {0, 0}}, 10, 10), InputError);
-  CHECK_THROWS_WITH(vk::read_png(std::filesystem::path(HSI_TEST_TMP) / "no_such.png"), Contains("no_such.png"));
+  CHECK_THROWS_AS(compute::View::fit({{0, 0}, {0, 0}}, 10, 10), InputError);
+  CHECK_THROWS_WITH(read_png(std::filesystem::path(HSI_TEST_TMP) / "no_such.png"), Contains("no_such.png"));
 }
 
 TEST_CASE("render: PNG round trip", "[render]") {
-  const vk::RgbaImage img = gradient(37, 21);
+  const RgbaImage img = gradient(37, 21);
   const auto path = std::filesystem::path(HSI_TEST_TMP) / "render_roundtrip.png";
   std::filesystem::create_directories(path.parent_path());
-  vk::write_png(path, img);
-  const vk::RgbaImage back = vk::read_png(path);
+  write_png(path, img);
+  const RgbaImage back = read_png(path);
   CHECK(back.width == 37);
   CHECK(back.height == 21);
   CHECK(back.pixels == img.pixels);
@@ -410,14 +410,14 @@ struct Bundled {
   Scene scene;
   Cage cage;
   TriMesh mesh;
-  vk::RgbaImage texture;
+  RgbaImage texture;
   std::array<double, 4> rect;
   explicit Bundled(const std::string& name) : scene(load_scene(std::filesystem::path(HSI_ASSETS_DIR) / (name + ".json"))) {
     cage = scene_cage(scene);
     TriangulateOptions o;
     o.max_edge = edge_for_vertex_count(scene.shape, 6000);
     mesh = triangulate(scene.shape, o);
-    texture = vk::read_png(scene.texture_path());
+    texture = read_png(scene.texture_path());
     rect = scene.texture_rect_or_bounds();
   }
   std::vector<HarmonicMap> keyframes() const {
@@ -434,19 +434,19 @@ struct Bundled {
 
 TEST_CASE("render goldens: keyframes and interpolated frames of bundled scenes", "[vulkan][render][golden]") {
   FOR_EACH_RASTERIZER();
-  with_vulkan([&](vk::Context& ctx) {
+  with_vulkan([&](compute::Context& ctx) {
     SECTION("bar_holes: keyframe 1, interpolated t = 0.5 (distortion), uncertified marking") {
       const Bundled b("bar_holes");
       const std::vector<HarmonicMap> keys = b.keyframes();
-      vk::Renderer r(ctx, 256, 160, with_rasterizer(rasterizer));
+      compute::Renderer r(ctx, 256, 160, with_rasterizer(rasterizer));
       r.set_mesh(b.mesh, b.scene.handles);
       r.set_texture(b.texture, b.rect);
-      vk::RenderStyle style;
-      style.overlays = vk::kOverlayBoundary | vk::kOverlayHandles;
+      compute::RenderStyle style;
+      style.overlays = compute::kOverlayBoundary | compute::kOverlayHandles;
       style.boundary_width_px = 1.5f;
       style.handle_radius_px = 4;
       style.handle_outline_px = 1;
-      const vk::View key_view = frame_view(b.scene.shape, b.cage, keys[1], 256, 160, 8);
+      const compute::View key_view = frame_view(b.scene.shape, b.cage, keys[1], 256, 160, 8);
       check_golden(r.render(b.cage, keys[1], key_view, style), "bar_holes_key1");
 
       // An interpolated frame, half way between keyframes 0 and 1.
@@ -457,22 +457,22 @@ TEST_CASE("render goldens: keyframes and interpolated frames of bundled scenes",
       const FrameResult f = interp.frame(0.5 * (times[0] + times[1]));
       REQUIRE(f.certified);
       REQUIRE(!f.keyframe);
-      const vk::View view = frame_view(b.scene.shape, setup->cage, f.map, 256, 160, 8);
-      style.overlays = vk::kOverlayDistortion | vk::kOverlayBoundary;
+      const compute::View view = frame_view(b.scene.shape, setup->cage, f.map, 256, 160, 8);
+      style.overlays = compute::kOverlayDistortion | compute::kOverlayBoundary;
       style.distortion_lo = 1;
       style.distortion_hi = 1.5;
       check_golden(r.render(setup->cage, f.map, view, style), "bar_holes_t0.5_distortion");
-      style.overlays = vk::kOverlayNone;
+      style.overlays = compute::kOverlayNone;
       style.uncertified = true;
       check_golden(r.render(setup->cage, f.map, view, style), "bar_holes_t0.5_uncertified");
     }
     SECTION("sprite_pretzel: the sprite's own alpha, on a transparent background") {
       const Bundled b("sprite_pretzel");
       const std::vector<HarmonicMap> keys = b.keyframes();
-      vk::Renderer r(ctx, 192, 192, with_rasterizer(rasterizer));
+      compute::Renderer r(ctx, 192, 192, with_rasterizer(rasterizer));
       r.set_mesh(b.mesh, b.scene.handles);
       r.set_texture(b.texture, b.rect);
-      vk::RenderStyle style;
+      compute::RenderStyle style;
       style.background = {0, 0, 0, 0};
       const HarmonicMap& k = keys.back();
       check_golden(r.render(b.cage, k, frame_view(b.scene.shape, b.cage, k, 192, 192, 6), style), "pretzel_last_key");
@@ -482,15 +482,15 @@ TEST_CASE("render goldens: keyframes and interpolated frames of bundled scenes",
 
 TEST_CASE("render: given positions equal to f(vertices) draw the image of the map path", "[vulkan][render]") {
   FOR_EACH_RASTERIZER();
-  with_vulkan([&](vk::Context& ctx) {
+  with_vulkan([&](compute::Context& ctx) {
     // A bundled keyframe (a real harmonic map, not affine), every overlay on.
     const Bundled b("two_holes");
     const HarmonicMap key = b.keyframes().back();
     const int W = 256, H = 192;
-    vk::Renderer r(ctx, W, H, with_rasterizer(rasterizer));
+    compute::Renderer r(ctx, W, H, with_rasterizer(rasterizer));
     r.set_mesh(b.mesh, b.scene.handles);
     r.set_texture(b.texture, b.rect);
-    const vk::View view = frame_view(b.scene.shape, b.cage, key, W, H, 8);
+    const compute::View view = frame_view(b.scene.shape, b.cage, key, W, H, 8);
     const MapValues v = evaluate_map(b.cage, key, b.mesh.vertices);
     std::vector<cd> pos(b.mesh.vertices.size());
     std::vector<double> kappa(pos.size());
@@ -504,13 +504,13 @@ TEST_CASE("render: given positions equal to f(vertices) draw the image of the ma
     }
     REQUIRE(kappa_max > 1.05);  // the overlay shows something
     const std::vector<cd> handles = map_points(b.cage, key, b.scene.handles);
-    vk::RenderStyle style;
-    style.overlays = vk::kOverlayDistortion | vk::kOverlayBoundary | vk::kOverlayHandles;
+    compute::RenderStyle style;
+    style.overlays = compute::kOverlayDistortion | compute::kOverlayBoundary | compute::kOverlayHandles;
     style.distortion_lo = 1;
     style.distortion_hi = kappa_max;
     style.distortion_opacity = 0.6f;
-    const vk::RgbaImage from_map = r.render(b.cage, key, view, style);
-    const vk::RgbaImage given = r.render(pos, kappa, view, style, handles);
+    const RgbaImage from_map = r.render(b.cage, key, view, style);
+    const RgbaImage given = r.render(pos, kappa, view, style, handles);
     const Difference d = compare(given, from_map);
     int worst = 0;
     for (int y = 0; y < H; ++y)
@@ -539,7 +539,7 @@ TEST_CASE("render: given positions equal to f(vertices) draw the image of the ma
 TEST_CASE("render: an unwelded mesh shows per-triangle distortion flat", "[vulkan][render]") {
   FOR_EACH_RASTERIZER();
   const Setup s(0.25);
-  const vk::UnweldedMesh u = vk::unweld(s.mesh);
+  const compute::UnweldedMesh u = compute::unweld(s.mesh);
   REQUIRE(u.mesh.vertex_count() == 3 * s.mesh.triangle_count());
   REQUIRE(u.mesh.triangle_count() == s.mesh.triangle_count());
   REQUIRE(u.mesh.boundary_edges.size() == s.mesh.boundary_edges.size());
@@ -548,18 +548,18 @@ TEST_CASE("render: an unwelded mesh shows per-triangle distortion flat", "[vulka
       CHECK(u.mesh.vertices[static_cast<size_t>(u.mesh.boundary_edges[e][k])] ==
             s.mesh.vertices[static_cast<size_t>(s.mesh.boundary_edges[e][k])]);
   for (size_t v = 0; v < u.source.size(); ++v) CHECK(u.mesh.vertices[v] == s.mesh.vertices[static_cast<size_t>(u.source[v])]);
-  with_vulkan([&](vk::Context& ctx) {
+  with_vulkan([&](compute::Context& ctx) {
     const int W = 200, H = 150;
-    vk::Renderer r(ctx, W, H, with_rasterizer(rasterizer));
+    compute::Renderer r(ctx, W, H, with_rasterizer(rasterizer));
     r.set_mesh(u.mesh);
-    const vk::View view = vk::View::fit({{-1, -0.75}, {1, 0.75}}, W, H);
+    const compute::View view = compute::View::fit({{-1, -0.75}, {1, 0.75}}, W, H);
     // Triangle t gets κ = 1 + (t mod 5) / 4 over the range [1, 2]: five colours.
     std::vector<double> kappa(u.mesh.vertices.size());
     for (size_t v = 0; v < kappa.size(); ++v) kappa[v] = 1 + static_cast<double>((v / 3) % 5) / 4;
-    vk::RenderStyle style;
-    style.overlays = vk::kOverlayDistortion;
+    compute::RenderStyle style;
+    style.overlays = compute::kOverlayDistortion;
     style.distortion_opacity = 1;
-    const vk::RgbaImage img = r.render(u.mesh.vertices, kappa, view, style);
+    const RgbaImage img = r.render(u.mesh.vertices, kappa, view, style);
     int checked = 0, bad = 0;
     for (size_t t = 0; t < u.mesh.triangles.size(); ++t) {
       const auto& tri = u.mesh.triangles[t];
@@ -573,7 +573,7 @@ TEST_CASE("render: an unwelded mesh shows per-triangle distortion flat", "[vulka
       };
       if (std::min({dist(a, b), dist(b, c), dist(c, a)}) < 2.5) continue;
       ++checked;
-      const auto cm = vk::colormap(static_cast<double>(t % 5) / 4);
+      const auto cm = compute::colormap(static_cast<double>(t % 5) / 4);
       const uint8_t* p = img.at(static_cast<int>(q.real()), static_cast<int>(q.imag()));
       for (size_t ch = 0; ch < 3; ++ch) bad += std::abs(p[ch] - cm[ch] * 255) > 2.5;
     }
@@ -585,18 +585,18 @@ TEST_CASE("render: an unwelded mesh shows per-triangle distortion flat", "[vulka
 TEST_CASE("render: a frame recorded into the caller's submission is render()'s image; marks time its parts",
           "[vulkan][render]") {
   FOR_EACH_RASTERIZER();
-  with_vulkan([&](vk::Context& ctx) {
+  with_vulkan([&](compute::Context& ctx) {
     const Bundled b("two_holes");
     const HarmonicMap key = b.keyframes().back();
     const int W = 160, H = 120;
-    vk::Renderer r(ctx, W, H, with_rasterizer(rasterizer));
+    compute::Renderer r(ctx, W, H, with_rasterizer(rasterizer));
     r.set_mesh(b.mesh, b.scene.handles);
     r.set_texture(b.texture, b.rect);
-    const vk::View view = frame_view(b.scene.shape, b.cage, key, W, H, 8);
-    vk::RenderStyle style;
-    style.overlays = vk::kOverlayBoundary | vk::kOverlayHandles;
+    const compute::View view = frame_view(b.scene.shape, b.cage, key, W, H, 8);
+    compute::RenderStyle style;
+    style.overlays = compute::kOverlayBoundary | compute::kOverlayHandles;
     CHECK_THROWS_WITH(r.read_frame(), Contains("no frame drawn yet"));
-    const vk::RgbaImage reference = r.render(b.cage, key, view, style);
+    const RgbaImage reference = r.render(b.cage, key, view, style);
     // Draw something else first, so read_frame() must return the recorded frame.
     r.draw(b.cage, identity_map(b.cage), view, style);
     REQUIRE(compare(r.read_frame(), reference).mean_abs > 1);
@@ -604,7 +604,7 @@ TEST_CASE("render: a frame recorded into the caller's submission is render()'s i
       ctx.mark(cmd);
       r.record(cmd, b.cage, key, view, style, true);
     });
-    const vk::RgbaImage recorded = r.read_frame();
+    const RgbaImage recorded = r.read_frame();
     const Difference d = compare(recorded, reference);
     INFO("mean abs diff " << d.mean_abs << "/255");
     CHECK(d.mean_abs == 0);
@@ -626,38 +626,38 @@ TEST_CASE("render: a frame recorded into the caller's submission is render()'s i
 }
 
 TEST_CASE("render: the compute and graphics rasterizers draw the same frames of bundled scenes", "[vulkan][render]") {
-  with_vulkan([](vk::Context& ctx) {
-    vk::Renderer automatic(ctx, 16, 16);
+  with_vulkan([](compute::Context& ctx) {
+    compute::Renderer automatic(ctx, 16, 16);
     // kAuto: compute on GPUs, graphics on CPU devices (lavapipe rasterizes faster there).
-    CHECK(automatic.rasterizer() == (ctx.info().is_cpu() ? vk::Rasterizer::kGraphics : vk::Rasterizer::kCompute));
+    CHECK(automatic.rasterizer() == (ctx.info().is_cpu() ? compute::Rasterizer::kGraphics : compute::Rasterizer::kCompute));
     // A visibility buffer beyond one storage buffer (16384² pixels × 8 samples × 4 bytes
     // = 8 GiB) is refused before anything is allocated.
-    vk::RendererOptions huge;
+    compute::RendererOptions huge;
     huge.msaa_samples = 8;
-    CHECK_THROWS_WITH(vk::Renderer(ctx, 16384, 16384, with_rasterizer(vk::Rasterizer::kCompute, huge)),
+    CHECK_THROWS_WITH(compute::Renderer(ctx, 16384, 16384, with_rasterizer(compute::Rasterizer::kCompute, huge)),
                       Contains("maxStorageBufferRange"));
     for (const std::string name : {"two_holes", "sprite_pretzel"}) {
       const Bundled b(name);
       const int W = 224, H = 176;
       for (const int samples : {1, 4, 8}) {
-        vk::RendererOptions o;
+        compute::RendererOptions o;
         o.msaa_samples = samples;
-        vk::Renderer graphics(ctx, W, H, with_rasterizer(vk::Rasterizer::kGraphics, o));
-        vk::Renderer compute(ctx, W, H, with_rasterizer(vk::Rasterizer::kCompute, o));
+        compute::Renderer graphics(ctx, W, H, with_rasterizer(compute::Rasterizer::kGraphics, o));
+        compute::Renderer compute(ctx, W, H, with_rasterizer(compute::Rasterizer::kCompute, o));
         if (graphics.msaa_samples() != samples) continue;  // the device's graphics path lacks this count
         CHECK(compute.msaa_samples() == samples);
-        for (vk::Renderer* r : {&graphics, &compute}) {
+        for (compute::Renderer* r : {&graphics, &compute}) {
           r->set_mesh(b.mesh, b.scene.handles);
           r->set_texture(b.texture, b.rect);
         }
         for (const HarmonicMap& key : b.keyframes()) {
-          vk::RenderStyle style;
-          style.overlays = vk::kOverlayDistortion | vk::kOverlayBoundary | vk::kOverlayHandles;
+          compute::RenderStyle style;
+          style.overlays = compute::kOverlayDistortion | compute::kOverlayBoundary | compute::kOverlayHandles;
           style.distortion_opacity = 0.5f;
           style.distortion_hi = 1.5;
           style.background = {0.2f, 0.3f, 0.4f, name == "sprite_pretzel" ? 0.0f : 1.0f};
-          const vk::View view = frame_view(b.scene.shape, b.cage, key, W, H, 8);
-          const vk::RgbaImage a = graphics.render(b.cage, key, view, style), c = compute.render(b.cage, key, view, style);
+          const compute::View view = frame_view(b.scene.shape, b.cage, key, W, H, 8);
+          const RgbaImage a = graphics.render(b.cage, key, view, style), c = compute.render(b.cage, key, view, style);
           const Difference d = compare(c, a);
           INFO(name << ", " << samples << " samples: mean abs diff " << d.mean_abs << "/255, pixels off by > 48: "
                     << 100 * d.outlier_fraction << "%");
@@ -666,7 +666,7 @@ TEST_CASE("render: the compute and graphics rasterizers draw the same frames of 
           CHECK(d.mean_abs <= (samples == 1 ? 1.0 : 0.5));
           CHECK(d.outlier_fraction <= (samples == 1 ? 0.01 : 0.002));
           // The tolerance can fail: the same frame 2 px to the right is far off.
-          vk::View shifted = view;
+          compute::View shifted = view;
           shifted.pixel_center += 2.0;
           CHECK(compare(c, graphics.render(b.cage, key, shifted, style)).mean_abs > 2);
         }
@@ -711,14 +711,14 @@ TriMesh grid_mesh(int nx, int ny, double x0, double y0, double x1, double y1, do
 
 TEST_CASE("render: no cracks between triangles, large triangles, the last triangle on top", "[vulkan][render]") {
   FOR_EACH_RASTERIZER();
-  with_vulkan([&](vk::Context& ctx) {
+  with_vulkan([&](compute::Context& ctx) {
     const int W = 256, H = 192;
-    const vk::View view = vk::View::fit({{-1, -0.75}, {1, 0.75}}, W, H);  // 128 px per unit
-    vk::RenderStyle style;
+    const compute::View view = compute::View::fit({{-1, -0.75}, {1, 0.75}}, W, H);  // 128 px per unit
+    compute::RenderStyle style;
     style.background = {0, 0, 0, 1};
     style.fill = {1, 1, 1, 1};
     for (const int samples : {1, 4}) {
-      vk::RendererOptions o;
+      compute::RendererOptions o;
       o.msaa_samples = samples;
       // Fine grids put samples exactly on edges and vertices (unjittered: vertices on
       // pixel corners and centres) or anywhere (jittered); the coarse grid's triangles
@@ -727,14 +727,14 @@ TEST_CASE("render: no cracks between triangles, large triangles, the last triang
         int nx, ny;
         double jitter;
       };
-      vk::Renderer r(ctx, W, H, with_rasterizer(rasterizer, o));
+      compute::Renderer r(ctx, W, H, with_rasterizer(rasterizer, o));
       for (const Case c : {Case{128, 96, 0.0}, Case{101, 77, 0.45}, Case{4, 3, 0.3}}) {
         // Inset by a quarter pixel: no sample lies on the outer edge.
         const double inset = 0.25 / view.pixels_per_unit;
         const TriMesh m = grid_mesh(c.nx, c.ny, -1 + inset, -0.75 + inset, 1 - inset, 0.75 - inset, c.jitter);
         r.set_mesh(m);  // a new mesh for a renderer that has drawn others
         const std::vector<double> kappa(m.vertices.size(), 1.0);
-        const vk::RgbaImage img = r.render(m.vertices, kappa, view, style);
+        const RgbaImage img = r.render(m.vertices, kappa, view, style);
         // (With 4 samples, the image's outermost pixels have samples outside the inset.)
         const int edge = samples == 1 ? 0 : 1;
         int holes = 0;
@@ -744,9 +744,9 @@ TEST_CASE("render: no cracks between triangles, large triangles, the last triang
         CHECK(holes == 0);
         // Zoomed in 3x: every triangle at the image's sides is cut by it, and the
         // image lies inside the shape: all of it is the fill.
-        vk::View zoomed = view;
+        compute::View zoomed = view;
         zoomed.pixels_per_unit *= 3;
-        const vk::RgbaImage z = r.render(m.vertices, kappa, zoomed, style);
+        const RgbaImage z = r.render(m.vertices, kappa, zoomed, style);
         int off = 0;
         for (int y = 0; y < H; ++y)
           for (int x = 0; x < W; ++x) off += z.at(x, y)[0] != 255 || z.at(x, y)[1] != 255;
@@ -758,16 +758,16 @@ TEST_CASE("render: no cracks between triangles, large triangles, the last triang
     TriMesh two;
     two.vertices = {{-0.8, -0.5}, {0.4, -0.5}, {-0.2, 0.6}, {-0.4, -0.6}, {0.8, -0.6}, {0.2, 0.5}};
     two.triangles = {{0, 1, 2}, {3, 4, 5}};
-    vk::Renderer r(ctx, W, H, with_rasterizer(rasterizer));
+    compute::Renderer r(ctx, W, H, with_rasterizer(rasterizer));
     r.set_mesh(two);
-    style.overlays = vk::kOverlayDistortion;
+    style.overlays = compute::kOverlayDistortion;
     style.distortion_opacity = 1;
-    const vk::RgbaImage img = r.render(two.vertices, std::vector<double>{1, 1, 1, 2, 2, 2}, view, style);
+    const RgbaImage img = r.render(two.vertices, std::vector<double>{1, 1, 1, 2, 2, 2}, view, style);
     auto at = [&](cd w) {
       const cd q = view.to_pixel(w);
       return img.at(static_cast<int>(q.real()), static_cast<int>(q.imag()));
     };
-    const auto top = vk::colormap(1), below = vk::colormap(0);
+    const auto top = compute::colormap(1), below = compute::colormap(0);
     for (const auto& [w, cm] : {std::pair{cd(0.0, 0.0), top}, std::pair{cd(-0.6, -0.3), below}, std::pair{cd(0.6, -0.4), top}}) {
       INFO("at " << w);
       for (size_t ch = 0; ch < 3; ++ch) CHECK(std::abs(at(w)[ch] - cm[ch] * 255) <= 2.5);
@@ -776,11 +776,11 @@ TEST_CASE("render: no cracks between triangles, large triangles, the last triang
 }
 
 TEST_CASE("render: the distortion legend's upper end is a round number at or above the largest value", "[render]") {
-  CHECK(vk::round_distortion_hi(1.9) == Approx(2.0));   // steps of 0.25
-  CHECK(vk::round_distortion_hi(5.49) == Approx(9.0));  // steps of 2
-  CHECK(vk::round_distortion_hi(2.0) == Approx(2.0));   // already round
-  CHECK(vk::round_distortion_hi(1.0) == Approx(1.001));  // the smallest span, 1e-3, in steps of 0.00025
-  for (double hi : {1.01, 1.37, 3.3, 12.0, 250.0}) CHECK(vk::round_distortion_hi(hi) >= hi);
+  CHECK(compute::round_distortion_hi(1.9) == Approx(2.0));   // steps of 0.25
+  CHECK(compute::round_distortion_hi(5.49) == Approx(9.0));  // steps of 2
+  CHECK(compute::round_distortion_hi(2.0) == Approx(2.0));   // already round
+  CHECK(compute::round_distortion_hi(1.0) == Approx(1.001));  // the smallest span, 1e-3, in steps of 0.00025
+  for (double hi : {1.01, 1.37, 3.3, 12.0, 250.0}) CHECK(compute::round_distortion_hi(hi) >= hi);
 }
 
 TEST_CASE("render: a mesh whose image overlaps itself shows the later layer alone, the same in both rasterizers",
@@ -790,7 +790,7 @@ TEST_CASE("render: a mesh whose image overlaps itself shows the later layer alon
   // layer lies at larger y wherever the two overlap, so it is the later one there.
   // Translucent colour (fill alpha 0 under the colour map at half opacity) shows whether
   // anything of the layer below comes through: it must not, in either rasterizer.
-  with_vulkan([](vk::Context& ctx) {
+  with_vulkan([](compute::Context& ctx) {
     const int W = 192, H = 192;
     const TriMesh m = grid_mesh(140, 8, 0.0, -0.2, 7.0, 0.2, 0.0);
     const auto g = [](cd z) { return std::exp(cd(0.05, 1.0) * z); };
@@ -800,11 +800,11 @@ TEST_CASE("render: a mesh whose image overlaps itself shows the later layer alon
       pos.push_back(g(z));
       kappa.push_back(z.real() < 3.5 ? 1.0 : 2.0);  // near layer: colour map 0, far layer: colour map 1
     }
-    const vk::View view = vk::View::fit({{-1.9, -1.9}, {1.9, 1.9}}, W, H);
-    vk::RenderStyle style;
+    const compute::View view = compute::View::fit({{-1.9, -1.9}, {1.9, 1.9}}, W, H);
+    compute::RenderStyle style;
     style.background = {1, 1, 1, 1};
     style.fill = {0, 0, 0, 0};
-    style.overlays = vk::kOverlayDistortion;
+    style.overlays = compute::kOverlayDistortion;
     style.distortion_opacity = 0.5f;
     style.distortion_lo = 1;
     style.distortion_hi = 2;
@@ -812,17 +812,17 @@ TEST_CASE("render: a mesh whose image overlaps itself shows the later layer alon
     const cd z1(0.36, -0.16);
     const cd w = g(z1);
     REQUIRE(std::abs(w - g(z1 + cd(2 * std::numbers::pi, 0.1 * std::numbers::pi))) < 0.03);
-    const auto far = vk::colormap(1);
-    std::map<int, std::vector<vk::RgbaImage>> images;  // per sample count: graphics, compute
+    const auto far = compute::colormap(1);
+    std::map<int, std::vector<RgbaImage>> images;  // per sample count: graphics, compute
     for (const int samples : {1, 4})
-      for (const vk::Rasterizer ras : {vk::Rasterizer::kGraphics, vk::Rasterizer::kCompute}) {
-        vk::RendererOptions o;
+      for (const compute::Rasterizer ras : {compute::Rasterizer::kGraphics, compute::Rasterizer::kCompute}) {
+        compute::RendererOptions o;
         o.msaa_samples = samples;
-        vk::Renderer r(ctx, W, H, with_rasterizer(ras, o));
+        compute::Renderer r(ctx, W, H, with_rasterizer(ras, o));
         if (r.msaa_samples() != samples) continue;
         r.set_mesh(m);
-        const vk::RgbaImage a = r.render(pos, kappa, view, style);
-        const vk::RgbaImage b = r.render(pos, kappa, view, style);
+        const RgbaImage a = r.render(pos, kappa, view, style);
+        const RgbaImage b = r.render(pos, kappa, view, style);
         INFO(rasterizer_name(ras) << ", " << samples << " samples");
         CHECK(std::memcmp(a.pixels.data(), b.pixels.data(), a.pixels.size()) == 0);  // deterministic
         // Where the layers overlap: the far layer's half-opaque colour over white, nothing
@@ -849,7 +849,7 @@ TEST_CASE("render: the triangulation's spatial order shows an overlapping layer 
   // come in Hilbert-curve order of their rest centroids, so the far end (later on the
   // curve) covers the near end everywhere they overlap. CGAL's own face order, which
   // the renderers used to draw in, alternated the two layers triangle by triangle.
-  with_vulkan([](vk::Context& ctx) {
+  with_vulkan([](compute::Context& ctx) {
     const int W = 256, H = 256;
     const Shape bar = normalize(Shape{test::rect(0, -0.2, 7, 0.2), {}});
     TriangulateOptions to;
@@ -863,20 +863,20 @@ TEST_CASE("render: the triangulation's spatial order shows an overlapping layer 
       pos.push_back(g(z));
       kappa.push_back(z.real() < 3.5 ? 1.0 : 2.0);
     }
-    const vk::View view = vk::View::fit({{-1.9, -1.9}, {1.9, 1.9}}, W, H);
-    vk::RenderStyle style;
+    const compute::View view = compute::View::fit({{-1.9, -1.9}, {1.9, 1.9}}, W, H);
+    compute::RenderStyle style;
     style.background = {1, 1, 1, 1};
-    style.overlays = vk::kOverlayDistortion;
+    style.overlays = compute::kOverlayDistortion;
     style.distortion_opacity = 1;
     style.distortion_lo = 1;
     style.distortion_hi = 2;
-    const auto far = vk::colormap(1);
+    const auto far = compute::colormap(1);
     // Inside the bar by a margin (in rest units) that keeps pixels off the layers' edges.
     const auto inside = [](cd z) { return z.real() > 0.03 && z.real() < 6.97 && std::abs(z.imag()) < 0.17; };
-    for (const vk::Rasterizer ras : {vk::Rasterizer::kGraphics, vk::Rasterizer::kCompute}) {
-      vk::Renderer r(ctx, W, H, with_rasterizer(ras));
+    for (const compute::Rasterizer ras : {compute::Rasterizer::kGraphics, compute::Rasterizer::kCompute}) {
+      compute::Renderer r(ctx, W, H, with_rasterizer(ras));
       r.set_mesh(m);
-      const vk::RgbaImage img = r.render(pos, kappa, view, style);
+      const RgbaImage img = r.render(pos, kappa, view, style);
       int both = 0, wrong = 0;
       for (int y = 0; y < H; ++y)
         for (int x = 0; x < W; ++x) {

@@ -22,14 +22,14 @@ inline bool env_set(const char* name) {
 }
 
 template <class Body>
-void with_vulkan(Body&& body, vk::ContextOptions options = {}) {
+void with_vulkan(Body&& body, compute::ContextOptions options = {}) {
   options.validation = true;
-  std::shared_ptr<vk::ValidationLog> log;
+  std::shared_ptr<compute::ValidationLog> log;
   {
-    std::unique_ptr<vk::Context> ctx;
+    std::unique_ptr<compute::Context> ctx;
     try {
-      ctx = std::make_unique<vk::Context>(options);
-    } catch (const vk::VulkanUnavailable& e) {
+      ctx = std::make_unique<compute::Context>(options);
+    } catch (const compute::VulkanUnavailable& e) {
       if (env_set("HSI_REQUIRE_VULKAN")) FAIL("HSI_REQUIRE_VULKAN is set but: " << e.what());
       WARN("skipping Vulkan test: " << e.what());
       return;

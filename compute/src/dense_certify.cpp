@@ -13,15 +13,11 @@
 #include <string>
 
 #include "hsi/compute/spirv/certify_f64.h"
+#include "timing.h"
 
-namespace hsi::vk {
+namespace hsi::compute {
 
 namespace {
-
-using Clock = std::chrono::steady_clock;
-double ms_since(Clock::time_point t0) {
-  return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
-}
 
 // Mirrors `Push` in certify.comp.
 struct PushConstants {
@@ -82,7 +78,7 @@ DenseCertifier::DenseCertifier(const Context& context, const Shape& shape, const
                      context.info().name + " can hold in one storage buffer");
 
   pipeline_ = ComputePipeline(context, certify_f64, kBindings, sizeof(PushConstants));
-  set_ = DescriptorSet(context, pipeline_);
+  set_ = DescriptorSet(context, pipeline_.layout());
 
   int first = 0;
   for (const Loop& loop : cage.loops) {
@@ -334,4 +330,4 @@ CertificateResult DenseCertifier::collect() {
   return r;
 }
 
-}  // namespace hsi::vk
+}  // namespace hsi::compute

@@ -12,15 +12,11 @@
 
 #include "hsi/compute/spirv/dense_eval_f32.h"
 #include "hsi/compute/spirv/dense_eval_f64.h"
+#include "timing.h"
 
-namespace hsi::vk {
+namespace hsi::compute {
 
 namespace {
-
-using Clock = std::chrono::steady_clock;
-double ms_since(Clock::time_point t0) {
-  return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
-}
 
 // Mirrors `Push` in dense_eval.comp.
 struct PushConstants {
@@ -128,7 +124,7 @@ DenseEvaluator::DenseEvaluator(const Context& context, const DenseEvalOptions& o
   const std::span<const uint32_t> spirv =
       double_ ? std::span<const uint32_t>(dense_eval_f64) : std::span<const uint32_t>(dense_eval_f32);
   pipeline_ = ComputePipeline(context, spirv, kBindings, sizeof(PushConstants));
-  set_ = DescriptorSet(context, pipeline_);
+  set_ = DescriptorSet(context, pipeline_.layout());
 }
 
 DenseField DenseEvaluator::evaluate_points(const Cage& cage, const HarmonicMap& map, std::span<const cd> points) {
@@ -418,4 +414,4 @@ DenseField DenseEvaluator::run(const Job& job) {
   return out;
 }
 
-}  // namespace hsi::vk
+}  // namespace hsi::compute

@@ -4,10 +4,11 @@
 #include <array>
 #include <chrono>
 
+#include "hsi/compute/compute_pipeline.h"
 #include "hsi/compute/spirv/probe_fma_f32.h"
 #include "hsi/compute/spirv/probe_fma_f64.h"
 
-namespace hsi::vk {
+namespace hsi::compute {
 
 ThroughputProbe probe_fma_throughput(const Context& context, bool double_precision, uint32_t workgroups,
                                      uint32_t iterations) {
@@ -18,7 +19,7 @@ ThroughputProbe probe_fma_throughput(const Context& context, bool double_precisi
   const std::span<const uint32_t> spirv =
       double_precision ? std::span<const uint32_t>(probe_fma_f64) : std::span<const uint32_t>(probe_fma_f32);
   ComputePipeline pipeline(context, spirv, kBindings, sizeof(uint32_t));
-  DescriptorSet set(context, pipeline);
+  DescriptorSet set(context, pipeline.layout());
   const uint64_t invocations = static_cast<uint64_t>(workgroups) * kLocal;
   Buffer out(context, invocations * (double_precision ? 8 : 4), VK_BUFFER_USAGE_STORAGE_BUFFER_BIT,
              MemoryUse::kDeviceLocal);
@@ -41,4 +42,4 @@ ThroughputProbe probe_fma_throughput(const Context& context, bool double_precisi
   return r;
 }
 
-}  // namespace hsi::vk
+}  // namespace hsi::compute

@@ -1,113 +1,105 @@
-// PNG reading and writing through libpng's simplified API (png_image), which
-// converts every PNG colour type and bit depth to RGBA8.
+// Device images and texture uploads (see image.h).
 #include "hsi/compute/image.h"
 
-#include <png.h>
-
 #include <algorithm>
-#include <cmath>
-#include <cstring>
-#include <fstream>
-#include <iterator>
-#include <string>
 
-#include "hsi/domain.h"
-#include "hsi/png_import.h"
+namespace hsi::compute {
 
-namespace hsi::vk {
-
-namespace {
-constexpr int kMaxSide = 16384;
+uint32_t mip_levels(uint32_t width, uint32_t height) {
+  uint32_t mips = 1;
+  while ((std::max(width, height) >> mips) > 0) ++mips;
+  return mips;
 }
 
-RgbaImage::RgbaImage(int w, int h, std::array<uint8_t, 4> fill) : width(w), height(h) {
-  if (w < 0 || h < 0) throw InputError("image: negative size " + std::to_string(w) + " x " + std::to_string(h));
-  pixels.resize(static_cast<size_t>(w) * static_cast<size_t>(h) * 4);
-  for (size_t i = 0; i < pixels.size(); i += 4) std::memcpy(&pixels[i], fill.data(), 4);
+DeviceHandle<VkImageView> make_image_view(const Context& context, VkImage image, VkFormat format, uint32_t mips) {
+  VkImageViewCreateInfo view{};
+  view.sType = VK_STRUCTURE_TYPE_IMAGE_VIEW_CREATE_INFO;
+  view.image = image;
+  view.viewType = VK_IMAGE_VIEW_TYPE_2D;
+  view.format = format;
+  view.subresourceRange = {VK_IMAGE_ASPECT_COLOR_BIT, 0, mips, 0, 1};
+  VkImageView raw = VK_NULL_HANDLE;
+  check(vkCreateImageView(context.device(), &view, nullptr, &raw), "vkCreateImageView");
+  return DeviceHandle<VkImageView>(context.device(), raw, [](VkDevice d, VkImageView v) { vkDestroyImageView(d, v, nullptr); });
 }
 
-RgbaImage read_png(const std::filesystem::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw InputError(path.string() + ": cannot open the image (missing or unreadable)");
-  const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  png_image img;
-  std::memset(&img, 0, sizeof img);
-  img.version = PNG_IMAGE_VERSION;
-  if (!png_image_begin_read_from_memory(&img, bytes.data(), bytes.size()))
-    throw InputError(path.string() + ": not a readable PNG (" + img.message + ")");
-  if (img.width == 0 || img.height == 0 || img.width > kMaxSide || img.height > kMaxSide) {
-    png_image_free(&img);
-    throw InputError(path.string() + ": image size " + std::to_string(img.width) + " x " +
-                     std::to_string(img.height) + " is outside 1.." + std::to_string(kMaxSide));
+Image::Image(const Context& context, const ImageInfo& info) : info_(info) {
+  const VkDevice dev = context.device();
+  VkImageCreateInfo ci{};
+  ci.sType = VK_STRUCTURE_TYPE_IMAGE_CREATE_INFO;
+  ci.imageType = VK_IMAGE_TYPE_2D;
+  ci.format = info.format;
+  ci.extent = {info.width, info.height, 1};
+  ci.mipLevels = info.mips;
+  ci.arrayLayers = 1;
+  ci.samples = info.samples;
+  ci.tiling = VK_IMAGE_TILING_OPTIMAL;
+  ci.usage = info.usage;
+  ci.sharingMode = VK_SHARING_MODE_EXCLUSIVE;
+  ci.initialLayout = VK_IMAGE_LAYOUT_UNDEFINED;
+  VkImage raw = VK_NULL_HANDLE;
+  check(vkCreateImage(dev, &ci, nullptr, &raw), "vkCreateImage");
+  image_ = DeviceHandle<VkImage>(dev, raw, [](VkDevice d, VkImage i) { vkDestroyImage(d, i, nullptr); });
+  VkMemoryRequirements req;
+  vkGetImageMemoryRequirements(dev, raw, &req);
+  memory_ = allocate_memory(context, req, 0, VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT | info.preferred_memory);
+  check(vkBindImageMemory(dev, raw, memory_.get(), 0), "vkBindImageMemory");
+
+  view_ = make_image_view(context, raw, info.format, info.mips);
+}
+
+Image& Image::operator=(Image&& o) noexcept {
+  if (this != &o) {
+    reset();  // view, image, then memory (member-wise assignment would free the memory first)
+    info_ = o.info_;
+    memory_ = std::move(o.memory_);
+    image_ = std::move(o.image_);
+    view_ = std::move(o.view_);
   }
-  try {
-    check_png_payload({reinterpret_cast<const unsigned char*>(bytes.data()), bytes.size()}, path.string());
-  } catch (const InputError&) {
-    png_image_free(&img);
-    throw;
+  return *this;
+}
+
+void Image::reset() {
+  view_.reset();
+  image_.reset();
+  memory_.reset();
+}
+
+void Image::record_upload(VkCommandBuffer cmd, const Buffer& staging, VkImageLayout from, VkPipelineStageFlags readers) const {
+  const VkImage image = image_.get();
+  const uint32_t mips = info_.mips;
+  // A discarded image waits for nothing; one being sampled waits for its readers.
+  const bool fresh = from == VK_IMAGE_LAYOUT_UNDEFINED;
+  const VkAccessFlags before = fresh ? VkAccessFlags{0} : VkAccessFlags{VK_ACCESS_SHADER_READ_BIT};
+  const VkPipelineStageFlags before_stages = fresh ? VkPipelineStageFlags{VK_PIPELINE_STAGE_TOP_OF_PIPE_BIT} : readers;
+  image_barrier(cmd, image, from, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, before, VK_ACCESS_TRANSFER_WRITE_BIT, before_stages,
+                VK_PIPELINE_STAGE_TRANSFER_BIT, 0, mips);
+  VkBufferImageCopy copy{};
+  copy.imageSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, 1};
+  copy.imageExtent = {info_.width, info_.height, 1};
+  vkCmdCopyBufferToImage(cmd, staging.handle(), image, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, 1, &copy);
+  int32_t mw = static_cast<int32_t>(info_.width), mh = static_cast<int32_t>(info_.height);
+  for (uint32_t level = 1; level < mips; ++level) {
+    image_barrier(cmd, image, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL,
+                  VK_ACCESS_TRANSFER_WRITE_BIT, VK_ACCESS_TRANSFER_READ_BIT, VK_PIPELINE_STAGE_TRANSFER_BIT,
+                  VK_PIPELINE_STAGE_TRANSFER_BIT, level - 1, 1);
+    const int32_t nw = std::max(1, mw / 2), nh = std::max(1, mh / 2);
+    VkImageBlit blit{};
+    blit.srcSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, level - 1, 0, 1};
+    blit.srcOffsets[1] = {mw, mh, 1};
+    blit.dstSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, level, 0, 1};
+    blit.dstOffsets[1] = {nw, nh, 1};
+    vkCmdBlitImage(cmd, image, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, image, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, 1, &blit,
+                   VK_FILTER_LINEAR);
+    mw = nw;
+    mh = nh;
   }
-  img.format = PNG_FORMAT_RGBA;
-  RgbaImage out(static_cast<int>(img.width), static_cast<int>(img.height));
-  if (!png_image_finish_read(&img, nullptr, out.pixels.data(), 0, nullptr))
-    throw InputError(path.string() + ": corrupt or truncated PNG (" + img.message + ")");
-  return out;
+  if (mips > 1)
+    image_barrier(cmd, image, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL,
+                  VK_ACCESS_TRANSFER_READ_BIT, VK_ACCESS_SHADER_READ_BIT, VK_PIPELINE_STAGE_TRANSFER_BIT, readers, 0,
+                  mips - 1);
+  image_barrier(cmd, image, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL,
+                VK_ACCESS_TRANSFER_WRITE_BIT, VK_ACCESS_SHADER_READ_BIT, VK_PIPELINE_STAGE_TRANSFER_BIT, readers, mips - 1, 1);
 }
 
-void write_png(const std::filesystem::path& path, const RgbaImage& image) {
-  if (image.empty() || image.pixels.size() != static_cast<size_t>(image.width) * static_cast<size_t>(image.height) * 4)
-    throw InputError(path.string() + ": cannot write an empty or inconsistent image");
-  png_image img;
-  std::memset(&img, 0, sizeof img);
-  img.version = PNG_IMAGE_VERSION;
-  img.width = static_cast<png_uint_32>(image.width);
-  img.height = static_cast<png_uint_32>(image.height);
-  img.format = PNG_FORMAT_RGBA;
-  png_alloc_size_t size = 0;
-  if (!png_image_write_get_memory_size(img, size, 0, image.pixels.data(), 0, nullptr))
-    throw InputError(path.string() + ": PNG encoding failed (" + img.message + ")");
-  std::string bytes(size, '\0');
-  if (!png_image_write_to_memory(&img, bytes.data(), &size, 0, image.pixels.data(), 0, nullptr))
-    throw InputError(path.string() + ": PNG encoding failed (" + img.message + ")");
-  bytes.resize(size);
-  write_file_atomic(path, bytes);
-}
-
-RgbaImage checker_texture(const BoundingBox& box, std::array<double, 4>& rect, bool grid_lines) {
-  const cd ext = box.hi - box.lo;
-  const double side = std::max(ext.real(), ext.imag());
-  constexpr int kChecks = 16, kPx = 32;
-  const int w = std::max(1, static_cast<int>(std::ceil(ext.real() / side * kChecks))) * kPx;
-  const int h = std::max(1, static_cast<int>(std::ceil(ext.imag() / side * kChecks))) * kPx;
-  rect = {box.lo.real(), box.hi.imag() - h / static_cast<double>(kPx) * side / kChecks,
-          box.lo.real() + w / static_cast<double>(kPx) * side / kChecks, box.hi.imag()};
-  RgbaImage img(w, h);
-  for (int y = 0; y < h; ++y)
-    for (int x = 0; x < w; ++x) {
-      const bool odd = ((x / kPx) + (y / kPx)) % 2;
-      const bool line = grid_lines && (x % kPx == 0 || y % kPx == 0);
-      const uint8_t v[4] = {static_cast<uint8_t>(line ? 70 : odd ? 232 : 180),
-                            static_cast<uint8_t>(line ? 80 : odd ? 214 : 196),
-                            static_cast<uint8_t>(line ? 110 : odd ? 178 : 228), 255};
-      std::copy(v, v + 4, img.at(x, y));
-    }
-  return img;
-}
-
-SceneTexture scene_texture(const Scene& scene, const std::string& scene_file, bool use_checker, bool grid_lines,
-                           const std::string& alternative) {
-  SceneTexture t;
-  if (use_checker || scene.texture.empty()) {
-    t.image = checker_texture(bounding_box(scene.shape), t.rect, grid_lines);
-    t.checker = true;
-    return t;
-  }
-  const std::filesystem::path path = scene.texture_path();
-  if (!std::filesystem::exists(path))
-    throw InputError(scene_file + ": the texture file " + path.string() + " does not exist (fix \"texture\" in the scene" +
-                     (alternative.empty() ? "" : ", or " + alternative) + ")");
-  t.image = read_png(path);
-  t.rect = scene.texture_rect_or_bounds();
-  return t;
-}
-
-}  // namespace hsi::vk
+}  // namespace hsi::compute

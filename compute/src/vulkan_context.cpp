@@ -11,7 +11,9 @@
 #include <cstring>
 #include <sstream>
 
-namespace hsi::vk {
+#include "hsi/compute/sync.h"
+
+namespace hsi::compute {
 
 namespace {
 
@@ -483,11 +485,8 @@ void Context::submit_and_wait(const std::function<void(VkCommandBuffer)>& record
   if (timestamps_) vkCmdWriteTimestamp(cmd, VK_PIPELINE_STAGE_BOTTOM_OF_PIPE_BIT, timestamps_, 1);
   check(vkEndCommandBuffer(cmd), "vkEndCommandBuffer");
 
-  VkFenceCreateInfo fence_info{};
-  fence_info.sType = VK_STRUCTURE_TYPE_FENCE_CREATE_INFO;
-  VkFence raw_fence = VK_NULL_HANDLE;
-  check(vkCreateFence(device_, &fence_info, nullptr, &raw_fence), "vkCreateFence");
-  const DeviceHandle<VkFence> fence(device_, raw_fence, [](VkDevice d, VkFence f) { vkDestroyFence(d, f, nullptr); });
+  const DeviceHandle<VkFence> fence = make_fence(*this);
+  const VkFence raw_fence = fence.get();
 
   VkSubmitInfo submit{};
   submit.sType = VK_STRUCTURE_TYPE_SUBMIT_INFO;
@@ -550,7 +549,22 @@ std::pair<uint32_t, uint32_t> split_dispatch(const Context& context, uint64_t gr
   return {static_cast<uint32_t>(x), static_cast<uint32_t>(y)};
 }
 
-// --- buffer -----------------------------------------------------------------------
+// --- memory, buffer -----------------------------------------------------------------
+
+DeviceHandle<VkDeviceMemory> allocate_memory(const Context& context, const VkMemoryRequirements& requirements,
+                                             VkMemoryPropertyFlags required, VkMemoryPropertyFlags preferred,
+                                             VkMemoryPropertyFlags* flags) {
+  const uint32_t type = context.memory_type(requirements.memoryTypeBits, required, preferred);
+  if (flags) *flags = context.memory_properties().memoryTypes[type].propertyFlags;
+  VkMemoryAllocateInfo alloc{};
+  alloc.sType = VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO;
+  alloc.allocationSize = requirements.size;
+  alloc.memoryTypeIndex = type;
+  VkDeviceMemory mem = VK_NULL_HANDLE;
+  check(vkAllocateMemory(context.device(), &alloc, nullptr, &mem), "vkAllocateMemory");
+  return DeviceHandle<VkDeviceMemory>(context.device(), mem, [](VkDevice d, VkDeviceMemory m) { vkFreeMemory(d, m, nullptr); });
+}
+
 
 Buffer::Buffer(const Context& context, VkDeviceSize size, VkBufferUsageFlags usage, MemoryUse use)
     : context_(&context), size_(size) {
@@ -578,16 +592,10 @@ Buffer::Buffer(const Context& context, VkDeviceSize size, VkBufferUsageFlags usa
       preferred = VK_MEMORY_PROPERTY_HOST_CACHED_BIT | VK_MEMORY_PROPERTY_HOST_COHERENT_BIT;
       break;
   }
-  const uint32_t type = context.memory_type(req.memoryTypeBits, required, preferred);
-  const VkMemoryPropertyFlags flags = context.memory_properties().memoryTypes[type].propertyFlags;
+  VkMemoryPropertyFlags flags = 0;
+  memory_ = allocate_memory(context, req, required, preferred, &flags);
   flags_ = flags;
-  VkMemoryAllocateInfo alloc{};
-  alloc.sType = VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO;
-  alloc.allocationSize = req.size;
-  alloc.memoryTypeIndex = type;
-  VkDeviceMemory mem = VK_NULL_HANDLE;
-  check(vkAllocateMemory(dev, &alloc, nullptr, &mem), "vkAllocateMemory");
-  memory_ = DeviceHandle<VkDeviceMemory>(dev, mem, [](VkDevice d, VkDeviceMemory m) { vkFreeMemory(d, m, nullptr); });
+  const VkDeviceMemory mem = memory_.get();
   check(vkBindBufferMemory(dev, raw, mem, 0), "vkBindBufferMemory");
   // Device-local memory that happens to be host-visible (CPU devices, integrated
   // GPUs, resizable BAR) is mapped too, so callers can skip staging copies.
@@ -668,133 +676,4 @@ void Buffer::read(void* out, VkDeviceSize bytes, VkDeviceSize offset) const {
   std::memcpy(out, static_cast<const std::byte*>(mapped_) + offset, static_cast<size_t>(bytes));
 }
 
-// --- compute pipeline ---------------------------------------------------------------
-
-ComputePipeline::ComputePipeline(const Context& context, std::span<const uint32_t> spirv,
-                                 std::span<const VkDescriptorType> bindings, uint32_t push_constant_bytes)
-    : bindings_(bindings.begin(), bindings.end()) {
-  const VkDevice dev = context.device();
-  std::vector<VkDescriptorSetLayoutBinding> b(bindings.size());
-  for (size_t i = 0; i < bindings.size(); ++i) {
-    b[i].binding = static_cast<uint32_t>(i);
-    b[i].descriptorType = bindings[i];
-    b[i].descriptorCount = 1;
-    b[i].stageFlags = VK_SHADER_STAGE_COMPUTE_BIT;
-  }
-  VkDescriptorSetLayoutCreateInfo set_info{};
-  set_info.sType = VK_STRUCTURE_TYPE_DESCRIPTOR_SET_LAYOUT_CREATE_INFO;
-  set_info.bindingCount = static_cast<uint32_t>(b.size());
-  set_info.pBindings = b.data();
-  VkDescriptorSetLayout set_layout = VK_NULL_HANDLE;
-  check(vkCreateDescriptorSetLayout(dev, &set_info, nullptr, &set_layout), "vkCreateDescriptorSetLayout");
-  set_layout_ = DeviceHandle<VkDescriptorSetLayout>(
-      dev, set_layout, [](VkDevice d, VkDescriptorSetLayout l) { vkDestroyDescriptorSetLayout(d, l, nullptr); });
-
-  VkPushConstantRange push{VK_SHADER_STAGE_COMPUTE_BIT, 0, push_constant_bytes};
-  VkPipelineLayoutCreateInfo layout_info{};
-  layout_info.sType = VK_STRUCTURE_TYPE_PIPELINE_LAYOUT_CREATE_INFO;
-  layout_info.setLayoutCount = 1;
-  layout_info.pSetLayouts = &set_layout;
-  layout_info.pushConstantRangeCount = push_constant_bytes ? 1u : 0u;
-  layout_info.pPushConstantRanges = &push;
-  VkPipelineLayout layout = VK_NULL_HANDLE;
-  check(vkCreatePipelineLayout(dev, &layout_info, nullptr, &layout), "vkCreatePipelineLayout");
-  layout_ = DeviceHandle<VkPipelineLayout>(dev, layout,
-                                           [](VkDevice d, VkPipelineLayout l) { vkDestroyPipelineLayout(d, l, nullptr); });
-
-  VkShaderModuleCreateInfo module_info{};
-  module_info.sType = VK_STRUCTURE_TYPE_SHADER_MODULE_CREATE_INFO;
-  module_info.codeSize = spirv.size_bytes();
-  module_info.pCode = spirv.data();
-  VkShaderModule module_raw = VK_NULL_HANDLE;
-  check(vkCreateShaderModule(dev, &module_info, nullptr, &module_raw), "vkCreateShaderModule");
-  const DeviceHandle<VkShaderModule> module(dev, module_raw,
-                                            [](VkDevice d, VkShaderModule m) { vkDestroyShaderModule(d, m, nullptr); });
-
-  VkComputePipelineCreateInfo info{};
-  info.sType = VK_STRUCTURE_TYPE_COMPUTE_PIPELINE_CREATE_INFO;
-  info.stage.sType = VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO;
-  info.stage.stage = VK_SHADER_STAGE_COMPUTE_BIT;
-  info.stage.module = module.get();
-  info.stage.pName = "main";
-  info.layout = layout;
-  VkPipeline pipeline = VK_NULL_HANDLE;
-  check(vkCreateComputePipelines(dev, VK_NULL_HANDLE, 1, &info, nullptr, &pipeline), "vkCreateComputePipelines");
-  pipeline_ = DeviceHandle<VkPipeline>(dev, pipeline, [](VkDevice d, VkPipeline p) { vkDestroyPipeline(d, p, nullptr); });
-}
-
-// --- descriptor set -------------------------------------------------------------------
-
-void ComputePipeline::bind(VkCommandBuffer cmd, const DescriptorSet& set) const {
-  vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, pipeline_.get());
-  const VkDescriptorSet s = set.handle();
-  vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, layout_.get(), 0, 1, &s, 0, nullptr);
-}
-
-void ComputePipeline::push(VkCommandBuffer cmd, const void* data, uint32_t bytes) const {
-  vkCmdPushConstants(cmd, layout_.get(), VK_SHADER_STAGE_COMPUTE_BIT, 0, bytes, data);
-}
-
-DescriptorSet::DescriptorSet(const Context& context, const ComputePipeline& pipeline)
-    : context_(&context), bindings_(pipeline.bindings()) {
-  const VkDevice dev = context.device();
-  std::vector<VkDescriptorPoolSize> sizes;
-  for (VkDescriptorType t : bindings_) {
-    auto it = std::find_if(sizes.begin(), sizes.end(), [t](const VkDescriptorPoolSize& s) { return s.type == t; });
-    if (it == sizes.end()) sizes.push_back({t, 1});
-    else ++it->descriptorCount;
-  }
-  VkDescriptorPoolCreateInfo pool_info{};
-  pool_info.sType = VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO;
-  pool_info.maxSets = 1;
-  pool_info.poolSizeCount = static_cast<uint32_t>(sizes.size());
-  pool_info.pPoolSizes = sizes.data();
-  VkDescriptorPool pool = VK_NULL_HANDLE;
-  check(vkCreateDescriptorPool(dev, &pool_info, nullptr, &pool), "vkCreateDescriptorPool");
-  pool_ = DeviceHandle<VkDescriptorPool>(dev, pool,
-                                         [](VkDevice d, VkDescriptorPool p) { vkDestroyDescriptorPool(d, p, nullptr); });
-  const VkDescriptorSetLayout layout = pipeline.set_layout();
-  VkDescriptorSetAllocateInfo alloc{};
-  alloc.sType = VK_STRUCTURE_TYPE_DESCRIPTOR_SET_ALLOCATE_INFO;
-  alloc.descriptorPool = pool;
-  alloc.descriptorSetCount = 1;
-  alloc.pSetLayouts = &layout;
-  check(vkAllocateDescriptorSets(dev, &alloc, &set_), "vkAllocateDescriptorSets");
-}
-
-void DescriptorSet::check_binding(uint32_t binding) const {
-  if (binding >= bindings_.size())
-    throw VulkanError("DescriptorSet::bind: binding " + std::to_string(binding) + " does not exist (the set has " +
-                      std::to_string(bindings_.size()) + ")");
-}
-
-void DescriptorSet::bind(uint32_t binding, VkImageView view, VkImageLayout layout, VkSampler sampler) {
-  check_binding(binding);
-  const VkDescriptorType type = bindings_[binding];
-  if (type != VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER && type != VK_DESCRIPTOR_TYPE_STORAGE_IMAGE)
-    throw VulkanError("DescriptorSet::bind: binding " + std::to_string(binding) + " is not an image binding");
-  VkDescriptorImageInfo info{type == VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER ? sampler : VK_NULL_HANDLE, view, layout};
-  VkWriteDescriptorSet w{};
-  w.sType = VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET;
-  w.dstSet = set_;
-  w.dstBinding = binding;
-  w.descriptorCount = 1;
-  w.descriptorType = type;
-  w.pImageInfo = &info;
-  vkUpdateDescriptorSets(context_->device(), 1, &w, 0, nullptr);
-}
-
-void DescriptorSet::bind(uint32_t binding, const Buffer& buffer) {
-  check_binding(binding);
-  VkDescriptorBufferInfo info{buffer.handle(), 0, VK_WHOLE_SIZE};
-  VkWriteDescriptorSet w{};
-  w.sType = VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET;
-  w.dstSet = set_;
-  w.dstBinding = binding;
-  w.descriptorCount = 1;
-  w.descriptorType = bindings_[binding];
-  w.pBufferInfo = &info;
-  vkUpdateDescriptorSets(context_->device(), 1, &w, 0, nullptr);
-}
-
-}  // namespace hsi::vk
+}  // namespace hsi::compute

@@ -1,16 +1,12 @@
-// Shape from a PNG sprite's alpha channel: decode (libpng's simplified API),
+// Shape from a PNG sprite's alpha channel: decode (png.h's decode_png_alpha),
 // marching squares, nesting, largest piece, Douglas–Peucker (see png_import.h).
 #include "hsi/png_import.h"
-
-#include <png.h>
 
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
 #include <cstring>
-#include <fstream>
-#include <iterator>
 #include <sstream>
 #include <unordered_map>
 #include <utility>
@@ -37,85 +33,6 @@ std::string plural(size_t n, const std::string& word) {
 }
 
 // ---------------------------------------------------------------------------
-// Decoding
-
-struct AlphaImage {
-  int width = 0, height = 0;
-  std::vector<uint16_t> alpha;  // row-major, row 0 at the top
-  double max_value = 255;       // 255 for 8-bit sources, 65535 for 16-bit ones
-  std::vector<std::string> warnings;
-};
-
-// Frees libpng's state however we leave (png_image_free is safe to call twice).
-struct PngImageGuard {
-  png_image* image;
-  ~PngImageGuard() { png_image_free(image); }
-};
-
-std::string describe_format(png_uint_32 format) {
-  if (format & PNG_FORMAT_FLAG_COLORMAP) return "palette without a tRNS chunk";
-  return (format & PNG_FORMAT_FLAG_COLOR) ? "RGB" : "greyscale";
-}
-
-std::vector<unsigned char> read_file(const std::filesystem::path& path, const std::string& name) {
-  std::error_code ec;
-  if (!std::filesystem::exists(path, ec)) throw InputError(name + ": no such file");
-  if (std::filesystem::is_directory(path, ec)) throw InputError(name + ": is a directory, not a PNG file");
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw InputError(name + ": cannot open the file for reading");
-  std::vector<unsigned char> data((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  if (in.bad()) throw InputError(name + ": read error");
-  return data;
-}
-
-AlphaImage read_alpha(std::span<const unsigned char> data, const std::string& name) {
-  static constexpr unsigned char kSignature[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
-  if (data.size() < 8 || !std::equal(std::begin(kSignature), std::end(kSignature), data.begin()))
-    throw InputError(name + ": not a PNG file (" +
-                     (data.empty() ? std::string("the file is empty") : std::string("bad signature")) + ")");
-
-  png_image image{};
-  image.version = PNG_IMAGE_VERSION;
-  image.opaque = nullptr;
-  PngImageGuard guard{&image};
-  if (!png_image_begin_read_from_memory(&image, data.data(), data.size()))
-    throw InputError(name + ": corrupt or truncated PNG data (libpng: " + image.message + ")");
-  AlphaImage out;
-  if (image.width > static_cast<png_uint_32>(kPngMaxSide) || image.height > static_cast<png_uint_32>(kPngMaxSide))
-    throw InputError(name + ": image too large (" + std::to_string(image.width) + "x" + std::to_string(image.height) +
-                     " px; at most " + std::to_string(kPngMaxSide) + " px on a side)");
-  check_png_payload(data, name);
-  if (!(image.format & PNG_FORMAT_FLAG_ALPHA))
-    throw InputError(name + ": the image has no alpha channel (" + describe_format(image.format) +
-                     "); import-png traces the alpha channel, so it needs RGBA, grey+alpha, or a palette or "
-                     "colour key with transparency (tRNS)");
-  out.width = static_cast<int>(image.width);
-  out.height = static_cast<int>(image.height);
-  const size_t n = static_cast<size_t>(image.width) * image.height;
-  const bool sixteen = (image.format & PNG_FORMAT_FLAG_LINEAR) != 0;
-  // 8-bit sources: grey+alpha, 2 bytes a pixel, read straight into one uint16_t a
-  // pixel and then reduced in place to the alpha byte. 16-bit sources: linear
-  // grey+alpha (alpha is not altered by libpng's premultiplication of grey).
-  image.format = sixteen ? PNG_FORMAT_LINEAR_Y_ALPHA : PNG_FORMAT_GA;
-  out.max_value = sixteen ? 65535.0 : 255.0;
-  out.alpha.resize(sixteen ? 2 * n : n);
-  if (PNG_IMAGE_SIZE(image) != out.alpha.size() * sizeof(uint16_t))
-    throw InputError(name + ": unexpected decoded image size");  // cannot happen; guards the buffer
-  if (!png_image_finish_read(&image, nullptr, out.alpha.data(), 0, nullptr))
-    throw InputError(name + ": corrupt or truncated PNG data (libpng: " + image.message + ")");
-  if (image.warning_or_error & PNG_IMAGE_WARNING) out.warnings.push_back(std::string("libpng: ") + image.message);
-  if (sixteen) {
-    for (size_t i = 0; i < n; ++i) out.alpha[i] = out.alpha[2 * i + 1];
-    out.alpha.resize(n);
-    out.alpha.shrink_to_fit();
-  } else {
-    const unsigned char* bytes = reinterpret_cast<const unsigned char*>(out.alpha.data());
-    for (size_t i = 0; i < n; ++i) out.alpha[i] = bytes[2 * i + 1];  // reads bytes of slot i only
-  }
-  return out;
-}
-
-// ---------------------------------------------------------------------------
 // Marching squares
 
 // The image padded by one transparent pixel on every side; node (x, y) of the
@@ -123,7 +40,7 @@ AlphaImage read_alpha(std::span<const unsigned char> data, const std::string& na
 // coordinates (x right, y down).
 class PaddedGrid {
  public:
-  PaddedGrid(const AlphaImage& img, double threshold)
+  PaddedGrid(const PngAlpha& img, double threshold)
       : img_(img), nx_(img.width + 2), ny_(img.height + 2), level_(threshold * img.max_value) {}
   int nx() const { return nx_; }
   int ny() const { return ny_; }
@@ -154,7 +71,7 @@ class PaddedGrid {
   }
 
  private:
-  const AlphaImage& img_;
+  const PngAlpha& img_;
   int nx_, ny_;
   double level_;
 };
@@ -316,64 +233,16 @@ void check_options(const PngImportOptions& options, const std::string& name) {
 }
 }  // namespace
 
-void check_png_payload(std::span<const unsigned char> data, const std::string& name) {
-  const auto be32 = [&](size_t at) {
-    return (uint32_t{data[at]} << 24) | (uint32_t{data[at + 1]} << 16) | (uint32_t{data[at + 2]} << 8) | uint32_t{data[at + 3]};
-  };
-  // IHDR comes first: 8-byte signature, then length, "IHDR", width, height, depth, colour type.
-  if (data.size() < 33 || std::memcmp(&data[12], "IHDR", 4) != 0) return;  // libpng reports these itself
-  const uint64_t width = be32(16), height = be32(20);
-  const unsigned depth = data[24], colour = data[25];
-  const unsigned channels = colour == 0 ? 1 : colour == 2 ? 3 : colour == 3 ? 1 : colour == 4 ? 2 : colour == 6 ? 4 : 0;
-  if (channels == 0 || depth == 0 || depth > 16) return;  // invalid header: libpng's message names it
-  // Sum the IDAT chunks' lengths (as far as the file goes).
-  uint64_t compressed = 0;
-  for (size_t at = 8; at + 8 <= data.size();) {
-    const uint64_t length = be32(at);
-    if (std::memcmp(&data[at + 4], "IDAT", 4) == 0) compressed += std::min<uint64_t>(length, data.size() - (at + 8));
-    at += static_cast<size_t>(std::min<uint64_t>(12 + length, data.size()));
-  }
-  // The filtered rows the zlib stream must expand to (non-interlaced; interlacing adds more).
-  const uint64_t raw = height * (1 + (width * channels * depth + 7) / 8);
-  constexpr uint64_t kDeflateMaxRatio = 1032;
-  if (raw > kDeflateMaxRatio * compressed + 1024)
-    throw InputError(name + ": truncated or corrupt PNG: its header claims " + std::to_string(width) + "x" +
-                     std::to_string(height) + " px (" + std::to_string(raw) + " bytes of rows) but it holds only " +
-                     std::to_string(compressed) + " bytes of image data, which cannot expand to that");
-}
-
-std::array<int, 2> check_png_texture(std::span<const unsigned char> data, const std::string& name) {
-  static constexpr unsigned char kSignature[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
-  if (data.size() < 8 || !std::equal(std::begin(kSignature), std::end(kSignature), data.begin()))
-    throw InputError(name + ": the texture is not a PNG file (" +
-                     (data.empty() ? std::string("the file is empty") : std::string("bad signature")) + ")");
-  png_image image{};
-  image.version = PNG_IMAGE_VERSION;
-  PngImageGuard guard{&image};
-  if (!png_image_begin_read_from_memory(&image, data.data(), data.size()))
-    throw InputError(name + ": the texture is corrupt or truncated PNG data (libpng: " + image.message + ")");
-  if (image.width == 0 || image.height == 0 || image.width > static_cast<png_uint_32>(kPngMaxSide) ||
-      image.height > static_cast<png_uint_32>(kPngMaxSide))
-    throw InputError(name + ": the texture's size " + std::to_string(image.width) + "x" + std::to_string(image.height) +
-                     " px is outside 1.." + std::to_string(kPngMaxSide) + " px on a side");
-  check_png_payload(data, name + " (texture)");
-  image.format = PNG_FORMAT_RGBA;
-  std::vector<unsigned char> pixels(PNG_IMAGE_SIZE(image));
-  if (!png_image_finish_read(&image, nullptr, pixels.data(), 0, nullptr))
-    throw InputError(name + ": the texture is corrupt or truncated PNG data (libpng: " + image.message + ")");
-  return {static_cast<int>(image.width), static_cast<int>(image.height)};
-}
-
 PngShape import_png_alpha(const std::filesystem::path& png, const PngImportOptions& options) {
   const std::string name = png.string();
   check_options(options, name);
-  return import_png_alpha(read_file(png, name), name, options);
+  return import_png_alpha(read_png_bytes(png, name), name, options);
 }
 
 PngShape import_png_alpha(std::span<const unsigned char> png_bytes, const std::string& name, const PngImportOptions& options) {
   check_options(options, name);
   const double t = options.alpha_threshold;
-  const AlphaImage img = read_alpha(png_bytes, name);
+  const PngAlpha img = decode_png_alpha(png_bytes, name);
   PngShape result;
   result.width = img.width;
   result.height = img.height;

@@ -13,8 +13,8 @@ namespace hsi::capi {
 namespace {
 
 struct RenderCache {
-  std::unique_ptr<vk::Context> context;
-  std::unique_ptr<vk::Renderer> renderer;
+  std::unique_ptr<compute::Context> context;
+  std::unique_ptr<compute::Renderer> renderer;
   int width = 0, height = 0, msaa = 0;
   double mesh_vertices = 0;
   std::optional<BoundingBox> frames_box;  // every frame's image, for a shared view
@@ -41,7 +41,7 @@ BoundingBox frames_box(const SceneSequence& seq, const TriMesh& mesh) {
 
 bool render_available(std::string* why) {
   try {
-    vk::Context context;
+    compute::Context context;
     return true;
   } catch (const std::exception& e) {
     if (why) *why = std::string("no Vulkan device: ") + e.what();
@@ -59,24 +59,24 @@ void render_frame(hsi_sequence& s, uint32_t frame, const hsi_render_options& o, 
     // HSI_VULKAN_VALIDATION=1: the validation layer on, and any message it reports fails the call.
     const bool validate = std::getenv("HSI_VULKAN_VALIDATION") && std::string(std::getenv("HSI_VULKAN_VALIDATION")) != "0";
     if (!cache->context) {
-      vk::ContextOptions co;
+      compute::ContextOptions co;
       co.validation = validate;
-      cache->context = std::make_unique<vk::Context>(co);
+      cache->context = std::make_unique<compute::Context>(co);
     }
     const int w = static_cast<int>(o.width), h = static_cast<int>(o.height);
     const int msaa = o.msaa_samples ? static_cast<int>(o.msaa_samples) : 4;
     if (!cache->renderer || cache->width != w || cache->height != h || cache->msaa != msaa || cache->mesh_vertices != o.mesh_vertices) {
       cache->renderer.reset();
-      vk::RendererOptions ro;
+      compute::RendererOptions ro;
       ro.msaa_samples = msaa;
-      cache->renderer = std::make_unique<vk::Renderer>(*cache->context, w, h, ro);
+      cache->renderer = std::make_unique<compute::Renderer>(*cache->context, w, h, ro);
       const Scene& scene = *s.scene;
       TriangulateOptions to;
       to.max_edge = edge_for_vertex_count(scene.shape, std::max(16, static_cast<int>(o.mesh_vertices > 0 ? o.mesh_vertices : 4000)));
       const TriMesh mesh = triangulate(scene.shape, to);
       cache->renderer->set_mesh(mesh, scene.handles);
       if (!scene.texture.empty()) {
-        cache->renderer->set_texture(vk::read_png(scene.texture_path()), scene.texture_rect_or_bounds());
+        cache->renderer->set_texture(read_png(scene.texture_path()), scene.texture_rect_or_bounds());
       }
       cache->frames_box = frames_box(s.seq, mesh);
       cache->width = w;
@@ -88,22 +88,22 @@ void render_frame(hsi_sequence& s, uint32_t frame, const hsi_render_options& o, 
     if (custom_view && !(o.view[2] > o.view[0] && o.view[3] > o.view[1]))
       throw ApiError{HSI_ERROR_INVALID_ARGUMENT, "hsi_sequence_render: view must be x0 < x1 and y0 < y1"};
     const BoundingBox box = custom_view ? BoundingBox{cd(o.view[0], o.view[1]), cd(o.view[2], o.view[3])} : *cache->frames_box;
-    const vk::View view = vk::View::fit(box, w, h, 0.04 * std::min(w, h));
+    const compute::View view = compute::View::fit(box, w, h, 0.04 * std::min(w, h));
     const FrameResult& f = s.seq.frames[frame];
-    vk::RenderStyle style;
-    style.overlays = (o.draw_boundary ? vk::kOverlayBoundary : 0u) | (o.draw_distortion ? vk::kOverlayDistortion : 0u) |
-                     (o.draw_handles ? vk::kOverlayHandles : 0u);
+    compute::RenderStyle style;
+    style.overlays = (o.draw_boundary ? compute::kOverlayBoundary : 0u) | (o.draw_distortion ? compute::kOverlayDistortion : 0u) |
+                     (o.draw_handles ? compute::kOverlayHandles : 0u);
     for (int k = 0; k < 4; ++k) style.background[static_cast<size_t>(k)] = o.background[k];
     style.uncertified = !f.certified;
-    const vk::RgbaImage img = cache->renderer->render(s.seq.setup->cage, f.map, view, style);
+    const RgbaImage img = cache->renderer->render(s.seq.setup->cage, f.map, view, style);
     if (cache->context->validation_enabled() && cache->context->validation_log()->count() > 0)
       throw ApiError{HSI_ERROR_INTERNAL, "hsi_sequence_render: Vulkan validation reported problems:\n" +
                                              cache->context->validation_log()->summary(5)};
     for (int y = 0; y < h; ++y) std::memcpy(rgba + static_cast<size_t>(y) * row_stride, img.at(0, y), 4 * static_cast<size_t>(w));
-  } catch (const vk::VulkanUnavailable& e) {
+  } catch (const compute::VulkanUnavailable& e) {
     cache->context.reset();
     throw ApiError{HSI_ERROR_UNSUPPORTED, std::string("hsi_sequence_render: no Vulkan device: ") + e.what()};
-  } catch (const vk::VulkanError& e) {
+  } catch (const compute::VulkanError& e) {
     cache->renderer.reset();
     throw ApiError{HSI_ERROR_INTERNAL, std::string("hsi_sequence_render: Vulkan error: ") + e.what()};
   }

@@ -28,7 +28,7 @@ void check_name(std::string_view name) {
 }
 
 #if HSI_RUNTIME_VULKAN
-namespace gpu = hsi::vk;
+namespace gpu = hsi::compute;
 
 gpu::ContextOptions context_options(const CertifierOptions& o) {
   gpu::ContextOptions co;

@@ -23,6 +23,7 @@
 #include "hsi/scene_edit.h"
 #include "hsi/scene_io.h"
 #include "hsi/scene_sequence.h"
+#include "hsi/scene_texture.h"
 #include "hsi/triangulate.h"
 #include "panels.h"
 #include "playback.h"
@@ -45,7 +46,7 @@ float content_scale(GLFWwindow* window) {
 
 }  // namespace
 
-App::App(const Options& o, GLFWwindow* window, vk::Context& ctx)
+App::App(const Options& o, GLFWwindow* window, compute::Context& ctx)
     : o_(o), window_(window), ctx_(ctx), overlays_(parse_overlays(o.overlays)), view_(content_scale(window)),
       script_(script_from_options(o)) {
   if (!script_.empty()) o_.lockstep = true;
@@ -103,7 +104,7 @@ void App::load() {
 
   // Texture (or a checkerboard), render mesh, picking and probe points.
   {
-    vk::SceneTexture st = vk::scene_texture(scene, o_.scene, false, false);
+    SceneTexture st = scene_texture(scene, o_.scene, false, false);
     texture_ = std::move(st.image);
     texture_rect_ = st.rect;
   }
@@ -339,12 +340,12 @@ void App::render() {
   if (!renderer_ || renderer_->width() != w || renderer_->height() != h) {
     presenter_->wait_idle();
     renderer_.reset();
-    renderer_ = std::make_unique<vk::Renderer>(ctx_, w, h);
+    renderer_ = std::make_unique<compute::Renderer>(ctx_, w, h);
     renderer_->set_mesh(mesh_, editor_->scene().handles);
     renderer_->set_texture(texture_, texture_rect_);
     rendered_map_ = nullptr;
   }
-  const vk::View& camera = view_.update_camera(w, h);
+  const compute::View& camera = view_.update_camera(w, h);
 
   const Shown s = shown();
   const HarmonicMap* map = s.map;
@@ -368,8 +369,8 @@ void App::render() {
     mix(map->psi(i).imag());
   }
   if (rendered_map_ && sig == rendered_sig_) return;
-  vk::RenderStyle style;
-  style.overlays = overlays_.render & (vk::kOverlayDistortion | vk::kOverlayBoundary);
+  compute::RenderStyle style;
+  style.overlays = overlays_.render & (compute::kOverlayDistortion | compute::kOverlayBoundary);
   style.background = {0.97f, 0.97f, 0.98f, 1};
   style.distortion_lo = 1;
   style.distortion_hi = dist_hi_;
@@ -406,8 +407,8 @@ void App::handle_keys() {
   if (pressed(GLFW_KEY_L)) play.loop = !play.loop;
   if (pressed(GLFW_KEY_LEFT_BRACKET)) play.speed = std::max(0.125, play.speed / 2);
   if (pressed(GLFW_KEY_RIGHT_BRACKET)) play.speed = std::min(8.0, play.speed * 2);
-  if (pressed(GLFW_KEY_D)) overlays_.render ^= vk::kOverlayDistortion;
-  if (pressed(GLFW_KEY_B)) overlays_.render ^= vk::kOverlayBoundary;
+  if (pressed(GLFW_KEY_D)) overlays_.render ^= compute::kOverlayDistortion;
+  if (pressed(GLFW_KEY_B)) overlays_.render ^= compute::kOverlayBoundary;
   if (pressed(GLFW_KEY_C)) overlays_.cage = !overlays_.cage;
   if (pressed(GLFW_KEY_P)) overlays_.handles = !overlays_.handles;
   if (pressed(GLFW_KEY_G)) overlays_.status = !overlays_.status;
@@ -490,9 +491,9 @@ void App::draw_panels() {
   if (req.save) save(output_path());
 }
 
-void App::write_capture(const vk::RgbaImage& shot) {
+void App::write_capture(const RgbaImage& shot) {
   const std::string path = *script_.capture_path();
-  vk::write_png(path, shot);
+  write_png(path, shot);
   // Where the viewport is in the image, and what it shows (for tests).
   std::ofstream meta(path + ".json");
   const Shown s = shown();
@@ -532,7 +533,7 @@ bool App::frame() {
   draw_panels();
   ImGui::Render();
 
-  vk::RgbaImage shot;
+  RgbaImage shot;
   const bool capturing = script_.capture_path() != nullptr;
   const bool presented = presenter_->present(ImGui::GetDrawData(), capturing ? &shot : nullptr);
   if (presented) {

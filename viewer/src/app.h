@@ -50,7 +50,7 @@ struct Options {
 // The viewer's state for one window.
 class App final : public ScriptHost {
  public:
-  App(const Options& o, GLFWwindow* window, vk::Context& ctx);
+  App(const Options& o, GLFWwindow* window, compute::Context& ctx);
   ~App() override;
   bool frame();  // one UI frame; false: quit
   int script_status() const { return script_.failed() ? 4 : 0; }
@@ -99,11 +99,11 @@ class App final : public ScriptHost {
   void handle_input();
   void handle_keys();
   void draw_panels();
-  void write_capture(const vk::RgbaImage& shot);
+  void write_capture(const RgbaImage& shot);
 
   Options o_;
   GLFWwindow* window_;
-  vk::Context& ctx_;
+  compute::Context& ctx_;
   Overlays overlays_;
   View view_;
   ScriptRunner script_;
@@ -114,11 +114,11 @@ class App final : public ScriptHost {
   std::unique_ptr<Solver> solver_;
   std::unique_ptr<Playback> playback_;
   std::unique_ptr<Presenter> presenter_;
-  std::unique_ptr<vk::Renderer> renderer_;
+  std::unique_ptr<compute::Renderer> renderer_;
   std::unique_ptr<InverseMap> inverse_;  // picking: the rest point under the mouse
   TriMesh mesh_;
   BasisRows probe_rows_;
-  vk::RgbaImage texture_;
+  RgbaImage texture_;
   std::array<double, 4> texture_rect_{};
   bool title_dirty_ = false, quit_ = false;
   double dist_hi_ = 2;

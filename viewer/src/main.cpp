@@ -25,7 +25,7 @@ int run(const Options& o) {
   struct GlfwGuard {
     ~GlfwGuard() { glfwTerminate(); }
   } glfw_guard;
-  if (!glfwVulkanSupported()) throw vk::VulkanUnavailable("hsi-viewer: GLFW finds no Vulkan loader/driver for windows");
+  if (!glfwVulkanSupported()) throw compute::VulkanUnavailable("hsi-viewer: GLFW finds no Vulkan loader/driver for windows");
   glfwWindowHint(GLFW_CLIENT_API, GLFW_NO_API);
   glfwWindowHint(GLFW_SCALE_TO_MONITOR, GLFW_TRUE);
   GLFWwindow* window = glfwCreateWindow(o.width, o.height, "hsi viewer", nullptr, nullptr);
@@ -35,7 +35,7 @@ int run(const Options& o) {
     ~WindowGuard() { glfwDestroyWindow(w); }
   } window_guard{window};
 
-  vk::ContextOptions co;
+  compute::ContextOptions co;
   co.validation = o.validation;
   co.device_name = o.device;
   co.application_name = "hsi-viewer";
@@ -45,13 +45,13 @@ int run(const Options& o) {
   co.make_surface = [window](VkInstance instance) {
     VkSurfaceKHR surface = VK_NULL_HANDLE;
     const VkResult r = glfwCreateWindowSurface(instance, window, nullptr, &surface);
-    if (r != VK_SUCCESS) throw vk::VulkanError(std::string("glfwCreateWindowSurface failed with ") + vk::result_name(r), r);
+    if (r != VK_SUCCESS) throw compute::VulkanError(std::string("glfwCreateWindowSurface failed with ") + compute::result_name(r), r);
     return surface;
   };
-  std::shared_ptr<vk::ValidationLog> log;
+  std::shared_ptr<compute::ValidationLog> log;
   int status = 0;
   {
-    vk::Context ctx(co);
+    compute::Context ctx(co);
     log = ctx.validation_log();
     IMGUI_CHECKVERSION();
     ImGui::CreateContext();
@@ -131,7 +131,7 @@ int main(int argc, char** argv) {
     // message is the scene's problem, not a missing display's.
     (void)hsi::load_scene(o.scene);
     return hsi::viewer::run(o);
-  } catch (const hsi::vk::VulkanUnavailable& e) {
+  } catch (const hsi::compute::VulkanUnavailable& e) {
     std::fprintf(stderr, "hsi-viewer: needs Vulkan for a window: %s\n", e.what());
     return 1;
   } catch (const hsi::InputError& e) {

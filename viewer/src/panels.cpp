@@ -21,8 +21,8 @@ Overlays parse_overlays(const std::string& list) {
   for (std::stringstream ss(list); ss.good();) {
     std::string s;
     std::getline(ss, s, ',');
-    if (s == "distortion") o.render |= vk::kOverlayDistortion;
-    else if (s == "boundary") o.render |= vk::kOverlayBoundary;
+    if (s == "distortion") o.render |= compute::kOverlayDistortion;
+    else if (s == "boundary") o.render |= compute::kOverlayBoundary;
     else if (s == "cage") o.cage = true;
     else if (s == "handles") o.handles = true;
     else if (s == "status") o.status = true;
@@ -103,7 +103,7 @@ void draw_viewport_overlays(const PanelContext& c) {
     dl->AddText(ImVec2(p.x + pad, p.y + pad / 2), rgba(1, 1, 1), text.c_str());
   }
 
-  if (c.overlays.render & vk::kOverlayDistortion) {  // legend, bottom left
+  if (c.overlays.render & compute::kOverlayDistortion) {  // legend, bottom left
     const float w = std::min(260.0f * scale, v.size().x - 2 * pad), h = 12 * scale;
     const float fs = ImGui::GetFontSize();
     const ImVec2 p(a.x + pad, b.y - pad - h - fs * 2.4f);
@@ -113,7 +113,7 @@ void draw_viewport_overlays(const PanelContext& c) {
     const float y0 = p.y + fs * 1.2f;
     const int n = 32;
     for (int i = 0; i < n; ++i) {
-      const auto c0 = vk::colormap(i / double(n)), c1 = vk::colormap((i + 1) / double(n));
+      const auto c0 = compute::colormap(i / double(n)), c1 = compute::colormap((i + 1) / double(n));
       const ImU32 u0 = rgba(float(c0[0]), float(c0[1]), float(c0[2])), u1 = rgba(float(c1[0]), float(c1[1]), float(c1[2]));
       dl->AddRectFilledMultiColor(ImVec2(p.x + w * float(i) / float(n), y0), ImVec2(p.x + w * float(i + 1) / float(n), y0 + h), u0, u1, u1, u0);
     }
@@ -185,10 +185,10 @@ PanelRequests draw_side_panel(const PanelContext& c) {
 
   ImGui::TextUnformatted("Overlays");
   Overlays& ov = c.overlays;
-  bool d = ov.render & vk::kOverlayDistortion, bnd = ov.render & vk::kOverlayBoundary;
-  if (ImGui::Checkbox("distortion (D)", &d)) ov.render ^= vk::kOverlayDistortion;
+  bool d = ov.render & compute::kOverlayDistortion, bnd = ov.render & compute::kOverlayBoundary;
+  if (ImGui::Checkbox("distortion (D)", &d)) ov.render ^= compute::kOverlayDistortion;
   ImGui::SameLine();
-  if (ImGui::Checkbox("boundary (B)", &bnd)) ov.render ^= vk::kOverlayBoundary;
+  if (ImGui::Checkbox("boundary (B)", &bnd)) ov.render ^= compute::kOverlayBoundary;
   ImGui::Checkbox("cage (C)", &ov.cage);
   ImGui::SameLine();
   ImGui::Checkbox("handles (P)", &ov.handles);

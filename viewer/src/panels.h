@@ -18,7 +18,7 @@ namespace hsi::viewer {
 
 // What is drawn on top of the rendered frame, and which panels are open.
 struct Overlays {
-  uint32_t render = 0;  // the renderer's overlays (vk::kOverlayDistortion, vk::kOverlayBoundary)
+  uint32_t render = 0;  // the renderer's overlays (compute::kOverlayDistortion, compute::kOverlayBoundary)
   bool cage = false, handles = true, status = true, help = false;
 };
 // --overlays (comma-separated names); InputError naming an unknown one.

@@ -28,7 +28,7 @@ Framing frame_keyframes(const BasisRows& probe, const std::vector<HarmonicMap>& 
   const cd pad = 0.06 * (out.box.hi - out.box.lo);
   out.box.lo -= cd(pad.real(), pad.imag());
   out.box.hi += cd(pad.real(), pad.imag());
-  out.dist_hi = vk::round_distortion_hi(std::max(kappa * 1.1, 1.2));
+  out.dist_hi = compute::round_distortion_hi(std::max(kappa * 1.1, 1.2));
   return out;
 }
 
@@ -50,13 +50,13 @@ int View::pixel_width() const { return std::max(16, static_cast<int>(std::lround
 int View::pixel_height() const { return std::max(16, static_cast<int>(std::lround(size_.y * fb_scale_.y))); }
 
 double View::fitted_pixels_per_unit() const {
-  return vk::View::fit(box_, width_, height_, 16.0 * scale_ * fb_scale_.x).pixels_per_unit;
+  return compute::View::fit(box_, width_, height_, 16.0 * scale_ * fb_scale_.x).pixels_per_unit;
 }
 
-const vk::View& View::update_camera(int width, int height) {
+const compute::View& View::update_camera(int width, int height) {
   width_ = width;
   height_ = height;
-  camera_ = vk::View::fit(box_, width, height, 16.0 * scale_ * fb_scale_.x);
+  camera_ = compute::View::fit(box_, width, height, 16.0 * scale_ * fb_scale_.x);
   camera_.pixels_per_unit *= zoom_;
   camera_.world_center += pan_;
   return camera_;

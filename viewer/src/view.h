@@ -37,8 +37,8 @@ class View {
 
   void set_box(const BoundingBox& box) { box_ = box; }
   // The camera for a width × height image: the box fitted, then zoom and pan.
-  const vk::View& update_camera(int width, int height);
-  const vk::View& camera() const { return camera_; }
+  const compute::View& update_camera(int width, int height);
+  const compute::View& camera() const { return camera_; }
 
   // Wheel zoom about the mouse and middle-button pan (once a camera exists).
   void handle_mouse(bool in_viewport);
@@ -59,7 +59,7 @@ class View {
   BoundingBox box_{};
   double zoom_ = 1;
   cd pan_{0, 0};
-  vk::View camera_;
+  compute::View camera_;
   int width_ = 0, height_ = 0;  // of the last camera (0: none yet)
   bool middle_drag_ = false;
 };

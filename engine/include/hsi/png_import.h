@@ -26,6 +26,7 @@
 #include <vector>
 
 #include "hsi/domain.h"
+#include "hsi/png.h"  // the decoder, kPngMaxSide, check_png_texture, check_png_payload
 
 namespace hsi {
 
@@ -42,9 +43,6 @@ struct PngShape {
   std::vector<std::string> warnings;    // e.g. "dropped 2 smaller pieces (largest kept: 93% of the opaque area)"
 };
 
-// Largest accepted image side, in pixels.
-inline constexpr int kPngMaxSide = 16384;
-
 // Reads RGBA, grey+alpha, or any PNG with a tRNS chunk (palette, grey or RGB),
 // 8 or 16 bits. Throws InputError naming the file and the problem: missing file,
 // not a PNG, corrupt or truncated data, no alpha channel, no opaque pixels, image
@@ -53,17 +51,5 @@ PngShape import_png_alpha(const std::filesystem::path& png, const PngImportOptio
 // The same from the file's bytes in memory; `name` is used in messages.
 PngShape import_png_alpha(std::span<const unsigned char> png_bytes, const std::string& name,
                           const PngImportOptions& options = {});
-
-// Decodes a whole PNG (any colour type and depth) to check that it is a usable
-// texture, and returns its {width, height}. Throws InputError naming `name` and the
-// problem: not a PNG, corrupt or truncated data, an empty or too large image.
-std::array<int, 2> check_png_texture(std::span<const unsigned char> png_bytes, const std::string& name);
-
-// Refuses, before anything is allocated for the pixels, a PNG whose header claims
-// more pixels than its compressed data could hold (deflate expands at most ~1032:1):
-// a truncated or corrupt file that would otherwise cost up to gigabytes of memory
-// before libpng finds the data missing. Throws InputError naming `name`, the size
-// claimed and the data present. Call after the signature is known to be PNG's.
-void check_png_payload(std::span<const unsigned char> png_bytes, const std::string& name);
 
 }  // namespace hsi

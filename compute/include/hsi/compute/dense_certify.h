@@ -23,9 +23,10 @@
 #include <vector>
 
 #include "hsi/certificate.h"
+#include "hsi/compute/compute_pipeline.h"
 #include "hsi/compute/vulkan_context.h"
 
-namespace hsi::vk {
+namespace hsi::compute {
 
 struct DenseCertifyOptions {
   // The map-independent half of the breakpoint values and Lipschitz constants is
@@ -100,4 +101,4 @@ class DenseCertifier : public MapCertifier {
   bool pending_nonfinite_ = false;  // record() saw a non-finite map: collect() reports it
 };
 
-}  // namespace hsi::vk
+}  // namespace hsi::compute

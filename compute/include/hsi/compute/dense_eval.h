@@ -24,10 +24,11 @@
 #include <vector>
 
 #include "hsi/cage.h"
+#include "hsi/compute/compute_pipeline.h"
 #include "hsi/compute/vulkan_context.h"
 #include "hsi/harmonic_map.h"
 
-namespace hsi::vk {
+namespace hsi::compute {
 
 enum class Precision {
   kAuto,    // double if the device has shaderFloat64, else float
@@ -146,4 +147,4 @@ class DenseEvaluator {
   DenseEvalStats stats_;
 };
 
-}  // namespace hsi::vk
+}  // namespace hsi::compute

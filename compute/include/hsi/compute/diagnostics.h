@@ -6,7 +6,7 @@
 
 #include "hsi/compute/vulkan_context.h"
 
-namespace hsi::vk {
+namespace hsi::compute {
 
 struct ThroughputProbe {
   double gflops = 0;     // fused multiply-adds × 2 per second, by timestamps (wall time where none)
@@ -21,4 +21,4 @@ struct ThroughputProbe {
 ThroughputProbe probe_fma_throughput(const Context& context, bool double_precision, uint32_t workgroups = 16384,
                                      uint32_t iterations = 4096);
 
-}  // namespace hsi::vk
+}  // namespace hsi::compute

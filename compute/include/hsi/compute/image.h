@@ -1,56 +1,61 @@
-// RGBA images for offscreen rendering: the renderer's textures and results, read
-// and written as PNG (libpng). Straight (not premultiplied) alpha, 8 bits per
-// channel, rows from the top of the image down.
+// A 2D device image with its own memory and a view of all its mip levels (the
+// renderer's targets and textures, the viewer's UI textures), and the upload of
+// texels into it with its mip chain.
 #pragma once
 
-#include <array>
 #include <cstdint>
-#include <filesystem>
-#include <string>
-#include <vector>
 
-#include "hsi/domain.h"
-#include "hsi/scene_io.h"
+#include "hsi/compute/vulkan_context.h"
 
-namespace hsi::vk {
+namespace hsi::compute {
 
-struct RgbaImage {
-  int width = 0, height = 0;
-  std::vector<uint8_t> pixels;  // width × height × 4 bytes: R, G, B, A
-
-  RgbaImage() = default;
-  RgbaImage(int w, int h, std::array<uint8_t, 4> fill = {0, 0, 0, 0});
-  bool empty() const { return width <= 0 || height <= 0; }
-  uint8_t* at(int x, int y) { return pixels.data() + (static_cast<size_t>(y) * static_cast<size_t>(width) + static_cast<size_t>(x)) * 4; }
-  const uint8_t* at(int x, int y) const {
-    return pixels.data() + (static_cast<size_t>(y) * static_cast<size_t>(width) + static_cast<size_t>(x)) * 4;
-  }
+struct ImageInfo {
+  uint32_t width = 1, height = 1;
+  VkFormat format = VK_FORMAT_R8G8B8A8_UNORM;
+  VkImageUsageFlags usage = VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT;
+  VkSampleCountFlagBits samples = VK_SAMPLE_COUNT_1_BIT;
+  uint32_t mips = 1;  // mip_levels(width, height) for a full chain
+  // Memory flags wanted besides DEVICE_LOCAL (e.g. LAZILY_ALLOCATED for a transient
+  // attachment); none is required.
+  VkMemoryPropertyFlags preferred_memory = 0;
 };
 
-// Reads any PNG (grey, palette, RGB, with or without alpha, 8 or 16 bits) as RGBA8.
-// Throws hsi::InputError naming the file: missing, not a PNG, corrupt, too large.
-RgbaImage read_png(const std::filesystem::path& path);
-// Writes an RGBA8 PNG atomically (temporary file, then rename). Throws InputError.
-void write_png(const std::filesystem::path& path, const RgbaImage& image);
+// Levels of a full mip chain down to 1 × 1.
+uint32_t mip_levels(uint32_t width, uint32_t height);
 
-// A checkerboard over a rest shape's bounding box (16 square checks along the longer
-// side, 32 pixels each), the texture for a scene without one: it still shows how the
-// map deforms the shape. Sets `rect` to the world rectangle [x0, y0, x1, y1] it
-// covers. grid_lines: dark lines along the checks' edges (hsi render) or plain (viewer).
-RgbaImage checker_texture(const BoundingBox& box, std::array<double, 4>& rect, bool grid_lines = true);
+// A 2D colour view of `image`'s first `mips` levels (an Image's own, or a swapchain
+// image's, which the swapchain owns).
+DeviceHandle<VkImageView> make_image_view(const Context& context, VkImage image, VkFormat format, uint32_t mips = 1);
 
-// What a scene is drawn with: its texture (the PNG it names, over texture_rect or the
-// shape's bounding box), or a checkerboard (checker_texture over the shape's bounding
-// box) where it has none or `use_checker` asks for one.
-struct SceneTexture {
-  RgbaImage image;
-  std::array<double, 4> rect{};
-  bool checker = false;  // the checkerboard
+class Image {
+ public:
+  Image() = default;
+  Image(const Context& context, const ImageInfo& info);
+  Image(Image&& o) noexcept = default;
+  Image& operator=(Image&& o) noexcept;
+  Image(const Image&) = delete;
+  Image& operator=(const Image&) = delete;
+  ~Image() { reset(); }
+
+  VkImage handle() const { return image_.get(); }
+  VkImageView view() const { return view_.get(); }
+  const ImageInfo& info() const { return info_; }
+  explicit operator bool() const { return static_cast<bool>(image_); }
+  void reset();  // the view, the image, then its memory
+
+  // Records the copy of `staging` (level 0's texels, tightly packed) into the image
+  // and the other mip levels made from it by linear blits (the usage needs
+  // TRANSFER_SRC when there are any); every level ends SHADER_READ_ONLY_OPTIMAL.
+  // `from`: the layout the image is in (UNDEFINED: its contents are discarded; else
+  // SHADER_READ_ONLY_OPTIMAL, read by `readers` before); `readers`: the shader
+  // stages that sample it before and after.
+  void record_upload(VkCommandBuffer cmd, const Buffer& staging, VkImageLayout from, VkPipelineStageFlags readers) const;
+
+ private:
+  ImageInfo info_;
+  DeviceHandle<VkDeviceMemory> memory_;  // declared first: freed after the image and view
+  DeviceHandle<VkImage> image_;
+  DeviceHandle<VkImageView> view_;
 };
-// Throws InputError naming `scene_file` and the texture file when that file is
-// missing (read_png's errors when it is broken); `alternative` ("render with
-// --no-texture") is offered in the message besides fixing the scene.
-SceneTexture scene_texture(const Scene& scene, const std::string& scene_file, bool use_checker = false,
-                           bool grid_lines = true, const std::string& alternative = "");
 
-}  // namespace hsi::vk
+}  // namespace hsi::compute

@@ -22,10 +22,10 @@
 #include <vector>
 
 #include "hsi/compute/dense_eval.h"
-#include "hsi/compute/image.h"
+#include "hsi/png.h"
 #include "hsi/triangulate.h"
 
-namespace hsi::vk {
+namespace hsi::compute {
 
 // Overlay bits, combinable.
 enum Overlay : uint32_t {
@@ -180,7 +180,7 @@ class Renderer {
   const RenderStats& last_stats() const { return stats_; }
 
  private:
-  struct Impl;
+  struct Impl;  // the GPU state (src/renderer_impl.h)
   void upload_uv();
   // Writes positions and distortion into the given-geometry buffers; returns how many
   // handles to draw.
@@ -193,10 +193,6 @@ class Renderer {
                     const RenderStyle& style, bool copy_out, bool mark_evaluation);
   RgbaImage read_image();
   void record_copy_out(VkCommandBuffer cmd);
-  // The compute rasterizer's passes (Rasterizer::kCompute), up to the resolved image;
-  // f and fields: the positions and distortion to draw (evaluated or given).
-  void record_compute_raster(VkCommandBuffer cmd, const Buffer& f, const Buffer& fields, const View& view,
-                             const RenderStyle& style, uint32_t border_px);
 
   const Context* context_;
   int width_, height_, samples_ = 1;
@@ -211,4 +207,4 @@ class Renderer {
   std::unique_ptr<Impl> impl_;
 };
 
-}  // namespace hsi::vk
+}  // namespace hsi::compute

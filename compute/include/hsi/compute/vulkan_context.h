@@ -1,7 +1,10 @@
 // The Vulkan side of hsi: a device context (instance, one compute-capable device and
-// queue, optional validation layer whose messages are recorded) and RAII owners for
-// the GPU resources the compute and rendering passes share (buffers, compute
-// pipelines, descriptor sets, one-shot command submission).
+// queue, optional validation layer whose messages are recorded), RAII owners for
+// device handles and buffers, one-shot command submission and barriers. The other
+// GPU objects have a header each: image.h, sampler.h, render_pass.h, framebuffer.h,
+// shader_module.h, pipeline_layout.h, descriptor_set.h, compute_pipeline.h,
+// graphics_pipeline.h (whose fixed-function state is pipeline_state.h),
+// command_buffer.h and sync.h (fences, semaphores).
 //
 // Vulkan is loaded at run time through volk (VK_NO_PROTOTYPES): a machine without a
 // Vulkan loader or device gets a VulkanUnavailable exception, not a link error.
@@ -21,7 +24,7 @@
 #include <utility>
 #include <vector>
 
-namespace hsi::vk {
+namespace hsi::compute {
 
 // A Vulkan call failed; result() is the VkResult (VK_SUCCESS where none applies).
 class VulkanError : public std::runtime_error {
@@ -210,6 +213,13 @@ class DeviceHandle {
   Destroy destroy_ = nullptr;
 };
 
+// Memory for a resource with `requirements`: of a type allowed by them with all
+// `required` flags, the one with the most `preferred` flags first. `flags` receives
+// the chosen type's flags. Throws VulkanError if none fits or the allocation fails.
+DeviceHandle<VkDeviceMemory> allocate_memory(const Context& context, const VkMemoryRequirements& requirements,
+                                             VkMemoryPropertyFlags required, VkMemoryPropertyFlags preferred,
+                                             VkMemoryPropertyFlags* flags = nullptr);
+
 // Where a buffer's memory lives.
 enum class MemoryUse {
   kDeviceLocal,  // fastest for the GPU; may or may not be host-visible
@@ -254,67 +264,6 @@ class Buffer {
   VkDeviceSize size_ = 0;
 };
 
-class DescriptorSet;
-
-// A compute pipeline whose descriptor set 0 has one binding per entry of
-// `bindings` (binding i has type bindings[i]), with an optional push-constant
-// range of push_constant_bytes at offset 0.
-class ComputePipeline {
- public:
-  ComputePipeline() = default;
-  ComputePipeline(const Context& context, std::span<const uint32_t> spirv,
-                  std::span<const VkDescriptorType> bindings, uint32_t push_constant_bytes = 0);
-
-  VkPipeline pipeline() const { return pipeline_.get(); }
-  VkPipelineLayout layout() const { return layout_.get(); }
-  VkDescriptorSetLayout set_layout() const { return set_layout_.get(); }
-  const std::vector<VkDescriptorType>& bindings() const { return bindings_; }
-
-  // Records binding this pipeline with `set` as its set 0, for the dispatches after.
-  void bind(VkCommandBuffer cmd, const DescriptorSet& set) const;
-  // Records pushing `bytes` of push constants at offset 0.
-  void push(VkCommandBuffer cmd, const void* data, uint32_t bytes) const;
-
- private:
-  DeviceHandle<VkDescriptorSetLayout> set_layout_;
-  DeviceHandle<VkPipelineLayout> layout_;
-  DeviceHandle<VkPipeline> pipeline_;
-  std::vector<VkDescriptorType> bindings_;
-};
-
-// One descriptor set for a pipeline's set 0, from its own small pool.
-class DescriptorSet {
- public:
-  DescriptorSet() = default;
-  DescriptorSet(const Context& context, const ComputePipeline& pipeline);
-  DescriptorSet(DescriptorSet&& o) noexcept
-      : context_(o.context_), bindings_(std::move(o.bindings_)), pool_(std::move(o.pool_)),
-        set_(std::exchange(o.set_, VK_NULL_HANDLE)) {}
-  DescriptorSet& operator=(DescriptorSet&& o) noexcept {
-    if (this != &o) {
-      context_ = o.context_;
-      bindings_ = std::move(o.bindings_);
-      pool_ = std::move(o.pool_);
-      set_ = std::exchange(o.set_, VK_NULL_HANDLE);
-    }
-    return *this;
-  }
-
-  // Points binding `binding` at the whole buffer (its type is the pipeline's).
-  void bind(uint32_t binding, const Buffer& buffer);
-  // Points an image binding (combined image sampler: with `sampler`; storage image:
-  // sampler ignored) at `view` in `layout`.
-  void bind(uint32_t binding, VkImageView view, VkImageLayout layout, VkSampler sampler = VK_NULL_HANDLE);
-  VkDescriptorSet handle() const { return set_; }
-
- private:
-  void check_binding(uint32_t binding) const;
-  const Context* context_ = nullptr;
-  std::vector<VkDescriptorType> bindings_;
-  DeviceHandle<VkDescriptorPool> pool_;  // owns set_
-  VkDescriptorSet set_ = VK_NULL_HANDLE;
-};
-
 // Number of workgroups along x and y to cover `groups` groups without exceeding the
 // device's per-dimension limit; shaders flatten (x, y) back to a linear index.
 std::pair<uint32_t, uint32_t> split_dispatch(const Context& context, uint64_t groups);
@@ -328,4 +277,4 @@ void image_barrier(VkCommandBuffer cmd, VkImage image, VkImageLayout from, VkIma
                    VkAccessFlags dst_access, VkPipelineStageFlags src_stage, VkPipelineStageFlags dst_stage,
                    uint32_t first_mip = 0, uint32_t mips = 1);
 
-}  // namespace hsi::vk
+}  // namespace hsi::compute
