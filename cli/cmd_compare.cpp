@@ -36,7 +36,7 @@
 #include "hsi/scene_io.h"
 #include "hsi/scene_sequence.h"
 #include "hsi/triangulate.h"
-#include "plot.h"
+#include "hsi/draw/plot.h"
 #ifdef HSI_WITH_CUDA
 #include "hsi/cuda/newton_core.h"
 #endif
@@ -49,13 +49,15 @@
 #include "hsi/baselines/ccw16.h"
 #include "hsi/compute/dense_eval.h"
 #include "hsi/compute/renderer.h"
-#include "raster.h"
+#include "hsi/draw/raster.h"
 #endif
 
 namespace hsi::cli {
 
 #ifdef HSI_COMPARE
 namespace {
+
+using namespace hsi::draw;
 
 using Clock = std::chrono::steady_clock;
 using nlohmann::json;

@@ -10,13 +10,19 @@
 #include "hsi/frames_io.h"
 #include "hsi/interpolation.h"
 #include "hsi/keyframes.h"
+#include "hsi/draw/plot.h"
 #include "hsi/scene_sequence.h"
-#include "plot.h"
 #ifdef HSI_WITH_CUDA
 #include "hsi/cuda/newton_core.h"
 #endif
 
 namespace hsi::cli {
+
+using draw::MapPlot;
+using draw::plot_map;
+using draw::plot_series;
+using draw::PlotSpec;
+using draw::Series;
 
 void register_interpolate(CLI::App& app) {
   struct Opts {

@@ -22,14 +22,23 @@
 
 #include "hsi/basis.h"
 #include "hsi/compute/renderer.h"
+#include "hsi/draw/raster.h"
 #include "hsi/triangulate.h"
-#include "raster.h"
 #endif
 
 namespace hsi::cli {
 
 #ifdef HSI_WITH_VULKAN
 namespace {
+
+using draw::draw_legend;
+using draw::fmt;
+using draw::make_surface;
+using draw::Surface;
+using draw::surface_from;
+using draw::text;
+using draw::text_width;
+using draw::write_surface;
 
 using Clock = std::chrono::steady_clock;
 
