@@ -117,6 +117,10 @@ TEST_CASE("tables 1 and 2 from run results: values and markdown rows", "[compare
   CHECK(j["certified"] == 3);
   CHECK(j["max_iterations"] == 7);
   CHECK(j["mean_ms"].get<double>() == Approx(57.12));
+  // The summary with hsi interpolate's field names: flags such as not converged never left out.
+  for (const char* key : {"frames", "uncertified", "not_converged", "overlapping", "frames_within_keyframe_bounds", "total_s"})
+    CHECK(j.contains(key));
+  CHECK(j["frames"].is_number_integer());
 }
 
 TEST_CASE("table 3: ARAP against our solve per resolution, the GPU column or why it is missing", "[compare]") {
