@@ -6,9 +6,11 @@
 #include "commands.h"
 #include "hsi/map_space.h"
 #include "hsi/scene_io.h"
-#include "plot.h"
+#include "hsi/draw/plot.h"
 
 namespace hsi::cli {
+
+using draw::plot_cage;
 
 void register_info(CLI::App& app) {
   struct Opts {

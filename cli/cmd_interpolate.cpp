@@ -10,11 +10,17 @@
 #include "hsi/frames_io.h"
 #include "hsi/interpolation.h"
 #include "hsi/keyframes.h"
+#include "hsi/draw/plot.h"
 #include "hsi/scene_sequence.h"
 #include "hsi/runtime/backend.h"
-#include "plot.h"
 
 namespace hsi::cli {
+
+using draw::MapPlot;
+using draw::plot_map;
+using draw::plot_series;
+using draw::PlotSpec;
+using draw::Series;
 
 void register_interpolate(CLI::App& app) {
   struct Opts {

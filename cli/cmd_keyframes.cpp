@@ -5,9 +5,12 @@
 #include "commands.h"
 #include "hsi/keyframes.h"
 #include "hsi/scene_sequence.h"
-#include "plot.h"
+#include "hsi/draw/plot.h"
 
 namespace hsi::cli {
+
+using draw::MapPlot;
+using draw::plot_map;
 
 void register_keyframes(CLI::App& app) {
   struct Opts {

@@ -18,15 +18,24 @@
 #include "commands.h"
 #include "hsi/basis.h"
 #include "hsi/compute/renderer.h"
+#include "hsi/draw/raster.h"
 #include "hsi/frames_io.h"
 #include "hsi/scene_io.h"
 #include "hsi/scene_texture.h"
 #include "hsi/triangulate.h"
-#include "raster.h"
 
 namespace hsi::cli {
 
 namespace {
+
+using draw::draw_legend;
+using draw::fmt;
+using draw::make_surface;
+using draw::Surface;
+using draw::surface_from;
+using draw::text;
+using draw::text_width;
+using draw::write_surface;
 
 using Clock = std::chrono::steady_clock;
 

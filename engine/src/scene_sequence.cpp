@@ -100,7 +100,30 @@ SequenceSummary summarize(const std::vector<FrameResult>& frames, double total_s
   return s;
 }
 
+std::vector<SummaryField> summary_fields(const SequenceSummary& s) {
+  return {{"frames", double(s.frames), true},
+          {"certified", double(s.certified), true},
+          {"uncertified", double(s.uncertified), true},
+          {"not_converged", double(s.not_converged), true},
+          {"mean_iterations", s.mean_iterations, false},
+          {"mean_ms", s.mean_ms, false},
+          {"max_ms", s.max_ms, false},
+          {"total_s", s.total_s, false},
+          {"frames_within_keyframe_bounds", double(s.within_bounds), true},
+          {"max_bound_excess", s.max_bound_excess, false},
+          {"overlapping", double(s.overlapping), true},
+          {"frames_within_keyframe_certified_bounds", double(s.within_certified_bounds), true},
+          {"max_certified_bound_excess", s.max_certified_bound_excess, false}};
+}
+
 namespace {
+
+nlohmann::json summary_json(const SequenceSummary& s) {
+  nlohmann::json j = nlohmann::json::object();
+  for (const SummaryField& f : summary_fields(s))
+    j[f.name] = f.integer ? nlohmann::json(static_cast<long long>(f.value)) : nlohmann::json(f.value);
+  return j;
+}
 
 // A frame's global-overlap check (overlap.h): whether it ran, the crossings of the
 // boundary's image at the breakpoints, and the first one.
@@ -171,20 +194,7 @@ std::string report_json(const Scene& scene, const SceneSequence& seq, const std:
                   {"overlaps", f.overlap.overlaps()},
                   {"overlap", overlap_json(f.overlap)}});
   }
-  const SequenceSummary s = summarize(seq.frames, seq.total_s);
-  rep["summary"] = {{"frames", s.frames},
-                    {"certified", s.certified},
-                    {"uncertified", s.uncertified},
-                    {"not_converged", s.not_converged},
-                    {"mean_iterations", s.mean_iterations},
-                    {"mean_ms", s.mean_ms},
-                    {"max_ms", s.max_ms},
-                    {"total_s", s.total_s},
-                    {"frames_within_keyframe_bounds", s.within_bounds},
-                    {"max_bound_excess", s.max_bound_excess},
-                    {"overlapping", s.overlapping},
-                    {"frames_within_keyframe_certified_bounds", s.within_certified_bounds},
-                    {"max_certified_bound_excess", s.max_certified_bound_excess}};
+  rep["summary"] = summary_json(summarize(seq.frames, seq.total_s));
   rep["frames"] = fr;
   return rep.dump(1) + "\n";
 }

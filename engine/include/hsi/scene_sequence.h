@@ -61,6 +61,15 @@ struct SequenceSummary {
   double max_certified_bound_excess = 0;
 };
 SequenceSummary summarize(const std::vector<FrameResult>& frames, double total_s);
+// The summary as its reports name it (report_json's "summary"; hsi compare's rows of
+// Tables 1-2), one field set for every report: counts are `integer` (written without a
+// fraction), times and excesses not.
+struct SummaryField {
+  std::string name;
+  double value = 0;
+  bool integer = false;
+};
+std::vector<SummaryField> summary_fields(const SequenceSummary& s);
 
 // The per-frame report (the fields of hsi interpolate's report.json: time, keyframe,
 // certified, iterations, energy, ms, distortion and its bound, certificate, overlap), the

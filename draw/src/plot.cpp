@@ -1,5 +1,5 @@
-// Cairo drawings for diagnostics; kept out of engine/ (which depends on Eigen only).
-#include "plot.h"
+// Cairo drawings for diagnostics (plot.h); kept out of engine/, which depends on no drawing library.
+#include "hsi/draw/plot.h"
 
 #include <cairo.h>
 
@@ -8,7 +8,7 @@
 #include <limits>
 #include <memory>
 
-namespace hsi::cli {
+namespace hsi::draw {
 namespace {
 struct Frame {
   cd lo;
@@ -106,9 +106,9 @@ void plot_cage(const std::filesystem::path& png, const Shape& shape, const Cage&
   canvas.write(png);
 }
 
-}  // namespace hsi::cli
+}  // namespace hsi::draw
 
-namespace hsi::cli {
+namespace hsi::draw {
 
 void plot_map(const std::filesystem::path& png, const Shape& shape, const Cage& cage, const HarmonicMap& map,
               const MapPlot& extras, int width_px) {
@@ -224,9 +224,9 @@ void plot_map(const std::filesystem::path& png, const Shape& shape, const Cage& 
   canvas.write(png);
 }
 
-}  // namespace hsi::cli
+}  // namespace hsi::draw
 
-namespace hsi::cli {
+namespace hsi::draw {
 
 void plot_series(const std::filesystem::path& png, const std::string& title, const std::string& xlabel,
                  const std::vector<double>& x, const std::vector<Series>& series, const std::vector<double>& flagged,
@@ -500,4 +500,4 @@ void plot_series(const std::filesystem::path& png, const PlotSpec& spec) {
   canvas.write(png);
 }
 
-}  // namespace hsi::cli
+}  // namespace hsi::draw

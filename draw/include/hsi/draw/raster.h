@@ -1,6 +1,6 @@
 // Compositing rendered frames with cairo (hsi render, hsi compare): cairo surfaces
 // from the renderer's RGBA images, PNG output, text with a halo, the distortion
-// colour bar. Kept in the CLI so that compute/ stays free of text. (The checkerboard
+// colour bar. Kept out of compute/ so that it stays free of text. (The checkerboard
 // for scenes without a texture is checker_texture, hsi/scene_texture.h.)
 #pragma once
 
@@ -14,7 +14,7 @@
 #include "hsi/domain.h"
 #include "hsi/png.h"
 
-namespace hsi::cli {
+namespace hsi::draw {
 
 // A cairo image surface (premultiplied ARGB32) with its drawing context.
 struct Surface {
@@ -37,4 +37,4 @@ std::string fmt(const char* f, double v);  // snprintf of one number
 // the band of height `area` at the bottom of a W × H image.
 void draw_legend(cairo_t* cr, int W, int H, double area, double lo, double hi, double font);
 
-}  // namespace hsi::cli
+}  // namespace hsi::draw

@@ -1,5 +1,5 @@
 // Cairo compositing for rendered frames (raster.h).
-#include "raster.h"
+#include "hsi/draw/raster.h"
 
 #include <algorithm>
 #include <cmath>
@@ -8,7 +8,7 @@
 
 #include "hsi/compute/renderer.h"
 
-namespace hsi::cli {
+namespace hsi::draw {
 
 Surface make_surface(int w, int h) {
   Surface s;
@@ -116,4 +116,4 @@ void draw_legend(cairo_t* cr, int W, int H, double area, double lo, double hi, d
     text(cr, 0.5 * (W - caption_w), y0 - 0.5 * font, caption, 0.85 * font, false, 0.15, 0.15, 0.15);
 }
 
-}  // namespace hsi::cli
+}  // namespace hsi::draw

@@ -6,16 +6,16 @@
 #include "hsi/cage.h"
 #include "hsi/samples.h"
 
-namespace hsi::cli {
+namespace hsi::draw {
 
 void plot_cage(const std::filesystem::path& png, const Shape& shape, const Cage& cage, const BoundarySamples* samples,
                int width_px = 800);
 
-}  // namespace hsi::cli
+}  // namespace hsi::draw
 
 #include "hsi/harmonic_map.h"
 
-namespace hsi::cli {
+namespace hsi::draw {
 
 // The image of the shape under a map: its boundary filled, the images of grid
 // lines of the rest shape (to show the deformation), handles and their targets.
@@ -30,9 +30,9 @@ struct MapPlot {
 void plot_map(const std::filesystem::path& png, const Shape& shape, const Cage& cage, const HarmonicMap& map,
               const MapPlot& extras = {}, int width_px = 800);
 
-}  // namespace hsi::cli
+}  // namespace hsi::draw
 
-namespace hsi::cli {
+namespace hsi::draw {
 
 struct Series {
   std::string name;
@@ -67,4 +67,4 @@ void plot_series(const std::filesystem::path& png, const std::string& title, con
                  const std::vector<double>& x, const std::vector<Series>& series, const std::vector<double>& flagged = {},
                  int width_px = 900, int height_px = 420);
 
-}  // namespace hsi::cli
+}  // namespace hsi::draw

@@ -1,0 +1,145 @@
+// hsi compare, stage 1: the runs. Ours at the chosen settings (the main sequence, the side-
+// by-side frames, the sequences of Tables 1–2), ARAP [ACOL00] and CCW16 (log derivatives;
+// on a simply-connected shape also its boundary-metric variant, Fig. 8) on the render mesh,
+// and the timings of Tables 3–4. Each run's numbers are plain values for the later stages.
+#pragma once
+
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "hsi/baselines/arap.h"
+#include "hsi/baselines/ccw16.h"
+#include "hsi/compare/alignment.h"
+#include "hsi/compare/compare.h"
+#include "hsi/png.h"
+#include "hsi/scene_texture.h"
+#include "hsi/interpolation.h"
+#include "hsi/scene_io.h"
+#include "hsi/scene_sequence.h"
+#include "hsi/triangulate.h"
+
+namespace hsi::compare {
+
+// The scene with its keyframes solved, and the options checked.
+struct Inputs {
+  Scene scene;
+  std::string scene_path;
+  SceneTexture texture;  // the scene's, or a checkerboard
+  std::shared_ptr<const ShapeSetup> setup;
+  std::vector<double> times;
+  std::vector<HarmonicMap> keys;
+  double seg_t0 = 0, seg_t1 = 1, t_mid = 0.5;  // the side-by-side keyframe interval and its middle
+  std::vector<int> table3;                      // Table 3's resolutions, --no-800k applied
+  int holes() const { return setup->cage.hole_count(); }
+  double size() const { return setup->size; }
+};
+// Everything that can be refused is refused here (InputError naming the option or the scene).
+void check_options(const Options& o);
+Inputs prepare_inputs(const Options& o);
+
+// The caller's Newton core (Backends::newton_core), else the CPU reference.
+std::unique_ptr<NewtonCore> make_core(const Backends& b, const ShapeSetup& setup);
+
+// The main sequence of ours, with the interpolator the side-by-side frames are solved with.
+struct OurSequence {
+  std::unique_ptr<Interpolator> interp;
+  std::string core;  // the Newton core's name
+  std::vector<FrameResult> frames;
+  SequenceSummary summary;
+  int within_bound = 0;  // certified frames within the keyframes' sampled bound
+};
+OurSequence run_our_sequence(const Inputs& in, const Options& o);
+
+// One of our sequences (a projection, a Hessian ratio) with what Tables 1–2 report.
+struct OurRun {
+  std::string label;
+  std::string core;
+  int hessian_samples = 0;
+  double ratio = 0;
+  FrameResult cold;  // the segment's middle frame solved from its first keyframe (the paper's Table 1 setting)
+  SequenceSummary summary;
+  int max_iterations = 0;
+};
+OurRun run_ours(const std::string& label, const ShapeSetup& setup, const Inputs& in, HessianProjection projection,
+                std::unique_ptr<NewtonCore> core, int frames, double ratio);
+std::vector<OurRun> run_table1(const Inputs& in, const Options& o, const std::string& main_core);  // projections
+std::vector<OurRun> run_table2(Inputs& in, const Options& o);                                      // Hessian ratios
+
+// CCW16's boundary-metric variant (Fig. 8): only on a simply-connected shape (paper §1); with
+// holes it is reported as not applicable. Above the memory budget it runs on a coarser mesh.
+struct MetricVariant {
+  bool applies = false;
+  std::string why_not;
+  bool own_mesh = false;  // true: on `coarse`, not the render mesh
+  TriMesh coarse;
+  double render_mesh_mb = 0, mb = 0, setup_ms = 0;
+  std::optional<baselines::Ccw16Interpolation> interp;
+  std::optional<baselines::Ccw16Mesh> prepared;
+};
+
+// The baselines, set up on the render mesh with our keyframes.
+struct Baselines {
+  TriMesh mesh;  // the render mesh
+  std::vector<baselines::ArapKeyframe> arap_keys;
+  std::optional<baselines::ArapInterpolation> arap;
+  std::optional<baselines::Ccw16Interpolation> ccw;
+  std::optional<baselines::Ccw16Mesh> ccw_mesh;
+  double arap_setup_ms = 0, ccw_setup_ms = 0;
+  double arap_key_error = 0;  // ARAP's largest distance to its keyframes / size (a check of the baseline)
+  MetricVariant bm;
+  const TriMesh& bm_mesh() const { return bm.own_mesh ? bm.coarse : mesh; }
+};
+Baselines set_up_baselines(const Inputs& in, const Options& o);
+
+// Bytes CCW16's boundary-metric variant holds once prepare()d on a mesh (its basis rows).
+double metric_rows_bytes(const TriMesh& mesh, int columns, const baselines::Ccw16Options& co, double size);
+TriMesh mesh_with(const Shape& shape, int vertices);
+// f of a map at many points, in chunks so that the basis rows stay small.
+std::vector<cd> map_points_chunked(const Cage& cage, const HarmonicMap& map, std::span<const cd> points);
+
+// Per frame of the main sequence: each method's largest distortion and its time. Ours
+// sampled at the certificate's breakpoints (as the keyframes' bound_*) and certified (*_c,
+// NaN where not certified); the boundary-metric variant and both CCW16 variants'
+// distances to ours after rigid alignment (Fig. 8) only on a simply-connected shape (NaN else).
+struct PerFrame {
+  std::vector<double> t, our_kappa, our_iso, bound_kappa, bound_iso, our_ms, our_iters;
+  std::vector<double> our_kappa_c, our_iso_c, bound_kappa_c, bound_iso_c;
+  std::vector<double> arap_kappa, arap_iso, arap_ms, arap_flipped;
+  std::vector<double> ccw_kappa, ccw_iso, ccw_ms, ccw_period;
+  std::vector<double> bm_kappa, bm_iso, bm_ms, bm_fit, ccw_dist, bm_dist;
+  std::vector<bool> keyframe;
+  std::vector<double> uncertified_t, unconverged_t;
+  size_t size() const { return t.size(); }
+};
+PerFrame measure_sequence(const Inputs& in, const std::vector<FrameResult>& ours, const Baselines& b, const Progress& progress);
+
+// One time of the side-by-side figures, every method at it.
+struct Snapshot {
+  double u = 0, t = 0;  // fraction of the keyframe interval, time
+  FrameResult ours;
+  std::vector<cd> ours_pos, arap_pos;  // at the render mesh's vertices
+  baselines::MeshDistortion arap_d;
+  baselines::Ccw16Frame ccw, bm;  // CCW16: log derivatives; boundary metric (simply connected only)
+  Gap gap, bm_gap;                // ours vs each CCW16 variant
+  std::string png;                // the figure's file name, and its size (figures.h)
+  int width = 0, height = 0;
+};
+// At t = 0.25, 0.5, 0.75 of the segment, ours warm-started from the sequence's frame before t.
+std::vector<Snapshot> snapshots(const Inputs& in, const OurSequence& ours, const Baselines& b);
+
+// Table 3: time per frame against the render mesh's resolution.
+struct Table3Row {
+  int vertices = 0, triangles = 0;
+  double mesh_s = 0, arap_factor_ms = 0, arap_ms = 0, ours_eval_cpu_ms = 0;
+  double ours_eval_gpu_ms = 0;  // NaN where no GPU dense evaluation was given
+};
+// Frames of the sequence whose maps and times Table 3 uses.
+std::vector<size_t> timed_frames(size_t frames, int timing_frames);
+std::vector<Table3Row> run_table3(const Inputs& in, const std::vector<FrameResult>& ours, const std::vector<size_t>& timed,
+                                  const Backends& backends, const Progress& progress);
+// Ours at the render mesh for Table 4: f at its vertices on the CPU, mean ms over `timed`.
+double eval_ms(const Inputs& in, const std::vector<FrameResult>& ours, const std::vector<size_t>& timed, const TriMesh& mesh);
+
+}  // namespace hsi::compare

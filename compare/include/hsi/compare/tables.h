@@ -1,0 +1,45 @@
+// hsi compare, stage 4: the paper's Tables 1–4 as data (from the runs), then as JSON for
+// report.json and as markdown sections for report.md (heading, what was measured, table).
+#pragma once
+
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "hsi/compare/runs.h"
+
+namespace hsi::compare {
+
+// Table 4: time per frame at the render mesh against ARAP (means over the sequence).
+struct Table4 {
+  int mesh_vertices = 0;
+  double arap_ms = 0, ccw16_ms = 0;
+  bool boundary_metric = false;  // the boundary-metric variant ran (simply connected); else n/a
+  double ccw16_bm_ms = 0;
+  int ccw16_bm_mesh_vertices = 0;
+  bool ccw16_bm_own_mesh = false;  // on a coarser mesh than the render mesh
+  double ours_solve_ms = 0, ours_iterations = 0, ours_eval_cpu_ms = 0;
+  double ours_total_ms() const { return ours_solve_ms + ours_eval_cpu_ms; }
+  double arap_over_ours_solve() const { return arap_ms / ours_solve_ms; }
+  double arap_over_ours_total() const { return arap_ms / ours_total_ms(); }
+};
+
+// What Table 3's text names: our mean solve time (the solve does not see the mesh), the
+// frames timed, and the GPU dense evaluation's device, or why it is not available.
+struct Table3Context {
+  double ours_solve_ms = 0;
+  size_t timed_frames = 0;
+  std::string gpu_device;       // e.g. "llvmpipe (CPU)"
+  std::string gpu_unavailable;  // non-empty: no GPU column, this is why
+};
+
+nlohmann::json run_json(const OurRun& r);  // one row of Table 1 or 2
+nlohmann::json table3_json(const std::vector<Table3Row>& rows, double ours_solve_ms);
+nlohmann::json table4_json(const Table4& t);
+
+std::string table1_markdown(const std::vector<OurRun>& rows, int table_frames);
+std::string table2_markdown(const std::vector<OurRun>& rows, int table_frames);
+std::string table3_markdown(const std::vector<Table3Row>& rows, const Table3Context& c);
+std::string table4_markdown(const Table4& t, int sequence_frames);
+
+}  // namespace hsi::compare

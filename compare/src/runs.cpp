@@ -1,0 +1,393 @@
+// hsi compare's runs: ours, ARAP, CCW16 and the timings (hsi/compare/runs.h).
+#include "hsi/compare/runs.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <unordered_set>
+
+#include "format.h"
+#include "hsi/keyframes.h"
+
+namespace hsi::compare {
+
+void check_options(const Options& o) {
+  if (o.panel < 96 || o.panel > 4096)
+    throw InputError("--size: '" + std::to_string(o.panel) + "' is not a panel size between 96 and 4096 pixels");
+  for (double r : o.ratios)
+    if (!(r > 0 && r <= 1)) throw InputError("--ratios: " + std::to_string(r) + " is not a Hessian sample ratio in (0, 1]");
+  for (int v : o.table3_vertices)
+    if (v < 100 || v > 5'000'000) throw InputError("--table3-vertices: " + std::to_string(v) + " is outside 100..5000000");
+  if (o.frames < 2) throw InputError("--frames: " + std::to_string(o.frames) + " is fewer than 2");
+  if (o.table_frames < 2) throw InputError("--table-frames: " + std::to_string(o.table_frames) + " is fewer than 2");
+  if (o.timing_frames < 1) throw InputError("--timing-frames: " + std::to_string(o.timing_frames) + " is fewer than 1");
+  if (o.mesh_vertices < 100) throw InputError("--mesh-vertices: " + std::to_string(o.mesh_vertices) + " is fewer than 100");
+  if (!(o.ccw16_memory_mb >= 1)) throw InputError("--ccw16-memory: " + std::to_string(o.ccw16_memory_mb) + " MB is below 1 MB");
+}
+
+Inputs prepare_inputs(const Options& o) {
+  Inputs in;
+  in.scene = load_scene(o.scene);
+  in.scene_path = o.scene;
+  if (in.scene.keyframes.size() < 2) throw InputError(o.scene + ": comparing needs at least two keyframes");
+  const int segments = static_cast<int>(in.scene.keyframes.size()) - 1;
+  if (o.segment < 0 || o.segment >= segments)
+    throw InputError("--segment " + std::to_string(o.segment) + ": the scene has " + std::to_string(segments) +
+                     " keyframe interval(s), 0.." + std::to_string(segments - 1));
+  check_options(o);
+  in.texture = scene_texture(in.scene, o.scene);
+  for (int v : o.table3_vertices)
+    if (!(o.no_800k && v >= 800'000)) in.table3.push_back(v);
+  in.setup = scene_setup(in.scene, o.samples, 0);
+  solve_scene_keyframes(in.scene, *in.setup);
+  for (const Keyframe& k : in.scene.keyframes) {
+    in.times.push_back(k.time);
+    in.keys.push_back(*k.coefficients);
+  }
+  in.seg_t0 = in.times[static_cast<size_t>(o.segment)];
+  in.seg_t1 = in.times[static_cast<size_t>(o.segment) + 1];
+  in.t_mid = 0.5 * (in.seg_t0 + in.seg_t1);
+  return in;
+}
+
+std::unique_ptr<NewtonCore> make_core(const Backends& b, const ShapeSetup& setup) {
+  std::unique_ptr<NewtonCore> core = b.newton_core ? b.newton_core(setup) : nullptr;
+  return core ? std::move(core) : make_cpu_newton_core(setup.D_G, setup.H);
+}
+
+OurSequence run_our_sequence(const Inputs& in, const Options& o) {
+  OurSequence s;
+  std::unique_ptr<NewtonCore> core = make_core(o.backends, *in.setup);
+  s.core = core->name();
+  s.interp = std::make_unique<Interpolator>(*in.setup, in.times, in.keys, InterpolationOptions{}, std::move(core));
+  say(o.progress, false, "ours (%s): %d frames over the keyframes' range", s.core.c_str(), o.frames);
+  const auto t0 = Clock::now();
+  s.frames = s.interp->sequence(o.frames, [&](const FrameResult& f, int i, int n) {
+    say(o.progress, true, "ours: frame %d/%d  t = %.4f  %d it  %.1f ms", i + 1, n, f.t, f.iterations, f.ms);
+  });
+  s.summary = summarize(s.frames, s_since(t0));
+  for (const FrameResult& f : s.frames) s.within_bound += f.certified && f.bound_excess <= 1e-9;  // sampled against sampled
+  say(o.progress, false, "ours (%s): %d frames, %d certified, %.2f iterations and %.1f ms per frame", s.core.c_str(),
+      s.summary.frames, s.summary.certified, s.summary.mean_iterations, s.summary.mean_ms);
+  return s;
+}
+
+OurRun run_ours(const std::string& label, const ShapeSetup& setup, const Inputs& in, HessianProjection projection,
+                std::unique_ptr<NewtonCore> core, int frames, double ratio) {
+  OurRun r;
+  r.label = label;
+  r.core = core->name();
+  r.hessian_samples = static_cast<int>(setup.H.size());
+  r.ratio = ratio;
+  InterpolationOptions io;
+  io.projection = projection;
+  Interpolator interp(setup, in.times, in.keys, io, std::move(core));
+  r.cold = interp.frame(in.t_mid);
+  const auto t0 = Clock::now();
+  const std::vector<FrameResult> seq = interp.sequence(frames);
+  r.summary = summarize(seq, s_since(t0));
+  for (const FrameResult& f : seq)
+    if (!f.keyframe) r.max_iterations = std::max(r.max_iterations, f.iterations);
+  return r;
+}
+
+std::vector<OurRun> run_table1(const Inputs& in, const Options& o, const std::string& main_core) {
+  std::vector<OurRun> t;
+  const ShapeSetup& setup = *in.setup;
+  for (const HessianProjection proj : {HessianProjection::Delete, HessianProjection::FullProj, HessianProjection::PartProj}) {
+    say(o.progress, false, "table 1: %s, %d frames ...", to_string(proj), o.table_frames);
+    t.push_back(run_ours(to_string(proj), setup, in, proj, make_cpu_newton_core(setup.D_G, setup.H), o.table_frames,
+                         in.scene.hessian_ratio));
+    say(o.progress, false, "table 1: %s: %.2f iterations per frame", to_string(proj), t.back().summary.mean_iterations);
+  }
+  if (main_core != t.back().core) {
+    const std::string label = std::string(to_string(HessianProjection::PartProj)) + " (" + main_core + ")";
+    say(o.progress, false, "table 1: %s, %d frames ...", label.c_str(), o.table_frames);
+    t.push_back(run_ours(label, setup, in, HessianProjection::PartProj, make_core(o.backends, setup), o.table_frames,
+                         in.scene.hessian_ratio));
+  }
+  return t;
+}
+
+std::vector<OurRun> run_table2(Inputs& in, const Options& o) {
+  std::vector<OurRun> t;
+  for (const double r : o.ratios) {
+    const std::shared_ptr<const ShapeSetup> sr = scene_setup(in.scene, o.samples, r);
+    char label[32];
+    std::snprintf(label, sizeof label, "r = %g", r);
+    say(o.progress, false, "table 2: %s (|H| = %zu), %d frames ...", label, sr->H.size(), o.table_frames);
+    t.push_back(run_ours(label, *sr, in, HessianProjection::PartProj, make_core(o.backends, *sr), o.table_frames, r));
+    say(o.progress, false, "table 2: %s (|H| = %zu): %.2f iterations, %.1f ms per frame", label, sr->H.size(),
+        t.back().summary.mean_iterations, t.back().summary.mean_ms);
+  }
+  return t;
+}
+
+std::vector<cd> map_points_chunked(const Cage& cage, const HarmonicMap& map, std::span<const cd> points) {
+  constexpr size_t kChunk = 8192;  // 800k points × n columns would not fit in memory at once
+  std::vector<cd> out;
+  out.reserve(points.size());
+  for (size_t i = 0; i < points.size(); i += kChunk) {
+    const std::vector<cd> part = map_points(cage, map, points.subspan(i, std::min(kChunk, points.size() - i)));
+    out.insert(out.end(), part.begin(), part.end());
+  }
+  return out;
+}
+
+TriMesh mesh_with(const Shape& shape, int vertices) {
+  TriangulateOptions o;
+  o.max_edge = edge_for_vertex_count(shape, vertices);
+  return triangulate(shape, o);
+}
+
+// The C and D basis rows (2 × 16 bytes × m columns) at every vertex and at every Gauss node
+// of every edge (`quadrature` nodes per piece of at most max_piece × size; ccw16.h), counted
+// as it places them. ~300 MB at 10,000 vertices for a 32-vertex cage: hsi compare caps it.
+double metric_rows_bytes(const TriMesh& mesh, int columns, const baselines::Ccw16Options& co, double size) {
+  std::unordered_set<std::uint64_t> edges;
+  const double h = co.max_piece * size;
+  double points = mesh.vertex_count() + 1.0 + co.quadrature;  // + the anchor and its piece to the base vertex
+  for (const auto& tri : mesh.triangles)
+    for (int c = 0; c < 3; ++c) {
+      const int u = tri[static_cast<size_t>(c)], v = tri[static_cast<size_t>((c + 1) % 3)];
+      const auto key = (static_cast<std::uint64_t>(std::min(u, v)) << 32) | static_cast<std::uint32_t>(std::max(u, v));
+      if (!edges.insert(key).second) continue;
+      const double len = std::abs(mesh.vertices[static_cast<size_t>(u)] - mesh.vertices[static_cast<size_t>(v)]);
+      points += co.quadrature * std::max(1.0, std::ceil(len / h));
+    }
+  return points * columns * 2.0 * sizeof(cd);
+}
+
+Baselines set_up_baselines(const Inputs& in, const Options& o) {
+  Baselines b;
+  const Cage& cage = in.setup->cage;
+  const Shape& shape = in.scene.shape;
+  say(o.progress, false, "baselines: meshing the shape (about %d vertices), setting up ARAP and CCW16 ...", o.mesh_vertices);
+  b.mesh = mesh_with(shape, o.mesh_vertices);
+  for (size_t k = 0; k < in.keys.size(); ++k)
+    b.arap_keys.push_back({in.times[k], map_points_chunked(cage, in.keys[k], b.mesh.vertices)});
+  // A baseline that refuses the keyframes (e.g. a keyframe that flips a triangle of
+  // the mesh) stops the comparison with its reason and what to try.
+  auto baseline = [&](const char* name, auto make) {
+    try {
+      return make();
+    } catch (const InputError& e) {
+      throw InputError(o.scene + ": the " + name + " baseline refuses this scene's keyframes on the " +
+                       std::to_string(b.mesh.vertex_count()) + "-vertex mesh: " + e.what() +
+                       (std::string(name) == "ARAP" ? " (a finer mesh, --mesh-vertices, may resolve a flipped triangle)" : ""));
+    }
+  };
+  auto t0 = Clock::now();
+  b.arap.emplace(baseline("ARAP", [&] { return baselines::ArapInterpolation(b.mesh, b.arap_keys); }));
+  b.arap_setup_ms = ms_since(t0);
+  std::vector<baselines::Ccw16Keyframe> ccw_keys;
+  for (size_t k = 0; k < in.keys.size(); ++k) ccw_keys.push_back({in.times[k], in.keys[k]});
+  t0 = Clock::now();
+  b.ccw.emplace(baseline("CCW16", [&] { return baselines::Ccw16Interpolation(shape, cage, ccw_keys); }));
+  b.ccw_mesh.emplace(b.ccw->prepare(b.mesh));
+  b.ccw_setup_ms = ms_since(t0);
+  say(o.progress, false, "render mesh %d vertices, %d triangles; ARAP set up in %.0f ms, CCW16 (log derivatives) in %.0f ms",
+      b.mesh.vertex_count(), b.mesh.triangle_count(), b.arap_setup_ms, b.ccw_setup_ms);
+
+  // CCW16's boundary-metric variant (the one the paper's Fig. 8 compares with): the metric
+  // blended on the boundary, f_z and f_zbar rebuilt by a least-squares Hilbert transform.
+  MetricVariant& bm = b.bm;
+  const int holes = in.holes();
+  if (holes > 0) {
+    bm.why_not = "CCW16 (boundary metric) does not apply to multiply-connected domains (paper \xc2\xa7" "1): its Hilbert "
+                 "transform recovers a single-valued log f_z from its real part only on a simply-connected domain, and this "
+                 "shape has " + std::to_string(holes) + (holes == 1 ? " hole" : " holes");
+    say(o.progress, false, "%s; only CCW16 (log derivatives) is compared", bm.why_not.c_str());
+  } else {
+    bm.applies = true;
+    baselines::Ccw16Options bco;
+    bco.variant = baselines::Ccw16Variant::BoundaryMetric;
+    const double budget = o.ccw16_memory_mb * 1024.0 * 1024.0;
+    double bytes = metric_rows_bytes(b.mesh, cage.vertex_count(), bco, in.size());
+    bm.render_mesh_mb = bytes / (1024.0 * 1024.0);
+    // Coarser meshes until the rows fit (the mesher's vertex count is only roughly the one asked for).
+    int target = b.mesh.vertex_count();
+    for (int tries = 0; bytes > budget && tries < 8 && target > 100; ++tries) {
+      target = std::max(100, static_cast<int>(0.92 * target * budget / bytes));
+      bm.coarse = mesh_with(shape, target);
+      bm.own_mesh = true;
+      bytes = metric_rows_bytes(bm.coarse, cage.vertex_count(), bco, in.size());
+    }
+    bm.mb = bytes / (1024.0 * 1024.0);
+    say(o.progress, false, "CCW16 (boundary metric): setting up on a %d-vertex mesh ...", b.bm_mesh().vertex_count());
+    t0 = Clock::now();
+    bm.interp.emplace(baseline("CCW16 (boundary metric)", [&] { return baselines::Ccw16Interpolation(shape, cage, ccw_keys, bco); }));
+    bm.prepared.emplace(bm.interp->prepare(b.bm_mesh()));
+    bm.setup_ms = ms_since(t0);
+    say(o.progress, false,
+        "CCW16 (boundary metric) on %s%d-vertex mesh (%.0f MB of basis rows; %.0f MB on the render mesh, --ccw16-memory %.0f MB), set up in %.0f ms",
+        bm.own_mesh ? "a coarser " : "the ", b.bm_mesh().vertex_count(), bm.mb, bm.render_mesh_mb, o.ccw16_memory_mb, bm.setup_ms);
+  }
+
+  // ARAP reproduces its keyframes (a check of the baseline as we run it).
+  for (const auto& k : b.arap_keys) {
+    const std::vector<cd> p = b.arap->positions(k.time);
+    for (size_t i = 0; i < p.size(); ++i) b.arap_key_error = std::max(b.arap_key_error, std::abs(p[i] - k.positions[i]) / in.size());
+  }
+  return b;
+}
+
+PerFrame measure_sequence(const Inputs& in, const std::vector<FrameResult>& ours, const Baselines& b, const Progress& progress) {
+  const size_t F = ours.size();
+  const double nan = std::numeric_limits<double>::quiet_NaN(), inf = std::numeric_limits<double>::infinity();
+  const Cage& cage = in.setup->cage;
+  const double size = in.size();
+  PerFrame p;
+  for (auto* v : {&p.t, &p.our_kappa, &p.our_iso, &p.bound_kappa, &p.bound_iso, &p.our_ms, &p.our_iters, &p.our_kappa_c,
+                  &p.our_iso_c, &p.bound_kappa_c, &p.bound_iso_c, &p.arap_kappa, &p.arap_iso, &p.arap_ms, &p.arap_flipped,
+                  &p.ccw_kappa, &p.ccw_iso, &p.ccw_ms, &p.ccw_period})
+    v->resize(F);
+  for (auto* v : {&p.bm_kappa, &p.bm_iso, &p.bm_ms, &p.bm_fit, &p.ccw_dist, &p.bm_dist}) v->assign(F, nan);
+  p.keyframe.resize(F);
+  say(progress, false, "baselines over the sequence: ARAP and CCW16 at %zu frames ...", F);
+  for (size_t i = 0; i < F; ++i) {
+    const FrameResult& f = ours[i];
+    p.t[i] = f.t;
+    p.keyframe[i] = f.keyframe;
+    p.our_kappa[i] = f.certified ? f.distortion.conformal_max : inf;
+    p.our_iso[i] = f.certified ? f.distortion.isometric_max : inf;
+    p.bound_kappa[i] = f.bound.conformal_max;
+    p.bound_iso[i] = f.bound.isometric_max;
+    p.our_kappa_c[i] = f.distortion_certified.conformal_max;
+    p.our_iso_c[i] = f.distortion_certified.isometric_max;
+    p.bound_kappa_c[i] = f.certified_bound.conformal_max;
+    p.bound_iso_c[i] = f.certified_bound.isometric_max;
+    p.our_ms[i] = f.keyframe ? nan : f.ms;
+    p.our_iters[i] = f.iterations;
+    if (!f.certified) p.uncertified_t.push_back(f.t);
+    if (!f.converged) p.unconverged_t.push_back(f.t);
+    auto t0 = Clock::now();
+    const std::vector<cd> pos = b.arap->positions(f.t);
+    p.arap_ms[i] = ms_since(t0);
+    const baselines::MeshDistortion d = baselines::mesh_distortion(b.mesh, pos);
+    p.arap_kappa[i] = d.max_kappa;
+    p.arap_iso[i] = d.max_isometric;
+    p.arap_flipped[i] = d.flipped;
+    t0 = Clock::now();
+    const baselines::Ccw16Frame c = b.ccw->frame(f.t, *b.ccw_mesh);
+    p.ccw_ms[i] = ms_since(t0);
+    p.ccw_kappa[i] = c.max_kappa;
+    p.ccw_iso[i] = c.max_isometric;
+    p.ccw_period[i] = c.hole_period.empty() ? 0.0 : max_of(c.hole_period) / size;
+    if (b.bm.applies) {
+      t0 = Clock::now();
+      const baselines::Ccw16Frame m = b.bm.interp->frame(f.t, *b.bm.prepared);
+      p.bm_ms[i] = ms_since(t0);
+      p.bm_kappa[i] = m.max_kappa;
+      p.bm_iso[i] = m.max_isometric;
+      p.bm_fit[i] = m.fit_metric;
+      const std::vector<cd> ours_at = map_points_chunked(cage, f.map, b.mesh.vertices);
+      p.ccw_dist[i] = point_gap(c.positions, ours_at, size).rigid;
+      p.bm_dist[i] = point_gap(m.positions, b.bm.own_mesh ? map_points_chunked(cage, f.map, b.bm.coarse.vertices) : ours_at, size).rigid;
+    }
+    say(progress, true, "baselines: frame %zu/%zu", i + 1, F);
+  }
+  say(progress, false, "baselines over the sequence: ARAP %.1f ms per frame (%d frames with folds), CCW16 (log derivatives) %.1f ms per frame",
+      mean_of(p.arap_ms), static_cast<int>(std::count_if(p.arap_flipped.begin(), p.arap_flipped.end(), [](double v) { return v > 0; })),
+      mean_of(p.ccw_ms));
+  if (b.bm.applies)
+    say(progress, false, "CCW16 (boundary metric): %.1f ms per frame; after rigid alignment within %.2e of the size of ours (log derivatives: %.2e)",
+        mean_of(p.bm_ms), max_of(p.bm_dist), max_of(p.ccw_dist));
+  return p;
+}
+
+std::vector<Snapshot> snapshots(const Inputs& in, const OurSequence& ours, const Baselines& b) {
+  const Cage& cage = in.setup->cage;
+  const std::vector<FrameResult>& seq = ours.frames;
+  std::vector<Snapshot> snaps;
+  for (const double u : {0.25, 0.5, 0.75}) {
+    Snapshot s;
+    s.u = u;
+    s.t = in.seg_t0 + u * (in.seg_t1 - in.seg_t0);
+    // Warm-started from the sequence's frame just before t, as playback would be.
+    size_t j = 0;
+    for (size_t i = 0; i < seq.size(); ++i)
+      if (seq[i].t <= s.t) j = i;
+    s.ours = ours.interp->frame(s.t, seq[j].x, &seq[j].certificate);
+    s.ours_pos = map_points_chunked(cage, s.ours.map, b.mesh.vertices);
+    s.arap_pos = b.arap->positions(s.t);
+    s.arap_d = baselines::mesh_distortion(b.mesh, s.arap_pos);
+    s.ccw = b.ccw->frame(s.t, *b.ccw_mesh);
+    s.gap = point_gap(s.ccw.positions, s.ours_pos, in.size());
+    if (b.bm.applies) {
+      s.bm = b.bm.interp->frame(s.t, *b.bm.prepared);
+      s.bm_gap = point_gap(s.bm.positions, b.bm.own_mesh ? map_points_chunked(cage, s.ours.map, b.bm.coarse.vertices) : s.ours_pos,
+                           in.size());
+    }
+    snaps.push_back(std::move(s));
+  }
+  return snaps;
+}
+
+std::vector<size_t> timed_frames(size_t frames, int timing_frames) {
+  std::vector<size_t> timed;
+  for (int k = 0; k < timing_frames; ++k)
+    timed.push_back(static_cast<size_t>(k + 1) * (frames - 1) / static_cast<size_t>(timing_frames + 1));
+  return timed;
+}
+
+// Ours: the solve does not see the mesh; a frame at the mesh costs the solve plus f at
+// its vertices. ARAP: one sparse solve per frame on the mesh, after a factorisation.
+std::vector<Table3Row> run_table3(const Inputs& in, const std::vector<FrameResult>& ours, const std::vector<size_t>& timed,
+                                  const Backends& backends, const Progress& progress) {
+  const Cage& cage = in.setup->cage;
+  std::vector<Table3Row> rows;
+  for (int v : in.table3) {
+    Table3Row row{};
+    say(progress, false, "table 3: meshing the shape at about %d vertices ...", v);
+    auto t0 = Clock::now();
+    const TriMesh m = mesh_with(in.scene.shape, v);
+    row.mesh_s = s_since(t0);
+    row.vertices = m.vertex_count();
+    row.triangles = m.triangle_count();
+    say(progress, false, "table 3: ARAP at %d vertices: factorising, then %zu frame(s) ...", row.vertices, timed.size());
+    std::vector<baselines::ArapKeyframe> ak;
+    for (size_t k = 0; k < in.keys.size(); ++k) ak.push_back({in.times[k], map_points_chunked(cage, in.keys[k], m.vertices)});
+    t0 = Clock::now();
+    const baselines::ArapInterpolation a(m, std::move(ak));
+    row.arap_factor_ms = ms_since(t0);
+    double arap_sum = 0, cpu_sum = 0, gpu_sum = 0;
+    for (size_t i : timed) {
+      t0 = Clock::now();
+      const std::vector<cd> p = a.positions(ours[i].t);
+      arap_sum += ms_since(t0);
+      t0 = Clock::now();
+      const std::vector<cd> f = map_points_chunked(cage, ours[i].map, m.vertices);
+      cpu_sum += ms_since(t0);
+      if (p.size() != f.size()) throw std::logic_error("table 3: sizes disagree");
+      if (backends.dense_eval) {
+        t0 = Clock::now();
+        const size_t n = backends.dense_eval(cage, ours[i].map, m.vertices);
+        gpu_sum += ms_since(t0);
+        if (n != f.size()) throw std::logic_error("table 3: sizes disagree");
+      }
+    }
+    const double n = static_cast<double>(timed.size());
+    row.arap_ms = arap_sum / n;
+    row.ours_eval_cpu_ms = cpu_sum / n;
+    row.ours_eval_gpu_ms = backends.dense_eval ? gpu_sum / n : std::numeric_limits<double>::quiet_NaN();
+    rows.push_back(row);
+    say(progress, false,
+        "table 3: %d vertices: ARAP factorisation %.0f ms, %.1f ms per frame; ours f at the vertices %.1f ms (CPU), %.1f ms (Vulkan)",
+        row.vertices, row.arap_factor_ms, row.arap_ms, row.ours_eval_cpu_ms, row.ours_eval_gpu_ms);
+  }
+  return rows;
+}
+
+double eval_ms(const Inputs& in, const std::vector<FrameResult>& ours, const std::vector<size_t>& timed, const TriMesh& mesh) {
+  double ms = 0;
+  for (size_t i : timed) {
+    const auto t0 = Clock::now();
+    const std::vector<cd> f = map_points_chunked(in.setup->cage, ours[i].map, mesh.vertices);
+    ms += ms_since(t0) / static_cast<double>(timed.size());
+  }
+  return ms;
+}
+
+}  // namespace hsi::compare
