@@ -168,8 +168,14 @@ TEST_CASE("GE reproduces its keyframes and keeps rigid and similarity motions", 
   const std::vector<cd> k1 = apply(m, wobble), k2 = apply(m, [](cd z) { return 0.8 * std::polar(1.0, -0.5) * z + 1.0; });
   const GeInterpolation ge(m, {{0, m.vertices}, {1, k1}, {2.5, k2}}, {.tolerance = 1e-14});
   const std::vector<double> times{0, 0.25, 0.5, 0.75, 1, 1.5, 2, 2.5};
-  const std::vector<GeFrame> f = ge.sequence(times);
+  int calls = 0;
+  const std::vector<GeFrame> f = ge.sequence(times, [&](const GeFrame& g, int i, int n) {
+    CHECK(i == calls++);
+    CHECK(n == static_cast<int>(times.size()));
+    CHECK(g.time == times[static_cast<size_t>(i)]);
+  });
   REQUIRE(f.size() == times.size());
+  CHECK(calls == static_cast<int>(times.size()));
   for (const GeFrame& g : f) {
     CAPTURE(g.time);
     CHECK(g.converged);

@@ -364,7 +364,8 @@ GeInterpolation::GeInterpolation(const TriMesh& rest, std::vector<MeshKeyframe> 
   impl_ = std::move(impl);
 }
 
-std::vector<GeFrame> GeInterpolation::sequence(std::span<const double> times) const {
+std::vector<GeFrame> GeInterpolation::sequence(std::span<const double> times,
+                                               const std::function<void(const GeFrame&, int, int)>& progress) const {
   std::vector<GeFrame> frames;
   if (times.empty()) return frames;
   const Impl& m = *impl_;
@@ -376,6 +377,7 @@ std::vector<GeFrame> GeInterpolation::sequence(std::span<const double> times) co
   for (double t : times) {
     frames.push_back(m.solve(t, start));
     start = frames.back().positions;
+    if (progress) progress(frames.back(), static_cast<int>(frames.size()) - 1, static_cast<int>(times.size()));
   }
   return frames;
 }

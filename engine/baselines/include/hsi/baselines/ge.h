@@ -44,6 +44,7 @@
 
 #include <Eigen/Dense>
 #include <Eigen/SparseCore>
+#include <functional>
 #include <memory>
 #include <span>
 #include <vector>
@@ -98,8 +99,10 @@ class GeInterpolation {
   GeInterpolation(const TriMesh& rest, std::vector<MeshKeyframe> keyframes, GeOptions options = {});
 
   // Frames at the given times (any order, usually increasing), each solve warm-started
-  // from the previous frame; the first from the keyframe nearest times[0].
-  std::vector<GeFrame> sequence(std::span<const double> times) const;
+  // from the previous frame; the first from the keyframe nearest times[0]. progress, if
+  // given, is called after each frame with it, its index and the number of frames.
+  std::vector<GeFrame> sequence(std::span<const double> times,
+                                const std::function<void(const GeFrame&, int, int)>& progress = {}) const;
   // One frame at time t (clamped to the keyframes' range), Newton from `start`
   // (rest.vertex_count() finite positions with no flipped or degenerate triangle:
   // InputError otherwise).
