@@ -13,76 +13,18 @@
 #include "hsi/baselines/arap.h"
 #include "hsi/keyframes.h"
 #include "hsi/scene_sequence.h"
+#include "baseline_meshes.h"
 #include "test_shapes.h"
 
 using namespace hsi;
 using namespace hsi::baselines;
+using namespace hsi::test::mesh;
 
 namespace {
 
 constexpr double kPi = std::numbers::pi;
 size_t at(int i) { return static_cast<size_t>(i); }
 double deg(double d) { return d * kPi / 180; }
-
-// The bar with three holes, centred at the origin.
-TriMesh bar_mesh(int vertices) {
-  Shape s = test::bar_with_holes();
-  for (int l = 0; l < s.loop_count(); ++l)
-    for (cd& p : s.loop(l)) p -= cd(2, 0.5);
-  return triangulate(s, {.max_edge = edge_for_vertex_count(s, vertices)});
-}
-
-double mesh_size(const TriMesh& m) {
-  cd lo = m.vertices[0], hi = m.vertices[0];
-  for (cd p : m.vertices) {
-    lo = {std::min(lo.real(), p.real()), std::min(lo.imag(), p.imag())};
-    hi = {std::max(hi.real(), p.real()), std::max(hi.imag(), p.imag())};
-  }
-  return std::abs(hi - lo);
-}
-
-std::vector<cd> apply(const TriMesh& m, const std::function<cd(cd)>& f) {
-  std::vector<cd> x;
-  for (cd z : m.vertices) x.push_back(f(z));
-  return x;
-}
-
-double signed_area(std::span<const cd> x, const std::array<int, 3>& t) {
-  return 0.5 * std::imag(std::conj(x[at(t[1])] - x[at(t[0])]) * (x[at(t[2])] - x[at(t[0])]));
-}
-
-// Area-weighted centroid of the mesh under positions x: Σ_T area_T · centroid_T / Σ area_T,
-// with the rest areas (computed here independently of the library's lumped masses).
-cd centroid(const TriMesh& m, std::span<const cd> x) {
-  cd sum = 0;
-  double total = 0;
-  for (const auto& t : m.triangles) {
-    const double a = signed_area(m.vertices, t);
-    sum += a * (x[at(t[0])] + x[at(t[1])] + x[at(t[2])]) / 3.0;
-    total += a;
-  }
-  return sum / total;
-}
-
-double max_distance(std::span<const cd> a, std::span<const cd> b) {
-  REQUIRE(a.size() == b.size());
-  double d = 0;
-  for (size_t i = 0; i < a.size(); ++i) d = std::max(d, std::abs(a[i] - b[i]));
-  return d;
-}
-
-// A conformal bend of the bar: the tangent turns by `b` radians per unit of x.
-cd bend(cd z, double b) { return std::abs(b) < 1e-12 ? z : (std::exp(cd(0, b) * z) - 1.0) / cd(0, b); }
-
-std::string error_of(const std::function<void()>& f) {
-  try {
-    f();
-  } catch (const InputError& e) {
-    return e.what();
-  }
-  FAIL("no InputError was thrown");
-  return "";
-}
 
 // Rotation angle of triangle t's Jacobian under positions x (arg f_z).
 double triangle_angle(const TriMesh& m, std::span<const cd> x, int t) {

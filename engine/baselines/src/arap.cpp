@@ -12,95 +12,18 @@
 #include <limits>
 #include <numbers>
 #include <numeric>
+#include <optional>
 #include <queue>
 #include <string>
 #include <tuple>
 
+#include "mesh_support.h"
+
 namespace hsi::baselines {
+
+using namespace detail;
 namespace {
-
-using Mat2 = Eigen::Matrix2d;
 constexpr double kInf = std::numeric_limits<double>::infinity();
-
-size_t at(int i) { return static_cast<size_t>(i); }
-
-std::string num(double x) {
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%.6g", x);
-  return buf;
-}
-std::string point(cd p) { return "(" + num(p.real()) + ", " + num(p.imag()) + ")"; }
-std::string triangle_name(int t, const std::array<int, 3>& v) {
-  return "triangle " + std::to_string(t) + " (vertices " + std::to_string(v[0]) + ", " + std::to_string(v[1]) + ", " +
-         std::to_string(v[2]) + ")";
-}
-
-// The representative of x mod 2π in [−π, π].
-double wrap(double x) { return std::remainder(x, 2 * std::numbers::pi); }
-
-// [b − a, c − a] as columns: the triangle's edge matrix.
-Mat2 edge_matrix(cd a, cd b, cd c) {
-  Mat2 m;
-  m << (b - a).real(), (c - a).real(), (b - a).imag(), (c - a).imag();
-  return m;
-}
-
-struct RestTriangle {
-  std::array<int, 3> v{};
-  double area = 0;
-  Mat2 E_inv;  // inverse rest edge matrix: rows are ∇φ of v[1] and v[2]; ∇φ of v[0] is minus their sum
-};
-
-std::vector<RestTriangle> rest_triangles(const TriMesh& rest) {
-  const int n = rest.vertex_count();
-  for (int i = 0; i < n; ++i) {
-    const cd p = rest.vertices[at(i)];
-    if (!std::isfinite(p.real()) || !std::isfinite(p.imag()))
-      throw InputError("rest mesh: vertex " + std::to_string(i) + " is not finite " + point(p));
-  }
-  if (rest.triangles.empty()) throw InputError("rest mesh has no triangles");
-  std::vector<RestTriangle> tris(rest.triangles.size());
-  for (int t = 0; t < rest.triangle_count(); ++t) {
-    const auto& v = rest.triangles[at(t)];
-    for (int j : v)
-      if (j < 0 || j >= n)
-        throw InputError("rest mesh: " + triangle_name(t, v) + " refers to a vertex outside 0.." + std::to_string(n - 1));
-    if (v[0] == v[1] || v[1] == v[2] || v[0] == v[2])
-      throw InputError("rest mesh: " + triangle_name(t, v) + " repeats a vertex");
-    const cd a = rest.vertices[at(v[0])], b = rest.vertices[at(v[1])], c = rest.vertices[at(v[2])];
-    const Mat2 E = edge_matrix(a, b, c);
-    const double det = E.determinant();
-    const double scale = std::max({std::norm(b - a), std::norm(c - b), std::norm(a - c)});
-    // Relative to the edges, so that the test means the same at any scale of the shape.
-    if (!(std::abs(det) > 1e-12 * scale))
-      throw InputError("rest mesh: " + triangle_name(t, v) + " is degenerate (area " + num(std::abs(det) / 2) + ")");
-    tris[at(t)] = {v, std::abs(det) / 2, E.inverse()};
-  }
-  return tris;
-}
-
-void check_positions(const TriMesh& rest, std::span<const cd> positions, const std::string& what) {
-  if (positions.size() != rest.vertices.size())
-    throw InputError(what + " has " + std::to_string(positions.size()) + " positions; the rest mesh has " +
-                     std::to_string(rest.vertices.size()) + " vertices");
-  for (size_t i = 0; i < positions.size(); ++i)
-    if (!std::isfinite(positions[i].real()) || !std::isfinite(positions[i].imag()))
-      throw InputError(what + ": vertex " + std::to_string(i) + " is not finite " + point(positions[i]));
-}
-
-Mat2 jacobian(const RestTriangle& T, std::span<const cd> x) {
-  return edge_matrix(x[at(T.v[0])], x[at(T.v[1])], x[at(T.v[2])]) * T.E_inv;
-}
-
-// Polar angle of J (the rotation nearest J): arg f_z, with J acting as z ↦ f_z z + f_z̄ z̄.
-double polar_angle(const Mat2& J) { return std::atan2(J(1, 0) - J(0, 1), J(0, 0) + J(1, 1)); }
-
-Mat2 rotation(double angle) {
-  Mat2 R;
-  R << std::cos(angle), -std::sin(angle), std::sin(angle), std::cos(angle);
-  return R;
-}
-
 }  // namespace
 
 MeshDistortion mesh_distortion(const TriMesh& rest, std::span<const cd> positions) {
@@ -135,21 +58,11 @@ struct ArapInterpolation::Impl {
   // Per keyframe, per triangle: the lifted rotation angle α and the stretch S (s00, s01, s11).
   std::vector<std::vector<double>> alpha;
   std::vector<std::vector<std::array<double, 3>>> stretch;
-  std::vector<int> component;                 // per vertex (connected components of the mesh)
-  std::vector<double> mass;                   // per vertex: a third of its triangles' area
-  std::vector<double> component_mass;
+  MeshComponents components;
   std::vector<std::vector<cd>> centroid;      // per keyframe, per component
-  std::vector<int> reduced;                   // per vertex: row in the pinned system, −1 if pinned
-  int reduced_count = 0;
-  Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt;
+  std::optional<PoissonSolver> poisson;
 
-  std::pair<int, double> locate(double t) const {
-    if (std::isnan(t)) throw InputError("ARAP interpolation: the time is NaN");
-    t = std::clamp(t, times.front(), times.back());
-    const int last = static_cast<int>(times.size()) - 2;
-    const int k = std::clamp(static_cast<int>(std::upper_bound(times.begin(), times.end(), t) - times.begin()) - 1, 0, last);
-    return {k, std::clamp((t - times[at(k)]) / (times[at(k + 1)] - times[at(k)]), 0.0, 1.0)};
-  }
+  std::pair<int, double> locate(double t) const { return detail::locate(times, t, "ARAP"); }
 
   // A_T(t) = R((1−s) α_k + s α_{k+1}) · ((1−s) S_k + s S_{k+1}), exact at s = 0 and s = 1.
   std::vector<Mat2> targets(int k, double s) const {
@@ -167,37 +80,15 @@ struct ArapInterpolation::Impl {
   }
 
   std::vector<cd> solve(const std::vector<Mat2>& A, int k, double s) const {
-    // Normal equations K x_c = b_c per coordinate c, with b_u = Σ_T area_T A_T^T ∇φ_u.
-    Eigen::MatrixXd b = Eigen::MatrixXd::Zero(reduced_count, 2);
-    for (size_t t = 0; t < tris.size(); ++t) {
-      const RestTriangle& T = tris[t];
-      const Eigen::Vector2d g1 = T.E_inv.row(0).transpose(), g2 = T.E_inv.row(1).transpose();
-      const std::array<Eigen::Vector2d, 3> g{-g1 - g2, g1, g2};
-      for (int j = 0; j < 3; ++j) {
-        const int r = reduced[at(T.v[at(j)])];
-        if (r >= 0) b.row(r) += T.area * (A[t] * g[at(j)]).transpose();
-      }
-    }
-    const Eigen::MatrixXd X = ldlt.solve(b);
-    std::vector<cd> x(at(n));
-    for (int i = 0; i < n; ++i) {
-      const int r = reduced[at(i)];
-      x[at(i)] = r >= 0 ? cd(X(r, 0), X(r, 1)) : cd(0);
-    }
+    std::vector<cd> x = poisson->solve(tris, A);
     // E leaves each component's translation free: move its centroid linearly between the keyframes'.
-    std::vector<cd> shift(component_mass.size());
-    for (size_t c = 0; c < shift.size(); ++c)
-      shift[c] = (1 - s) * centroid[at(k)][c] + s * centroid[at(k + 1)][c];
-    for (int i = 0; i < n; ++i) shift[at(component[at(i)])] -= mass[at(i)] / component_mass[at(component[at(i)])] * x[at(i)];
-    for (int i = 0; i < n; ++i) x[at(i)] += shift[at(component[at(i)])];
+    std::vector<cd> target(centroid[at(k)].size());
+    for (size_t c = 0; c < target.size(); ++c) target[c] = (1 - s) * centroid[at(k)][c] + s * centroid[at(k + 1)][c];
+    components.move_centroids(x, target);
     return x;
   }
 
-  double energy(const std::vector<Mat2>& A, std::span<const cd> x) const {
-    double e = 0;
-    for (size_t t = 0; t < tris.size(); ++t) e += tris[t].area * (jacobian(tris[t], x) - A[t]).squaredNorm();
-    return e;
-  }
+  double energy(const std::vector<Mat2>& A, std::span<const cd> x) const { return PoissonSolver::energy(tris, A, x); }
 };
 
 ArapInterpolation::ArapInterpolation(const TriMesh& rest, std::vector<ArapKeyframe> keyframes) {
@@ -206,47 +97,12 @@ ArapInterpolation::ArapInterpolation(const TriMesh& rest, std::vector<ArapKeyfra
   m.n = rest.vertex_count();
   m.tris = rest_triangles(rest);
   const size_t T = m.tris.size();
-
-  if (keyframes.size() < 2)
-    throw InputError("ARAP interpolation needs at least 2 keyframes (got " + std::to_string(keyframes.size()) + ")");
-  for (size_t k = 0; k < keyframes.size(); ++k) {
-    const std::string name = "ARAP keyframe " + std::to_string(k) + " (t = " + num(keyframes[k].time) + ")";
-    if (!std::isfinite(keyframes[k].time)) throw InputError(name + ": the time is not finite");
-    if (k > 0 && !(keyframes[k].time > keyframes[k - 1].time))
-      throw InputError(name + " is not after keyframe " + std::to_string(k - 1) + " (t = " + num(keyframes[k - 1].time) +
-                       "): times must increase strictly");
-    check_positions(rest, keyframes[k].positions, name);
-  }
-
+  check_keyframes(rest, keyframes, "ARAP");
   // Connected components (a vertex in no triangle would leave K singular).
-  std::vector<int> parent(at(m.n));
-  std::iota(parent.begin(), parent.end(), 0);
-  auto find = [&](int i) {
-    while (parent[at(i)] != i) i = parent[at(i)] = parent[at(parent[at(i)])];
-    return i;
-  };
-  m.mass.assign(at(m.n), 0.0);
-  for (const RestTriangle& tri : m.tris) {
-    for (int j : tri.v) m.mass[at(j)] += tri.area / 3;
-    parent[at(find(tri.v[1]))] = find(tri.v[0]);
-    parent[at(find(tri.v[2]))] = find(tri.v[0]);
-  }
-  m.component.assign(at(m.n), -1);
-  m.reduced.assign(at(m.n), -1);
-  std::vector<int> root_component(at(m.n), -1);
-  for (int i = 0; i < m.n; ++i) {
-    if (m.mass[at(i)] == 0) throw InputError("rest mesh: vertex " + std::to_string(i) + " is in no triangle");
-    int& c = root_component[at(find(i))];
-    if (c < 0) {
-      c = static_cast<int>(m.component_mass.size());  // its first vertex is pinned
-      m.component_mass.push_back(0);
-    } else {
-      m.reduced[at(i)] = m.reduced_count++;
-    }
-    m.component[at(i)] = c;
-    m.component_mass[at(c)] += m.mass[at(i)];
-  }
-  const size_t C = m.component_mass.size();
+  m.components = mesh_components(m.n, m.tris);
+  const size_t C = m.components.component_mass.size();
+  const std::vector<int>& component = m.components.component;
+  check_orientation(m.tris, keyframes, "ARAP", "ARAP's polar decomposition needs det J > 0");
 
   // Polar decompositions J = R(θ) S of every keyframe triangle.
   const size_t K = keyframes.size();
@@ -257,17 +113,11 @@ ArapInterpolation::ArapInterpolation(const TriMesh& rest, std::vector<ArapKeyfra
     const std::vector<cd>& x = keyframes[k].positions;
     for (size_t t = 0; t < T; ++t) {
       const Mat2 J = jacobian(m.tris[t], x);
-      const double det = J.determinant();
-      if (!(det > 0))
-        throw InputError("ARAP keyframe " + std::to_string(k) + " (t = " + num(keyframes[k].time) + "): " +
-                         triangle_name(static_cast<int>(t), m.tris[t].v) + " is " + (det < 0 ? "flipped" : "degenerate") +
-                         " (det J = " + num(det) + "); ARAP's polar decomposition needs det J > 0");
       theta[k][t] = polar_angle(J);
       const Mat2 S = rotation(theta[k][t]).transpose() * J;
       m.stretch[k][t] = {S(0, 0), 0.5 * (S(0, 1) + S(1, 0)), S(1, 1)};
     }
-    for (int i = 0; i < m.n; ++i) m.centroid[k][at(m.component[at(i)])] += m.mass[at(i)] * x[at(i)];
-    for (size_t c = 0; c < C; ++c) m.centroid[k][c] /= m.component_mass[c];
+    m.centroid[k] = m.components.centroids(x);
   }
 
   // Triangles sharing a vertex (CSR), for lifting the angles.
@@ -292,10 +142,10 @@ ArapInterpolation::ArapInterpolation(const TriMesh& rest, std::vector<ArapKeyfra
   for (size_t k = 0; k + 1 < K; ++k) {
     for (size_t t = 0; t < T; ++t) d[t] = wrap(theta[k + 1][t] - m.alpha[k][t]);
     std::vector<cd> mean(C);
-    for (size_t t = 0; t < T; ++t) mean[at(m.component[at(m.tris[t].v[0])])] += m.tris[t].area * std::polar(1.0, d[t]);
+    for (size_t t = 0; t < T; ++t) mean[at(component[at(m.tris[t].v[0])])] += m.tris[t].area * std::polar(1.0, d[t]);
     std::vector<int> seed(C, -1);
     for (size_t t = 0; t < T; ++t) {
-      const size_t c = at(m.component[at(m.tris[t].v[0])]);
+      const size_t c = at(component[at(m.tris[t].v[0])]);
       const double mc = std::arg(mean[c]);
       if (seed[c] < 0 || std::abs(wrap(d[t] - mc)) < std::abs(wrap(d[at(seed[c])] - mc))) seed[c] = static_cast<int>(t);
     }
@@ -318,34 +168,16 @@ ArapInterpolation::ArapInterpolation(const TriMesh& rest, std::vector<ArapKeyfra
     // The lift is fixed up to 2π per component; the mean turn is taken the short way, so
     // that a coil whose ends turn more than π apart is not also spun round as a whole.
     std::vector<double> turn(C, 0.0);
-    for (size_t t = 0; t < T; ++t) turn[at(m.component[at(m.tris[t].v[0])])] += m.tris[t].area * delta[t];
+    for (size_t t = 0; t < T; ++t) turn[at(component[at(m.tris[t].v[0])])] += m.tris[t].area * delta[t];
     for (size_t c = 0; c < C; ++c) {
-      const double full_turns = std::round(turn[c] / m.component_mass[c] / (2 * std::numbers::pi));
+      const double full_turns = std::round(turn[c] / m.components.component_mass[c] / (2 * std::numbers::pi));
       turn[c] = -2 * std::numbers::pi * full_turns;
     }
     for (size_t t = 0; t < T; ++t)
-      m.alpha[k + 1][t] = m.alpha[k][t] + delta[t] + turn[at(m.component[at(m.tris[t].v[0])])];
+      m.alpha[k + 1][t] = m.alpha[k][t] + delta[t] + turn[at(component[at(m.tris[t].v[0])])];
   }
 
-  // The cotangent stiffness matrix K_uv = Σ_T area_T ∇φ_u · ∇φ_v without the pinned rows.
-  std::vector<Eigen::Triplet<double>> entries;
-  entries.reserve(9 * T);
-  for (const RestTriangle& tri : m.tris) {
-    const Eigen::Vector2d g1 = tri.E_inv.row(0).transpose(), g2 = tri.E_inv.row(1).transpose();
-    const std::array<Eigen::Vector2d, 3> g{-g1 - g2, g1, g2};
-    for (int a = 0; a < 3; ++a)
-      for (int b = 0; b < 3; ++b) {
-        const int ra = m.reduced[at(tri.v[at(a)])], rb = m.reduced[at(tri.v[at(b)])];
-        if (ra >= 0 && rb >= 0) entries.emplace_back(ra, rb, tri.area * g[at(a)].dot(g[at(b)]));
-      }
-  }
-  Eigen::SparseMatrix<double> stiffness(m.reduced_count, m.reduced_count);
-  stiffness.setFromTriplets(entries.begin(), entries.end());
-  if (m.reduced_count > 0) {
-    m.ldlt.compute(stiffness);
-    if (m.ldlt.info() != Eigen::Success)
-      throw InputError("rest mesh: the ARAP system cannot be factorised (triangles too far from well-shaped)");
-  }
+  m.poisson.emplace(m.n, m.tris, m.components, "ARAP");
 
   for (const ArapKeyframe& kf : keyframes) m.times.push_back(kf.time);
   impl_ = std::move(impl);

@@ -43,6 +43,7 @@
 #include <span>
 #include <vector>
 
+#include "hsi/baselines/mesh_keyframe.h"
 #include "hsi/triangulate.h"
 
 namespace hsi::baselines {
@@ -58,10 +59,7 @@ struct MeshDistortion {
 // rest mesh has a degenerate triangle or an index out of range.
 MeshDistortion mesh_distortion(const TriMesh& rest, std::span<const cd> positions);
 
-struct ArapKeyframe {
-  double time = 0;
-  std::vector<cd> positions;  // one position per rest mesh vertex
-};
+using ArapKeyframe = MeshKeyframe;
 
 struct ArapFrame {
   std::vector<cd> positions;
