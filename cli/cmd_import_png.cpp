@@ -8,6 +8,7 @@
 #include <string>
 
 #include "commands.h"
+#include "hsi/keyframes.h"
 #include "hsi/png_import.h"
 #include "hsi/scene_io.h"
 
@@ -60,7 +61,7 @@ void run(const ImportPngOptions& o) {
     std::printf(" vertices)");
   }
   for (const std::string& w : png.warnings) std::printf("; warning: %s", w.c_str());
-  std::printf("\n");
+  std::printf("\nnext: %s\n", kHowToAddKeyframes);
 }
 
 }  // namespace
@@ -73,7 +74,9 @@ void register_import_png(CLI::App& app) {
       "--threshold (marching squares with sub-pixel vertices), simplified to within\n"
       "--tolerance pixels. Transparent regions enclosed by the sprite become holes; if the\n"
       "sprite has several separate pieces, only the largest is kept (with a warning), and\n"
-      "holes under 4 square pixels are dropped. The scene is textured with the sprite: y\n"
+      "holes under --min-hole-area square pixels are dropped. The import checks that the scene\n"
+      "gets a cage: holes too narrow for one (slivers) are filled, narrowest first, with a\n"
+      "warning naming each. Shapes under 16 square pixels are refused. The scene is textured with the sprite: y\n"
       "points up, pixel (0,0) is the top-left corner at (0, height * pixel size), and the\n"
       "texture rectangle covers the whole image. Accepts RGBA, grey+alpha and palette\n"
       "images with transparency (tRNS), 8 or 16 bits; images without alpha are refused.");
@@ -91,6 +94,10 @@ void register_import_png(CLI::App& app) {
   cmd->add_option("--max-edge", opts->max_edge,
                   "After simplifying, split edges longer than this many pixels into equal parts; 0: off")
       ->capture_default_str();
+  cmd->add_option("--min-hole-area", opts->import.min_hole_area, "Drop (fill) holes smaller than this many square pixels")
+      ->capture_default_str();
+  cmd->add_flag("--keep-narrow-holes", [opts](int64_t) { opts->import.fill_narrow_holes = false; },
+                "Refuse the sprite, naming the hole, instead of filling a hole too narrow for a cage");
   cmd->add_option("--name", opts->name, "Scene name; default: the sprite's file name without extension");
   cmd->callback([opts] { run(*opts); });
 }

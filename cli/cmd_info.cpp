@@ -1,12 +1,17 @@
-// hsi info SCENE: what hsi sees in a scene (loops, cage, map space, samples).
+// hsi info SCENE: what hsi sees in a scene (loops, cage, map space, samples, keyframes)
+// and whether it can be interpolated, and if not, why.
+#include <algorithm>
 #include <cstdio>
-#include <fstream>
+#include <memory>
 #include <nlohmann/json.hpp>
 
 #include "commands.h"
+#include "hsi/interpolation.h"
+#include "hsi/keyframes.h"
 #include "hsi/map_space.h"
 #include "hsi/scene_io.h"
 #include "hsi/draw/plot.h"
+#include "hsi/shape_setup.h"
 
 namespace hsi::cli {
 
@@ -17,7 +22,11 @@ void register_info(CLI::App& app) {
     std::string scene, png, json;
   };
   auto o = std::make_shared<Opts>();
-  CLI::App* cmd = app.add_subcommand("info", "Print a scene's loops, cage, map-space size and samples; validate it");
+  CLI::App* cmd = app.add_subcommand(
+      "info",
+      "Print a scene's loops, cage, map-space size, samples and keyframes (time, how given, certified,\n"
+      "certified distortion bounds); validate it and say whether it can be interpolated, and if not, why.\n"
+      "Keyframes given only by targets are not solved here (hsi keyframes does that).");
   cmd->add_option("scene", o->scene, "Scene file (.json)")->required()->check(CLI::ExistingFile);
   cmd->add_option("--png", o->png, "Also draw the shape, cage, hole points and samples to this PNG");
   cmd->add_option("--json", o->json, "Also write the report as JSON to this file");
@@ -40,7 +49,7 @@ void register_info(CLI::App& app) {
     r["area"] = area(scene.shape);
     r["loops"] = nlohmann::json::array();
     std::printf("scene      %s%s%s\n", o->scene.c_str(), scene.name.empty() ? "" : "  (", scene.name.empty() ? "" : (scene.name + ")").c_str());
-    std::printf("validation ok: %d loop%s, area %.6g\n", scene.shape.loop_count(), scene.shape.loop_count() == 1 ? "" : "s",
+    std::printf("shape ok   %d loop%s, area %.6g\n", scene.shape.loop_count(), scene.shape.loop_count() == 1 ? "" : "s",
                 area(scene.shape));
     for (int k = 0; k < scene.shape.loop_count(); ++k) {
       const int nv = static_cast<int>(scene.shape.loop(k).size());
@@ -76,10 +85,67 @@ void register_info(CLI::App& app) {
                       {"sigma_min_metric", cm.sigma_min},
                       {"sigma_max_metric", cm.sigma_max}};
     r["samples"] = {{"G", G.size()}, {"H", H.size()}};
+
+    // Keyframes: how each is given and, for those with coefficients, their certificate.
+    // The verdict says plainly whether hsi interpolate can run, and why not.
+    std::vector<std::string> blockers;
+    if (scene.keyframes.size() < 2)
+      blockers.push_back("it has " + std::to_string(scene.keyframes.size()) + " keyframe" + (scene.keyframes.size() == 1 ? "" : "s") +
+                         "; interpolation needs at least two (" + kHowToAddKeyframes + ")");
+    std::unique_ptr<ShapeSetup> setup;
+    if (std::any_of(scene.keyframes.begin(), scene.keyframes.end(), [](const Keyframe& k) { return k.coefficients.has_value(); }))
+      setup = std::make_unique<ShapeSetup>(scene.shape, cage, scene.samples, scene.hessian_ratio);
+    r["keyframes"] = nlohmann::json::array();
+    std::printf("keyframes  %zu%s\n", scene.keyframes.size(), scene.keyframes.empty() ? " (none)" : "");
+    bool unsolved = false;
+    for (size_t k = 0; k < scene.keyframes.size(); ++k) {
+      const Keyframe& key = scene.keyframes[k];
+      const std::string given = key.coefficients ? (key.targets.empty() ? "coefficients" : "coefficients (solved from targets)")
+                                                 : "targets only (not solved yet)";
+      nlohmann::json kj{{"index", k}, {"time", key.time}, {"given", key.coefficients ? "coefficients" : "targets"},
+                        {"targets", key.targets.size()}};
+      std::printf("  %-3zu t = %-8.4g %-34s ", k, key.time, given.c_str());
+      if (!key.coefficients) {
+        unsolved = true;
+        kj["certified"] = nullptr;
+        std::printf("certified: not yet (hsi keyframes solves it)\n");
+      } else {
+        std::string why;
+        CertificateResult c;
+        try {
+          (void)import_keyframe(*setup, *key.coefficients, "keyframe " + std::to_string(k));
+          c = setup->certifier.certify(*key.coefficients);
+        } catch (const InputError& e) {
+          why = e.what();
+        }
+        kj["certified"] = why.empty();
+        if (why.empty()) {
+          const Distortion d = certified_distortion(c);
+          std::printf("certified; certified bounds: sigma1 <= %.4g, sigma2 >= %.4g, sigma1/sigma2 <= %.4g\n", d.sigma1_max, d.sigma2_min,
+                      d.conformal_max);
+          kj["certified_bounds"] = {{"sigma1_max", d.sigma1_max}, {"sigma2_min", d.sigma2_min}, {"conformal_max", d.conformal_max},
+                                    {"isometric_max", d.isometric_max}};
+        } else {
+          std::printf("NOT CERTIFIED: %s\n", why.c_str());
+          kj["why"] = why;
+          blockers.push_back(why);
+        }
+      }
+      r["keyframes"].push_back(kj);
+    }
+    r["interpolable"] = blockers.empty();
+    if (!blockers.empty()) {
+      std::printf("interpolation: NOT POSSIBLE: %s\n", blockers.front().c_str());
+      for (size_t b = 1; b < blockers.size(); ++b) std::printf("               also: %s\n", blockers[b].c_str());
+      r["not_interpolable_because"] = blockers;
+    } else if (unsolved) {
+      std::printf("interpolation: possible once the keyframes given by targets are solved (hsi interpolate and hsi keyframes "
+                  "solve them; targets that cannot be reached without folding give the closest certified map)\n");
+    } else {
+      std::printf("interpolation: ready (every keyframe certified)\n");
+    }
     if (!o->json.empty()) {
-      std::ofstream out(o->json);
-      out << r.dump(2) << "\n";
-      if (!out) throw std::runtime_error("cannot write " + o->json);
+      write_file_atomic(o->json, r.dump(2) + "\n");
     }
     if (!o->png.empty()) {
       plot_cage(o->png, scene.shape, cage, &G);

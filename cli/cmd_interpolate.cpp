@@ -25,7 +25,7 @@ using draw::Series;
 void register_interpolate(CLI::App& app) {
   struct Opts {
     std::string scene, out = "out";
-    int frames = 500, samples = 0, png_count = 16, max_iterations = 100;
+    int frames = 500, samples = 0, png_count = 16, max_iterations = 100, per_interval = 0;
     double ratio = 0, tolerance = 5e-8;
     std::string projection = "partproj";
     std::string backend = "auto";
@@ -44,7 +44,11 @@ void register_interpolate(CLI::App& app) {
           std::string(kFlaggedFramesHelp));
   cmd->add_option("scene", o->scene, "Scene file (.json) with two or more keyframes")->required()->check(CLI::ExistingFile);
   cmd->add_option("-o,--output", o->out, "Output folder")->capture_default_str();
-  cmd->add_option("--frames", o->frames, "Number of frames over the keyframes' time range")->capture_default_str()->check(CLI::Range(2, 1000000));
+  auto* frames_opt = cmd->add_option("--frames", o->frames, "Number of frames over the keyframes' time range")->capture_default_str()->check(CLI::Range(2, 1000000));
+  cmd->add_option("--frames-per-interval", o->per_interval,
+                  "Instead of --frames: this many equal steps between neighbouring keyframes, so every keyframe time is a frame")
+      ->check(CLI::Range(1, 1000000))
+      ->excludes(frames_opt);
   cmd->add_option("--samples", o->samples, "Boundary samples |G| (default: the scene's, 10000)")->check(CLI::Range(100, 10000000));
   cmd->add_option("--ratio", o->ratio, "Hessian sample ratio r (default: the scene's, 0.2)")->check(CLI::Range(1e-6, 1.0));
   cmd->add_option("--tolerance", o->tolerance, "Stop a frame when its energy decreases by less than this fraction of itself (and not in a slow linear crawl)")->capture_default_str();
@@ -67,7 +71,7 @@ void register_interpolate(CLI::App& app) {
   cmd->callback([o] {
     using Clock = std::chrono::steady_clock;
     Scene scene = load_scene(o->scene);
-    if (scene.keyframes.size() < 2) throw InputError(o->scene + ": interpolation needs at least two keyframes");
+    if (scene.keyframes.size() < 2) throw InputError(o->scene + ": interpolation needs at least two keyframes (it has " + std::to_string(scene.keyframes.size()) + "); " + kHowToAddKeyframes);
     const std::shared_ptr<const ShapeSetup> setup = scene_setup(scene, o->samples, o->ratio);
     std::printf("scene %s: %d loops, cage %d vertices, n = %d, |G| = %zu, |H| = %zu\n", scene.name.c_str(),
                 scene.shape.loop_count(), setup->cage.vertex_count(), setup->map_space.n(), setup->G.size(), setup->H.size());
@@ -120,7 +124,12 @@ void register_interpolate(CLI::App& app) {
       if (tty && i + 1 == n) std::fprintf(stderr, "\n");
     };
 
-    SceneSequence seq{setup, interp.sequence(o->frames, progress), 0.0, io};
+    SceneSequence seq{setup, o->per_interval > 0 ? interp.sequence(frame_times(times, o->per_interval), progress)
+                                                 : interp.sequence(o->frames, progress), 0.0, io};
+    const int key_frames = static_cast<int>(std::count_if(seq.frames.begin(), seq.frames.end(), [](const FrameResult& f) { return f.keyframe; }));
+    if (key_frames < static_cast<int>(times.size()))
+      std::printf("note: %d of %zu keyframe times are frames (--frames-per-interval K makes every keyframe time a frame)\n",
+                  key_frames, times.size());
     seq.total_s = std::chrono::duration<double>(Clock::now() - t0).count();
     const std::vector<FrameResult>& frames = seq.frames;
     write_frames(out / "frames.hsif", seq.frame_file());
@@ -255,8 +264,8 @@ void register_interpolate(CLI::App& app) {
       }
     }
     std::printf("%s", head);
-    std::printf("wrote %s/{frames.hsif, report.json, report.txt, energy.png, iterations.png, distortion.png%s}\n",
-                out.string().c_str(), o->png_count > 0 ? ", frames/" : "");
+    std::printf("wrote %s{frames.hsif, report.json, report.txt, energy.png, iterations.png, distortion.png%s}\n",
+                (out.lexically_normal() / "").string().c_str(), o->png_count > 0 ? ", frames/" : "");
     exit_for_flagged_frames(sum.uncertified, sum.not_converged, o->allow_unconverged, "see " + (out / "report.txt").string());
   });
 }

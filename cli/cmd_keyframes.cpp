@@ -1,13 +1,68 @@
 // hsi keyframes SCENE: solves the keyframes posed by handle targets (CW17), certifies
-// those given as coefficients, and writes the coefficients back into the scene.
+// those given as coefficients, and writes the scene with their coefficients to -o (or,
+// with --in-place, back over SCENE: an input is never overwritten unless asked).
+#include <array>
+#include <cmath>
 #include <cstdio>
+#include <fstream>
+#include <functional>
+#include <iterator>
+#include <sstream>
 
 #include "commands.h"
 #include "hsi/keyframes.h"
+#include "hsi/png_import.h"
 #include "hsi/scene_sequence.h"
 #include "hsi/draw/plot.h"
 
 namespace hsi::cli {
+
+namespace {
+
+// "X,Y" (spaces allowed around the numbers).
+cd parse_point(const std::string& text, const std::string& what) {
+  std::istringstream in(text);
+  double x = 0, y = 0;
+  char comma = 0, extra = 0;
+  if (!(in >> x >> comma >> y) || comma != ',' || (in >> extra) || !std::isfinite(x) || !std::isfinite(y))
+    throw InputError(what + " '" + text.substr(0, 60) + "': expected a point X,Y (two finite numbers)");
+  return {x, y};
+}
+
+// "T" or "T: X,Y X,Y ..." (targets separated by spaces or ';').
+std::pair<double, std::vector<cd>> parse_keyframe(const std::string& text) {
+  const size_t colon = text.find(':');
+  std::istringstream tin(text.substr(0, colon));
+  double t = 0;
+  char extra = 0;
+  if (!(tin >> t) || (tin >> extra) || !std::isfinite(t))
+    throw InputError("--keyframe '" + text.substr(0, 60) + "': expected 'T' or 'T: X,Y X,Y ...' with a finite time T");
+  std::vector<cd> targets;
+  if (colon != std::string::npos) {
+    std::string rest = text.substr(colon + 1);
+    for (char& ch : rest)
+      if (ch == ';') ch = ' ';
+    std::istringstream in(rest);
+    for (std::string p; in >> p;) targets.push_back(parse_point(p, "--keyframe target"));
+    if (targets.empty()) throw InputError("--keyframe '" + text.substr(0, 60) + "': no targets after ':' (give 'T' alone for the rest pose)");
+  }
+  return {t, targets};
+}
+
+// Points as given (scene units), or with --pixels the texture's pixel (x right, y down
+// from the top-left corner) mapped through texture_rect onto the scene (y up).
+std::function<cd(cd)> pixel_mapping(const Scene& scene, bool pixels) {
+  if (!pixels) return [](cd p) { return p; };
+  if (scene.texture.empty()) throw InputError("--pixels needs the scene's texture (the scene has none)");
+  std::ifstream in(scene.texture_path(), std::ios::binary);
+  if (!in) throw InputError(scene.texture_path().string() + ": cannot open the texture for --pixels");
+  const std::vector<unsigned char> bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const auto [w, h] = check_png_texture(bytes, scene.texture_path().string());
+  const std::array<double, 4> r = scene.texture_rect_or_bounds();
+  return [=](cd p) { return cd(r[0] + p.real() / w * (r[2] - r[0]), r[3] - p.imag() / h * (r[3] - r[1])); };
+}
+
+}  // namespace
 
 using draw::MapPlot;
 using draw::plot_map;
@@ -15,31 +70,70 @@ using draw::plot_map;
 void register_keyframes(CLI::App& app) {
   struct Opts {
     std::string scene, out, png_dir;
-    bool force = false, verbose = false;
+    std::vector<std::string> handles, keyframes;
+    bool force = false, verbose = false, in_place = false, allow_unreached = false, pixels = false;
     double lambda = 1e5;
     int stages = 8;
+    int max_iterations = KeyframeOptions{}.newton.max_iterations;
   };
   auto o = std::make_shared<Opts>();
   CLI::App* cmd = app.add_subcommand(
       "keyframes",
       "Solve a scene's keyframes from handle targets (certified, locally injective) and write their coefficients back");
   cmd->add_option("scene", o->scene, "Scene file (.json)")->required()->check(CLI::ExistingFile);
-  cmd->add_option("-o,--output", o->out, "Write the solved scene here (default: overwrite SCENE)");
+  auto* output = cmd->add_option("-o,--output", o->out,
+                                 "Write the solved scene here (without -o or --in-place nothing is written: a dry run)");
+  cmd->add_flag("--in-place", o->in_place, "Write the solved scene back over SCENE")->excludes(output);
+  cmd->add_flag("--allow-unreached", o->allow_unreached,
+                "Exit 0 when some handle target could not be reached without folding (the closest certified map is written)");
+  cmd->footer(
+      "Exit status: 0 every keyframe certified and its targets reached; 1 error; 2 bad input (also a keyframe that cannot\n"
+      "be made certified); 5 some keyframe's targets could not be reached without folding: the scene is written with the\n"
+      "closest certified map (--allow-unreached: 0).");
+  cmd->add_option("--handle", o->handles,
+                  "Add a handle at rest point X,Y (scene units; repeatable); keyframes with coefficients keep their pose")
+      ->take_all();
+  cmd->add_option("--keyframe", o->keyframes,
+                  "Add a keyframe 'T: X,Y X,Y ...' (one target per handle, in order) or 'T' (the rest pose); repeatable")
+      ->take_all();
+  cmd->add_flag("--pixels", o->pixels,
+                "--handle and --keyframe points are pixels of the scene's texture (x right, y down from the image's "
+                "top-left corner, as in an image editor), mapped through texture_rect");
   cmd->add_option("--png", o->png_dir, "Draw each keyframe to DIR/keyframe_K.png");
   cmd->add_flag("--force", o->force, "Re-solve keyframes that already have coefficients (if they have targets)");
   cmd->add_flag("-v,--verbose", o->verbose, "Print every Newton iteration (energy, gradient norm, step, backtracks, time)");
   cmd->add_option("--lambda", o->lambda, "Positional weight (relative to size^2)")->capture_default_str();
   cmd->add_option("--stages", o->stages, "Drag the handles to their targets in this many steps")->capture_default_str();
+  cmd->add_option("--max-iterations", o->max_iterations, "Newton iterations of the last step at most")
+      ->capture_default_str()
+      ->check(CLI::Range(1, 100000));
   cmd->callback([o] {
+    std::error_code ec;
+    if (!o->out.empty() && std::filesystem::equivalent(o->scene, o->out, ec))
+      throw InputError("-o " + o->out + " is the input scene; to overwrite it, use --in-place instead of -o");
     Scene scene = load_scene(o->scene);
-    if (scene.keyframes.empty()) throw InputError(o->scene + ": the scene has no keyframes");
+    try {
+      const auto to_scene = pixel_mapping(scene, o->pixels);
+      for (const std::string& h : o->handles) add_handle(scene, to_scene(parse_point(h, "--handle")));
+      for (const std::string& k : o->keyframes) {
+        auto [time, targets] = parse_keyframe(k);
+        for (cd& q : targets) q = to_scene(q);
+        const int index = add_keyframe(scene, time, targets);
+        std::printf("added keyframe %d at t = %g (%s)\n", index, time, targets.empty() ? "the rest pose" : "targets given");
+      }
+    } catch (const InputError& e) {
+      rethrow_in_scene(scene, e);
+    }
+    if (scene.keyframes.empty()) throw InputError(o->scene + ": the scene has no keyframes; " + kHowToAddKeyframes);
     // Coefficients are stored over a cage: keep the one they were solved with.
     const auto setup = scene_setup(scene);
     KeyframeOptions ko;
     ko.lambda = o->lambda;
     ko.stages = o->stages;
+    ko.newton.max_iterations = o->max_iterations;
     if (!o->png_dir.empty()) std::filesystem::create_directories(o->png_dir);
     bool all_ok = true;
+    int unreached = 0;  // keyframes whose targets could not be reached without folding
     int overlapping = 0;  // keyframes that are locally but not globally injective
     solve_scene_keyframes(scene, *setup, ko, o->force, [&](const SceneKeyframe& k) {
       const Keyframe& key = scene.keyframes[static_cast<size_t>(k.index)];
@@ -50,6 +144,7 @@ void register_keyframes(CLI::App& app) {
         std::printf("%-28s %3d Newton iterations, %8.1f ms, energy %.4f, %s\n", label.c_str(), k.result.iterations,
                     k.result.ms, k.result.energy, k.result.message.c_str());
         all_ok = all_ok && k.result.reached;
+        unreached += !k.result.reached;
         if (o->verbose)
           for (size_t i = 0; i < k.result.log.size(); ++i) {
             const NewtonIteration& it = k.result.log[i];
@@ -72,16 +167,25 @@ void register_keyframes(CLI::App& app) {
                  setup->cage, *key.coefficients, extras);
       }
     });
-    const std::filesystem::path out = o->out.empty() ? std::filesystem::path(o->scene) : std::filesystem::path(o->out);
-    if (out.parent_path() != std::filesystem::path(o->scene).parent_path() && !scene.texture.empty() &&
-        scene.texture.is_relative())
-      scene.texture = std::filesystem::relative(scene.texture_path(), out.parent_path().empty() ? "." : out.parent_path());
-    save_scene(scene, out);
-    std::printf("wrote %s%s\n", out.string().c_str(), all_ok ? "" : " (some targets were not reached: see above)");
+    if (o->out.empty() && !o->in_place) {
+      std::printf("scene not written (a dry run): give -o FILE to write the solved scene, or --in-place to update %s\n",
+                  o->scene.c_str());
+    } else {
+      const std::filesystem::path out = o->in_place ? std::filesystem::path(o->scene) : std::filesystem::path(o->out);
+      if (out.parent_path() != std::filesystem::path(o->scene).parent_path() && !scene.texture.empty() &&
+          scene.texture.is_relative())
+        scene.texture = std::filesystem::relative(scene.texture_path(), out.parent_path().empty() ? "." : out.parent_path());
+      save_scene(scene, out);
+      std::printf("wrote %s%s\n", out.string().c_str(), all_ok ? "" : " (some targets were not reached: see above)");
+    }
     if (overlapping > 0)
       std::printf("WARNING: %d keyframe(s) overlap themselves (certified locally injective, but the image of the boundary "
                   "crosses itself)\n",
                   overlapping);
+    if (unreached > 0 && !o->allow_unreached)
+      throw FlaggedFrames(kExitUnreached, std::to_string(unreached) +
+                                              " keyframe(s) did not reach their handle targets without folding (see above); the "
+                                              "closest certified maps were kept (exit status 5; --allow-unreached accepts them)");
   });
 }
 

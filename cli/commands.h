@@ -17,8 +17,11 @@ namespace hsi::cli {
 //   4  every frame certified, but some Newton solve stopped without converging (its
 //      iteration limit reached): the frame is injective but not the interpolation's
 //      minimiser. --allow-unconverged makes this 0.
+// hsi keyframes writes the scene (the closest certified maps) and then exits with:
+//   5  some keyframe's handle targets could not be reached without folding;
+//      --allow-unreached makes this 0.
 // CLI11's own parse errors keep CLI11's codes (105 a bad option value, 106 a missing one, ...).
-enum ExitStatus { kExitOk = 0, kExitError = 1, kExitBadInput = 2, kExitUncertified = 3, kExitNotConverged = 4 };
+enum ExitStatus { kExitOk = 0, kExitError = 1, kExitBadInput = 2, kExitUncertified = 3, kExitNotConverged = 4, kExitUnreached = 5 };
 
 // Thrown once a command has written its outputs when frames are flagged; main() prints
 // the message (as an error for 3, a warning for 4) and exits with `status`.
@@ -55,6 +58,7 @@ void register_info(CLI::App& app);
 void register_import_png(CLI::App& app);
 void register_import_glyph(CLI::App& app);
 void register_keyframes(CLI::App& app);
+void register_eval(CLI::App& app);
 void register_interpolate(CLI::App& app);
 void register_bake(CLI::App& app);
 void register_export(CLI::App& app);

@@ -11,13 +11,14 @@ int main(int argc, char** argv) {
       "Every frame is a harmonic map of the shape, certified locally injective.\n"
       "Run 'hsi <command> --help' for the options of a command.\n"
       "Exit status: 0 ok; 1 error; 2 bad input; interpolate, bake, export: 3 some frame not certified,\n"
-      "4 some frame did not converge (see their --help)."};
+      "4 some frame did not converge (see their --help); keyframes: 5 some handle target not reached."};
   app.require_subcommand(1);
   app.set_version_flag("--version", "hsi 0.1.0");
   hsi::cli::register_info(app);
   hsi::cli::register_import_png(app);
   hsi::cli::register_import_glyph(app);
   hsi::cli::register_keyframes(app);
+  hsi::cli::register_eval(app);
   hsi::cli::register_interpolate(app);
   hsi::cli::register_bake(app);
   hsi::cli::register_export(app);

@@ -12,7 +12,7 @@ For each asset the script reads assets/NAME.json, sets its `handles` and its
 the user cage `loops`/`hole_points` are dropped, the cage options are kept), writes
 the scene back and then runs
 
-    hsi keyframes assets/NAME.json --png PNGDIR/NAME
+    hsi keyframes assets/NAME.json --in-place --png PNGDIR/NAME
 
 which solves each keyframe (certified, locally injective), stores the automatic
 cage as a user cage and writes the coefficients into the scene. `--only NAME`
@@ -443,7 +443,7 @@ def main():
             print(f"   t = {t:g}: {d}", flush=True)
         if args.no_solve:
             continue
-        cmd = [hsi, "keyframes", path, "--png", os.path.join(png, name)]
+        cmd = [hsi, "keyframes", path, "--in-place", "--png", os.path.join(png, name)]
         r = subprocess.run(cmd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
         sys.stdout.write(r.stdout)
         sys.stdout.flush()

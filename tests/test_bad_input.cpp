@@ -97,7 +97,7 @@ const std::vector<Case> kLoadCases = {
     {"single_quotes.json", {"invalid JSON at line 1", "invalid literal"}},
     {"nan_literal.json", {"invalid JSON at line 1", "invalid literal"}},
     {"infinity_literal.json", {"invalid JSON at line 1", "invalid literal"}},
-    {"number_overflow.json", {"invalid JSON", "number overflow", "1e400"}},
+    {"number_overflow.json", {"invalid JSON at line 1, column 45", "number overflow", "1e400"}},
     {"bad_utf8.json", {"invalid JSON at line 1, column 27: syntax error while parsing value - invalid string: ill-formed UTF-8 byte; last read: '\"\\xFF'"}},
     {"two_documents.json", {"invalid JSON at line 1", "expected end of input"}},
     {"deep_nesting.json", {"shape.outer[0]: expected a point [x, y], got an array of 1"}},
@@ -122,7 +122,7 @@ const std::vector<Case> kLoadCases = {
     {"holes_not_array.json", {"shape.holes: expected an array of loops"}},
     // geometry
     {"huge_coordinate.json", {"shape: outer loop vertex 1 has a coordinate beyond 1e12", "rescale"}},
-    {"hole_nan.json", {"invalid JSON", "number overflow", "1e999"}},
+    {"hole_nan.json", {"invalid JSON at line 1, column 90", "number overflow", "1e999"}},
     {"two_vertices.json", {"shape: outer loop has 2 vertices; a loop needs at least 3"}},
     {"empty_outer.json", {"shape: outer loop has 0 vertices"}},
     {"collinear.json", {"shape: outer loop intersects itself"}},
@@ -148,7 +148,7 @@ const std::vector<Case> kLoadCases = {
     {"cage_loops_only.json", {"cage: a user cage needs both \"loops\" and \"hole_points\""}},
     {"cage_cuts_shape.json", {"cage: cage loop of the outer loop touches the shape", "outer loop edge"}},
     {"cage_inside_shape.json", {"cage: the cage's outer loop does not enclose the shape"}},
-    {"cage_too_close.json", {"cage: the cage (or a hole point) comes within", "of the shape's boundary"}},
+    {"cage_too_close.json", {"cage: the cage loop of the outer loop comes within", "of the shape's outer loop", "a user cage that fits"}},
     {"cage_wrong_loop_count.json", {"cage: the cage has 1 loops; the shape has 2"}},
     {"cage_hole_point_outside_hole.json", {"cage: hole point 1 lies outside hole 1"}},
     {"cage_loop_two_vertices.json", {"cage.loops[0]: needs at least 3 vertices"}},
@@ -173,12 +173,17 @@ const std::vector<Case> kLoadCases = {
     {"keyframe_times_decrease.json", {"keyframes[1].time: keyframe times must increase"}},
     {"keyframe_times_equal.json", {"keyframes[1].time: keyframe times must increase"}},
     {"keyframe_targets_count.json", {"keyframes[0].targets: has 1 targets; the scene has 2 handles"}},
-    {"keyframe_target_nan.json", {"invalid JSON", "number overflow"}},
+    {"keyframe_target_nan.json", {"invalid JSON at line 1, column 126", "number overflow"}},
     {"keyframe_empty.json", {"keyframes[0]: needs \"targets\" (one per handle) or coefficients"}},
     {"keyframe_phi_without_psi.json", {"keyframes[0]: coefficients need both \"phi\" and \"psi\""}},
     {"keyframe_coefficients_without_cage.json", {"keyframes[0]: coefficients need the scene's cage"}},
     {"keyframe_phi_wrong_length.json", {"keyframes[0].phi: has 3 coefficients; the cage needs 4"}},
     {"keyframe_phi_psi_lengths_differ.json", {"keyframes[0]: \"phi\" and \"psi\" differ in length"}},
+    {"keyframe_layout_unknown.json", {"keyframes[0].layout: expected \"full\" or \"reduced\", got \"compact\""}},
+    // misspelt keys: refused with their JSON path and the nearest known key, never ignored
+    {"misspelt_key.json", {"sample: unknown key; the nearest known key is \"samples\""}},
+    {"shape_misspelt_key.json", {"shape.hole: unknown key; the nearest known key is \"holes\""}},
+    {"keyframe_misspelt_key.json", {"keyframes[1].tme: unknown key; the nearest known key is \"time\""}},
 };
 
 // Load, but are refused when their keyframes are made certified (or interpolated).
@@ -187,7 +192,7 @@ const std::vector<Case> kKeyframeCases = {
     {"keyframe_reflects.json", {"keyframe 1 is not locally injective"}},
     {"keyframe_collapses.json", {"keyframe 0 is not locally injective"}},
     {"keyframe_log_terms_mismatch.json", {"keyframe 1: hole 1 column: psi must equal conj(phi)"}},
-    {"one_keyframe.json", {"interpolation needs at least two keyframes"}},
+    {"one_keyframe.json", {"interpolation needs at least two keyframes (it has 1)", "hsi-viewer SCENE", "hsi keyframes SCENE --handle X,Y"}},
 };
 
 // A scene made into certified keyframes and interpolated, as hsi interpolate does.
@@ -497,7 +502,8 @@ TEST_CASE("bad-input corpus: writers leave no partial file that looks complete",
   CHECK_FALSE(fs::exists(dir / "seq.hsib"));
   CHECK_THROWS(write_frames(dir / "seq.hsif", bad));
   CHECK_FALSE(fs::exists(dir / "seq.hsif"));
-  // A folder that cannot be written: the message names the path.
-  check_message(input_error([&] { write_file_atomic(dir / "no" / "such" / "dir" / "x.json", "{}"); }), {"x.json: cannot write"});
+  // A folder that cannot be written: the message names the path and the system's reason.
+  check_message(input_error([&] { write_file_atomic(dir / "no" / "such" / "dir" / "x.json", "{}"); }),
+                {"x.json: cannot write: No such file or directory"});
   for (const auto& e : fs::directory_iterator(dir)) FAIL("left behind: " << e.path());
 }

@@ -38,7 +38,7 @@ refuse(cage_cuts_shape "touches the shape" ${HSI_CLI} interpolate ${C}/cage_cuts
 refuse(handle_outside "handles\\[1\\]: lies outside the shape" ${HSI_CLI} interpolate ${C}/handle_outside.json -o @OUT@)
 refuse(phi_wrong_length "keyframes\\[0\\].phi: has 3 coefficients" ${HSI_CLI} interpolate ${C}/keyframe_phi_wrong_length.json -o @OUT@)
 refuse(keyframe_folds "keyframe 1 is not locally injective" ${HSI_CLI} interpolate ${C}/keyframe_folds.json -o @OUT@)
-refuse(one_keyframe "needs at least two keyframes" ${HSI_CLI} interpolate ${C}/one_keyframe.json -o @OUT@)
+refuse(one_keyframe "needs at least two keyframes.*hsi-viewer SCENE.*hsi keyframes SCENE --handle X,Y" ${HSI_CLI} interpolate ${C}/one_keyframe.json -o @OUT@)
 # hsi bake and hsi export write nothing for a refused scene.
 refuse(bake_folds "keyframe 1 is not locally injective" ${HSI_CLI} bake ${C}/keyframe_folds.json -o @OUT@/seq.hsib)
 refuse(bake_bow_tie "outer loop intersects itself" ${HSI_CLI} bake ${C}/bow_tie.json -o @OUT@/seq.hsib)

@@ -15,6 +15,7 @@
 #include <string>
 #include <vector>
 
+#include "hsi/cage.h"
 #include "hsi/domain.h"
 #include "hsi/png_import.h"
 
@@ -506,4 +507,45 @@ TEST_CASE("png import: refusals name the file and the problem", "[png]") {
       CHECK_THAT(message_of([&] { import_png_alpha(good, o); }), Contains("pixel size"));
     }
   }
+}
+
+TEST_CASE("png import: sliver holes too narrow for a cage are filled, so the scene works", "[png][authoring]") {
+  // A game sprite's slivers: a 1.2 x 10 px slot and a 1.6 x 8 px one (12 and 13 px², above the
+  // minimum hole area), beside a real hole, in a 256 px sprite: the cage must keep 0.002 of
+  // the size (0.7 px) from the boundary, more than a sliver has room for, so without
+  // filling build_cage fails.
+  const Region sprite = [](double x, double y) {
+    if (x < 8 || x > 248 || y < 8 || y > 248) return false;
+    if (x > 40 && x < 41.2 && y > 60 && y < 70) return false;
+    if (x > 190 && x < 191.6 && y > 150 && y < 158) return false;
+    return !disc(128, 128, 30)(x, y);
+  };
+  const auto p = write_rgba("slivers.png", 256, 256, sprite);
+  PngImportOptions keep;
+  keep.fill_narrow_holes = false;
+  const std::string refused = message_of([&] { (void)import_png_alpha(p, keep); });
+  CHECK_THAT(refused, Contains("slivers.png: the hole at (") && Contains("is too narrow for a cage") &&
+                          Contains("fill it (the default, without --keep-narrow-holes)"));
+  const PngShape s = import_png_alpha(p);
+  REQUIRE(s.shape.holes.size() >= 1);
+  CHECK(s.shape.holes.size() < 3);
+  CHECK(std::any_of(s.warnings.begin(), s.warnings.end(), [](const std::string& w) {
+    return w.find("filled the hole at (") != std::string::npos && w.find("too narrow for a cage") != std::string::npos;
+  }));
+  // The real hole is kept, and the scene gets a cage.
+  CHECK(std::any_of(s.shape.holes.begin(), s.shape.holes.end(), [](const Loop& h) { return std::abs(signed_area(h)) > 2500; }));
+  CHECK_NOTHROW(build_cage(s.shape));
+  // --min-hole-area drops them by area instead.
+  PngImportOptions by_area;
+  by_area.min_hole_area = 20;
+  const PngShape a = import_png_alpha(p, by_area);
+  CHECK(a.shape.holes.size() == 1);
+}
+
+TEST_CASE("png import: a shape below the minimum size is refused, naming its size", "[png][authoring]") {
+  const auto one = write_rgba("one_pixel.png", 8, 8, [](double x, double y) { return x > 3 && x < 4 && y > 3 && y < 4; });
+  CHECK_THAT(message_of([&] { (void)import_png_alpha(one); }),
+             Contains("one_pixel.png: the sprite's shape is only") && Contains("at least 16 square pixels"));
+  const auto small = write_rgba("five_pixels.png", 8, 8, [](double x, double y) { return x > 2 && x < 7 && y > 2 && y < 7; });
+  CHECK_NOTHROW(import_png_alpha(small));
 }

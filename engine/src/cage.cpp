@@ -131,10 +131,10 @@ Loop decimate(Loop cage, const Loop& boundary, double min_dist, int target, bool
   return out;
 }
 
-std::string fmt(double v) {
+std::string fmt_point(cd p) {
   std::ostringstream s;
   s.precision(4);
-  s << v;
+  s << "(" << p.real() << ", " << p.imag() << ")";
   return s.str();
 }
 
@@ -180,6 +180,10 @@ double cage_clearance(const Shape& shape, const Cage& cage) {
   }
   for (const cd& rho : cage.hole_points) best = std::min(best, boundary_distance(shape, rho));
   return best;
+}
+
+double sufficient_hole_radius(double size, const CageOptions& o, double min_distance) {
+  return min_distance * size / (o.hole_clearance * o.min_clearance);
 }
 
 void check_cage(const Shape& shape, const Cage& cage, double min_distance) {
@@ -229,10 +233,42 @@ void check_cage(const Shape& shape, const Cage& cage, double min_distance) {
   }
   const double diag = bounding_box(shape).diagonal();
   const double clearance = cage_clearance(shape, cage);
-  if (clearance < min_distance * diag)
-    throw InputError("the cage (or a hole point) comes within " + fmt(clearance) + " of the shape's boundary; at least " +
-                     fmt(min_distance * diag) + " (" + fmt(min_distance) + " of the shape's size) is needed so that boundary "
-                     "samples stay away from the basis singularities");
+  if (clearance < min_distance * diag) {
+    // Name the closest pair (a shape loop and the cage loop or hole point near it) and what to do.
+    double best = std::numeric_limits<double>::infinity();
+    int shape_loop = 0, cage_loop = 0;
+    bool hole_point = false;
+    for (int k = 0; k < L; ++k) {
+      const Loop& sl = shape.loop(k);
+      for (int c = 0; c < L; ++c) {
+        const Loop& cl = cage.loops[static_cast<size_t>(c)];
+        for (size_t i = 0; i < sl.size(); ++i)
+          for (size_t j = 0; j < cl.size(); ++j) {
+            const double d = segment_segment_distance(sl[i], sl[(i + 1) % sl.size()], cl[j], cl[(j + 1) % cl.size()]);
+            if (d < best) best = d, shape_loop = k, cage_loop = c, hole_point = false;
+          }
+      }
+      for (int h = 0; h < cage.hole_count(); ++h) {
+        const double d = loop_distance(sl, cage.hole_points[static_cast<size_t>(h)]);
+        if (d < best) best = d, shape_loop = k, cage_loop = h + 1, hole_point = true;
+      }
+    }
+    std::ostringstream m;
+    m.precision(4);
+    if (hole_point) m << "hole point " << cage_loop;
+    else m << "the cage loop of the " << loop_name(cage_loop);
+    m << " comes within " << clearance << " of the shape's " << loop_name(shape_loop) << "; at least " << min_distance * diag << " ("
+      << min_distance << " of the shape's size) is needed so that boundary samples stay away from the basis singularities";
+    if (cage_loop > 0) {
+      const Circle c = largest_inscribed_circle(shape.loop(cage_loop));
+      m << "; " << loop_name(cage_loop) << " (around " << fmt_point(c.center) << ") is " << 2 * c.radius
+        << " across at its widest, too narrow for a cage at this distance: widen or remove that hole (hsi import-png "
+           "fills such holes), or give a user cage that fits";
+    } else {
+      m << "; give the cage more room (\"cage\": {\"clearance\": larger}) or a user cage that fits";
+    }
+    throw InputError(m.str());
+  }
 }
 
 }  // namespace hsi

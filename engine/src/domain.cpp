@@ -2,7 +2,10 @@
 #include "hsi/domain.h"
 
 #include <algorithm>
+#include <cerrno>
 #include <cmath>
+#include <cstdio>
+#include <cstring>
 #include <fstream>
 #include <limits>
 #include <queue>
@@ -15,17 +18,25 @@ namespace hsi {
 void write_file_atomic(const std::filesystem::path& path, const std::string& bytes) {
   std::filesystem::path tmp = path;
   tmp += ".tmp";
-  {
-    std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
-    if (!out) throw InputError(path.string() + ": cannot write");
-    out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
-    if (!out.flush()) {
-      out.close();
-      std::filesystem::remove(tmp);
-      throw InputError(path.string() + ": write failed");
-    }
+  // C stdio, for errno: a message says why the system refused (no such folder, permission, disk full).
+  const auto why = [] { return std::string(std::strerror(errno)); };
+  errno = 0;
+  std::FILE* out = std::fopen(tmp.c_str(), "wb");
+  if (!out) throw InputError(path.string() + ": cannot write: " + why());
+  const bool written = std::fwrite(bytes.data(), 1, bytes.size(), out) == bytes.size() && std::fflush(out) == 0;
+  const std::string reason = written ? "" : why();
+  if (std::fclose(out) != 0 || !written) {
+    const std::string r = reason.empty() ? why() : reason;
+    std::error_code ec;
+    std::filesystem::remove(tmp, ec);
+    throw InputError(path.string() + ": write failed: " + r);
   }
-  std::filesystem::rename(tmp, path);
+  if (std::rename(tmp.c_str(), path.c_str()) != 0) {
+    const std::string r = why();
+    std::error_code ec;
+    std::filesystem::remove(tmp, ec);
+    throw InputError(path.string() + ": cannot write: " + r);
+  }
 }
 
 std::string loop_name(int loop) { return loop == 0 ? "outer loop" : "hole " + std::to_string(loop); }

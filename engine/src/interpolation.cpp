@@ -216,12 +216,25 @@ FrameResult Interpolator::frame(double t, const Eigen::VectorXd& warm_start, con
 
 std::vector<FrameResult> Interpolator::sequence(int frames, const std::function<void(const FrameResult&, int, int)>& progress) {
   if (frames < 2) throw InputError("a sequence needs at least 2 frames (got " + std::to_string(frames) + ")");
+  std::vector<double> times;
+  for (int i = 0; i < frames; ++i)
+    times.push_back(i == frames - 1 ? t_end() : t_begin() + (t_end() - t_begin()) * i / (frames - 1));
+  return sequence(times, progress);
+}
+
+std::vector<FrameResult> Interpolator::sequence(const std::vector<double>& times,
+                                                const std::function<void(const FrameResult&, int, int)>& progress) {
+  for (size_t i = 0; i < times.size(); ++i)
+    if (!(times[i] >= t_begin() && times[i] <= t_end()) || (i > 0 && !(times[i] > times[i - 1])))
+      throw InputError("frame times must increase within the keyframes' range [" + std::to_string(t_begin()) + ", " +
+                       std::to_string(t_end()) + "]; time " + std::to_string(i) + " is " + std::to_string(times[i]));
+  const int frames = static_cast<int>(times.size());
   std::vector<FrameResult> out;
-  out.reserve(static_cast<size_t>(frames));
+  out.reserve(times.size());
   Eigen::VectorXd warm;
   CertificateResult warm_certificate;
   for (int i = 0; i < frames; ++i) {
-    const double t = i == frames - 1 ? t_end() : t_begin() + (t_end() - t_begin()) * i / (frames - 1);
+    const double t = times[static_cast<size_t>(i)];
     // Crossing into a new keyframe segment keeps the warm start: frames are continuous.
     // A solved frame's certificate is of its canonical map expand(x): reusable as the
     // next solve's start (a keyframe's, or a held one's, is of the posed map, so it is
@@ -233,6 +246,17 @@ std::vector<FrameResult> Interpolator::sequence(int frames, const std::function<
     }
     if (progress) progress(out.back(), i, frames);
   }
+  return out;
+}
+
+std::vector<double> frame_times(const std::vector<double>& key_times, int per_interval) {
+  if (per_interval < 1) throw InputError("frames per interval must be at least 1 (got " + std::to_string(per_interval) + ")");
+  if (key_times.size() < 2) throw InputError("frame times need at least two keyframes");
+  std::vector<double> out;
+  for (size_t k = 0; k + 1 < key_times.size(); ++k)
+    for (int i = 0; i < per_interval; ++i)  // i = 0 is the keyframe time itself, exactly
+      out.push_back(i == 0 ? key_times[k] : key_times[k] + (key_times[k + 1] - key_times[k]) * i / per_interval);
+  out.push_back(key_times.back());
   return out;
 }
 

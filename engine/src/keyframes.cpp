@@ -1,6 +1,7 @@
 // Keyframe authoring by handles (CW17) and import of coefficient keyframes.
 #include "hsi/keyframes.h"
 
+#include <algorithm>
 #include <chrono>
 #include <sstream>
 
@@ -138,6 +139,70 @@ std::vector<SceneKeyframe> solve_scene_keyframes(Scene& scene, const ShapeSetup&
     rethrow_in_scene(scene, e);
   }
   return out;
+}
+
+}  // namespace hsi
+
+namespace hsi {
+
+namespace {
+std::string fmt_point(cd p) {
+  std::ostringstream s;
+  s.precision(6);
+  s << "(" << p.real() << ", " << p.imag() << ")";
+  return s.str();
+}
+}  // namespace
+
+void add_handle(Scene& scene, cd rest) {
+  const std::string what = "handle " + std::to_string(scene.handles.size()) + " at " + fmt_point(rest);
+  if (!std::isfinite(rest.real()) || !std::isfinite(rest.imag())) throw InputError(what + ": is not finite");
+  if (!point_in_shape(scene.shape, rest) && boundary_distance(scene.shape, rest) > 1e-9 * bounding_box(scene.shape).diagonal()) {
+    std::string where = "outside the outer loop";
+    for (int l = 1; l < scene.shape.loop_count(); ++l)
+      if (point_in_loop(scene.shape.loop(l), rest)) where = "inside " + loop_name(l);
+    const BoundingBox bb = bounding_box(scene.shape);
+    throw InputError(what + ": lies " + where + "; a handle must be on the shape (its bounding box is " + fmt_point(bb.lo) + " to " +
+                     fmt_point(bb.hi) + ")");
+  }
+  for (size_t k = 0; k < scene.keyframes.size(); ++k)
+    if (!scene.keyframes[k].coefficients)
+      throw InputError(what + ": keyframe " + std::to_string(k) +
+                       " is given by targets only, so the new handle's target there is not known; solve the keyframes "
+                       "first (hsi keyframes SCENE -o SOLVED.json) and add handles to the solved scene");
+  if (!scene.keyframes.empty() && !scene.cage) throw InputError(what + ": the scene's keyframe coefficients have no cage");
+  std::vector<cd> all = scene.handles;
+  all.push_back(rest);
+  for (Keyframe& k : scene.keyframes)  // each keyframe keeps its pose: the target is where the handle is
+    k.targets = k.targets.size() == scene.handles.size() && !k.targets.empty()
+                    ? [&] {
+                        std::vector<cd> t = k.targets;
+                        t.push_back(map_points(*scene.cage, *k.coefficients, std::span<const cd>(&rest, 1))[0]);
+                        return t;
+                      }()
+                    : map_points(*scene.cage, *k.coefficients, all);
+  scene.handles = std::move(all);
+}
+
+int add_keyframe(Scene& scene, double time, std::vector<cd> targets) {
+  const std::string what = "keyframe at t = " + std::to_string(time);
+  if (!std::isfinite(time)) throw InputError("a keyframe's time must be finite");
+  if (targets.empty()) targets = scene.handles;
+  if (scene.handles.empty()) throw InputError(what + ": the scene has no handles; add handles first (they are what a keyframe poses)");
+  if (targets.size() != scene.handles.size())
+    throw InputError(what + ": has " + std::to_string(targets.size()) + " targets; the scene has " + std::to_string(scene.handles.size()) +
+                     " handles (give one target per handle, in handle order, or none for the rest pose)");
+  for (size_t i = 0; i < targets.size(); ++i)
+    if (!std::isfinite(targets[i].real()) || !std::isfinite(targets[i].imag()))
+      throw InputError(what + ": target " + std::to_string(i) + " is not finite");
+  for (size_t k = 0; k < scene.keyframes.size(); ++k)
+    if (scene.keyframes[k].time == time)
+      throw InputError(what + ": keyframe " + std::to_string(k) + " is at that time already");
+  const auto at = std::upper_bound(scene.keyframes.begin(), scene.keyframes.end(), time,
+                                   [](double t, const Keyframe& x) { return t < x.time; });
+  const int index = static_cast<int>(at - scene.keyframes.begin());
+  scene.keyframes.insert(at, Keyframe{time, std::move(targets), std::nullopt});
+  return index;
 }
 
 }  // namespace hsi

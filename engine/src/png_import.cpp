@@ -12,12 +12,12 @@
 #include <utility>
 
 #include "cgal_geometry.h"
+#include "hsi/cage.h"
 
 namespace hsi {
 
 namespace {
 
-constexpr double kMinHoleArea = 4.0;       // px²: smaller holes are dropped with a warning
 constexpr double kEdgeClamp = 1e-3;        // keeps contour vertices off the pixel centres
 constexpr double kMinTolerance = 1e-3;     // below this a loop is left unsimplified
 constexpr int kMaxSimplifyRounds = 64;
@@ -230,7 +230,51 @@ void check_options(const PngImportOptions& options, const std::string& name) {
                      fmt(options.tolerance));
   if (!(options.pixel_size > 0) || !std::isfinite(options.pixel_size))
     throw InputError(name + ": bad option: the pixel size must be > 0, got " + fmt(options.pixel_size));
+  if (!(options.min_hole_area >= 0) || !std::isfinite(options.min_hole_area))
+    throw InputError(name + ": bad option: the minimum hole area must be >= 0 square pixels, got " + fmt(options.min_hole_area));
 }
+// The import checks its own output (png_import.h): the shape must get a cage. While
+// build_cage fails, the narrowest hole under sufficient_hole_radius() is filled (or,
+// without fill_narrow_holes, the import is refused naming it); a failure left over is
+// refused with the cage's reason.
+void fit_cage(Shape& shape, const std::string& name, const PngImportOptions& options, double height_px,
+              std::vector<std::string>& warnings) {
+  const double ps = options.pixel_size;
+  const auto px = [&](cd p) {  // output units (y up) back to pixels (y down from the top), for messages
+    char buf[64];
+    std::snprintf(buf, sizeof buf, "(%.1f, %.1f) px", p.real() / ps, height_px - p.imag() / ps);
+    return std::string(buf);
+  };
+  const double r_ok = sufficient_hole_radius(bounding_box(shape).diagonal());
+  for (;;) {
+    std::string why;
+    try {
+      (void)build_cage(shape);
+      return;
+    } catch (const InputError& e) {
+      why = e.what();
+    }
+    int narrowest = -1;
+    Circle c_min;
+    for (size_t h = 0; h < shape.holes.size(); ++h) {
+      const Circle c = largest_inscribed_circle(shape.holes[h]);
+      if (c.radius < r_ok && (narrowest < 0 || c.radius < c_min.radius)) narrowest = static_cast<int>(h), c_min = c;
+    }
+    if (narrowest < 0)
+      throw InputError(name + ": the imported shape cannot be given a cage: " + why +
+                       "; try a larger --tolerance, --min-hole-area, or a larger sprite");
+    const Loop& hole = shape.holes[static_cast<size_t>(narrowest)];
+    char what[256];
+    std::snprintf(what, sizeof what, "hole at %s (%.3g square pixels, %.2g px across at its widest; a cage needs %.2g px in a sprite this size)",
+                  px(c_min.center).c_str(), std::abs(signed_area(hole)) / (ps * ps), 2 * c_min.radius / ps, 2 * r_ok / ps);
+    if (!options.fill_narrow_holes)
+      throw InputError(name + ": the " + what + " is too narrow for a cage (" + why +
+                       "); fill it (the default, without --keep-narrow-holes), raise --min-hole-area, or widen it in the sprite");
+    warnings.push_back(std::string("filled the ") + what + ", too narrow for a cage");
+    shape.holes.erase(shape.holes.begin() + narrowest);
+  }
+}
+
 }  // namespace
 
 PngShape import_png_alpha(const std::filesystem::path& png, const PngImportOptions& options) {
@@ -295,11 +339,18 @@ PngShape import_png_alpha(std::span<const unsigned char> png_bytes, const std::s
     result.warnings.push_back("dropped " + plural(bounds.size() - 1, "smaller piece") + " (largest kept: " + buf +
                               " of the opaque area)");
   }
+  if (best_area < kPngMinShapeArea) {
+    char buf[32];
+    std::snprintf(buf, sizeof buf, "%.3g", best_area);
+    throw InputError(name + ": the sprite's shape is only " + buf + " square pixels (" + std::to_string(img.width) + "x" +
+                     std::to_string(img.height) + " px image, alpha threshold " + fmt(t) + "); hsi needs at least " +
+                     fmt(kPngMinShapeArea) + " square pixels (e.g. 4 x 4 px) to make a shape worth interpolating");
+  }
   std::vector<Loop> kept{loops[best]};
   size_t tiny = 0;
   double tiny_max = 0;
   for (size_t h : holes_of[best]) {
-    if (-areas[h] < kMinHoleArea) {
+    if (-areas[h] < options.min_hole_area) {
       ++tiny;
       tiny_max = std::max(tiny_max, -areas[h]);
     } else {
@@ -309,7 +360,7 @@ PngShape import_png_alpha(std::span<const unsigned char> png_bytes, const std::s
   if (tiny > 0) {
     char buf[32];
     std::snprintf(buf, sizeof buf, "%.2g", tiny_max);
-    result.warnings.push_back("dropped " + plural(tiny, "hole") + " smaller than " + fmt(kMinHoleArea) +
+    result.warnings.push_back("dropped " + plural(tiny, "hole") + " smaller than " + fmt(options.min_hole_area) +
                               " square pixels (largest dropped: " + buf + " square pixels)");
   }
   // Hole order: by position (top to bottom, then left to right), so that it does
@@ -359,6 +410,7 @@ PngShape import_png_alpha(std::span<const unsigned char> png_bytes, const std::s
   } catch (const InputError& e) {
     throw InputError(name + ": the traced shape is invalid after simplification: " + e.what());
   }
+  fit_cage(shape, name, options, hgt, result.warnings);
   result.shape = std::move(shape);
   return result;
 }

@@ -2,11 +2,14 @@
 #include "hsi/scene_io.h"
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <sstream>
+
+#include "hsi/map_space.h"
 
 namespace hsi {
 namespace {
@@ -45,6 +48,109 @@ VectorXcd coefficients(const Ctx& c, const json& j, const std::string& path) {
   VectorXcd out(static_cast<Eigen::Index>(v.size()));
   for (size_t i = 0; i < v.size(); ++i) out(static_cast<Eigen::Index>(i)) = v[i];
   return out;
+}
+
+// The coefficient layouts a keyframe may be given in (scene_io.h, "layout").
+enum class Layout { Full, Reduced };
+
+// A keyframe's φ or ψ as read (`layout`, over the cage loops in the file's order and
+// orientation) to the full layout over the loaded cage, whose loops parse_scene turned
+// to the normal orientation: a reversed loop takes its coefficients with it, so each
+// coefficient stays with its vertex. The reduced layout's dropped columns (the first
+// two vertices of each hole loop: map_space.h) become 0, which leaves f unchanged.
+VectorXcd to_full_layout(const VectorXcd& given, Layout layout, const Cage& file_cage, const std::vector<bool>& reversed) {
+  VectorXcd full = VectorXcd::Zero(basis_size(file_cage));
+  if (layout == Layout::Full) {
+    full = given;
+  } else {
+    const std::vector<int> active = MapSpace(file_cage, Gauge::Map).active();
+    for (size_t a = 0; a < active.size(); ++a) full(active[a]) = given(static_cast<Eigen::Index>(a));
+  }
+  for (int k = 0; k < static_cast<int>(file_cage.loops.size()); ++k)
+    if (reversed[static_cast<size_t>(k)])
+      full.segment(file_cage.loop_offset(k), static_cast<Eigen::Index>(file_cage.loops[static_cast<size_t>(k)].size())).reverseInPlace();
+  return full;
+}
+
+// Text from the file quoted in a message: non-printable bytes as \xNN, and cut to a
+// readable length (a 100,000-digit number must not fill the terminal).
+std::string excerpt(const std::string& text, size_t max_chars = 40) {
+  std::string out;
+  for (size_t i = 0; i < std::min(text.size(), max_chars); ++i) {
+    const auto u = static_cast<unsigned char>(text[i]);
+    if (u >= 0x20 && u < 0x7f) {
+      out += text[i];
+    } else {
+      char hex[8];
+      std::snprintf(hex, sizeof hex, "\\x%02X", u);
+      out += hex;
+    }
+  }
+  if (text.size() > max_chars) out += "... (" + std::to_string(text.size()) + " characters)";
+  return out;
+}
+
+// nlohmann's messages quote the offending token ('...'): that part cut to an excerpt.
+std::string cut_quotes(const std::string& msg) {
+  const size_t open = msg.find('\'');
+  const size_t close = msg.rfind('\'');
+  if (open == std::string::npos || close <= open) return excerpt(msg, 300);
+  return excerpt(msg.substr(0, open + 1), 300) + excerpt(msg.substr(open + 1, close - open - 1)) + excerpt(msg.substr(close), 300);
+}
+
+// Byte offset of `token` standing alone as a number in `text` (outside strings), or npos.
+size_t find_number_token(const std::string& text, const std::string& token) {
+  if (token.empty()) return std::string::npos;
+  const auto part_of_number = [](char ch) { return std::isalnum(static_cast<unsigned char>(ch)) || ch == '.' || ch == '+' || ch == '-'; };
+  bool in_string = false;
+  for (size_t i = 0; i < text.size(); ++i) {
+    const char ch = text[i];
+    if (in_string) {
+      if (ch == '\\') ++i;
+      else if (ch == '"') in_string = false;
+    } else if (ch == '"') {
+      in_string = true;
+    } else if (text.compare(i, token.size(), token) == 0 && (i == 0 || !part_of_number(text[i - 1])) &&
+               (i + token.size() == text.size() || !part_of_number(text[i + token.size()]))) {
+      return i;
+    }
+  }
+  return std::string::npos;
+}
+
+size_t edit_distance(const std::string& a, const std::string& b) {
+  std::vector<size_t> row(b.size() + 1);
+  for (size_t j = 0; j <= b.size(); ++j) row[j] = j;
+  for (size_t i = 1; i <= a.size(); ++i) {
+    size_t diagonal = row[0];
+    row[0] = i;
+    for (size_t j = 1; j <= b.size(); ++j) {
+      const size_t up = row[j];
+      const bool same = std::tolower(static_cast<unsigned char>(a[i - 1])) == std::tolower(static_cast<unsigned char>(b[j - 1]));
+      row[j] = std::min({row[j] + 1, row[j - 1] + 1, diagonal + (same ? 0 : 1)});
+      diagonal = up;
+    }
+  }
+  return row[b.size()];
+}
+
+// Refuses a key the format does not have (scene_io.h): a misspelt optional key would
+// otherwise fall back to its default without a word. Names the key's JSON path and the
+// nearest known key.
+void check_keys(const Ctx& c, const json& obj, const std::string& path, std::initializer_list<const char*> known) {
+  for (auto it = obj.begin(); it != obj.end(); ++it) {
+    const std::string& key = it.key();
+    if (std::any_of(known.begin(), known.end(), [&](const char* k) { return key == k; })) continue;
+    const std::string cut = key.substr(0, 200);  // the distance of a huge key says nothing more
+    const char* nearest = *known.begin();
+    for (const char* k : known)
+      if (edit_distance(cut, k) < edit_distance(cut, nearest)) nearest = k;
+    std::string all;
+    for (const char* k : known) all += std::string(all.empty() ? "" : ", ") + "\"" + k + "\"";
+    c.fail(path.empty() ? excerpt(key) : path + "." + excerpt(key),
+           "unknown key; the nearest known key is \"" + std::string(nearest) + "\" (" + (path.empty() ? "the top level" : path) +
+               " takes " + all + ")");
+  }
 }
 
 const json* field(const json& obj, const char* key) {
@@ -101,23 +207,18 @@ Scene parse_scene(const std::string& text, const std::filesystem::path& base_dir
     if (auto p = msg.find("] "); p != std::string::npos) msg = msg.substr(p + 2);
     if (msg.rfind("parse error", 0) == 0)
       if (auto p = msg.find(": "); p != std::string::npos) msg = msg.substr(p + 2);
-    std::string clean;
-    for (const char ch : msg) {
-      const auto u = static_cast<unsigned char>(ch);
-      if (u >= 0x20 && u < 0x7f) {
-        clean += ch;
-      } else {
-        char hex[8];
-        std::snprintf(hex, sizeof hex, "\\x%02X", u);
-        clean += hex;
-      }
-    }
-    c.fail("", "invalid JSON at " + line_col(text, e.byte > 0 ? e.byte - 1 : 0) + ": " + clean);
+    c.fail("", "invalid JSON at " + line_col(text, e.byte > 0 ? e.byte - 1 : 0) + ": " + cut_quotes(msg));
   } catch (const json::exception& e) {
-    // E.g. a number too large for a double (1e400): nlohmann reports it as out_of_range.
+    // E.g. a number too large for a double (1e400): nlohmann reports it as out_of_range,
+    // quoting the number but giving no place; the place is found from the number.
     std::string msg = e.what();
     if (auto p = msg.find("] "); p != std::string::npos) msg = msg.substr(p + 2);
-    c.fail("", "invalid JSON: " + msg);
+    std::string where;
+    const size_t open = msg.find('\''), close = msg.rfind('\'');
+    if (open != std::string::npos && close > open)
+      if (const size_t at = find_number_token(text, msg.substr(open + 1, close - open - 1)); at != std::string::npos)
+        where = " at " + line_col(text, at);
+    c.fail("", "invalid JSON" + where + ": " + cut_quotes(msg));
   }
   if (!j.is_object()) c.fail("", "expected a JSON object at the top level, got " + type_name(j));
   const json* version = field(j, "hsi_scene");
@@ -127,6 +228,7 @@ Scene parse_scene(const std::string& text, const std::filesystem::path& base_dir
   if (version->dump() != "1" && version->dump() != std::to_string(kSceneVersion))
     c.fail("hsi_scene", "unsupported version " + version->dump() + " (this hsi reads versions 1 to " + std::to_string(kSceneVersion) + ")");
   const int file_version = version->dump() == "1" ? 1 : kSceneVersion;
+  check_keys(c, j, "", {"hsi_scene", "name", "shape", "texture", "texture_rect", "cage", "samples", "hessian_ratio", "handles", "keyframes"});
   Scene s;
   s.base_dir = base_dir;
   s.source = source;
@@ -137,6 +239,7 @@ Scene parse_scene(const std::string& text, const std::filesystem::path& base_dir
   const json* shape = field(j, "shape");
   if (!shape) c.fail("", "missing \"shape\"");
   if (!shape->is_object()) c.fail("shape", "expected an object with \"outer\" and optional \"holes\"");
+  check_keys(c, *shape, "shape", {"outer", "holes"});
   const json* outer = field(*shape, "outer");
   if (!outer) c.fail("shape", "missing \"outer\"");
   s.shape.outer = points(c, *outer, "shape.outer");
@@ -163,8 +266,11 @@ Scene parse_scene(const std::string& text, const std::filesystem::path& base_dir
     if (!(rect[2] > rect[0] && rect[3] > rect[1])) c.fail("texture_rect", "needs x1 > x0 and y1 > y0");
     s.texture_rect = rect;
   }
+  Cage file_cage;              // the user cage as the file gives it (loop order and orientation)
+  std::vector<bool> reversed;  // per cage loop: reversed to the normal orientation
   if (const json* cg = field(j, "cage")) {
     if (!cg->is_object()) c.fail("cage", "expected an object");
+    check_keys(c, *cg, "cage", {"clearance", "max_vertices_per_loop", "loops", "hole_points"});
     if (const json* v = field(*cg, "clearance")) {
       s.cage_options.clearance = number(c, *v, "cage.clearance");
       if (!(s.cage_options.clearance > 0 && s.cage_options.clearance <= 1))
@@ -184,9 +290,16 @@ Scene parse_scene(const std::string& text, const std::filesystem::path& base_dir
       for (size_t k = 0; k < loops->size(); ++k)
         cage.loops.push_back(points(c, (*loops)[k], "cage.loops[" + std::to_string(k) + "]"));
       cage.hole_points = points(c, *holes, "cage.hole_points");
+      file_cage = cage;
+      reversed.assign(cage.loops.size(), false);
       for (size_t k = 0; k < cage.loops.size(); ++k) {
         if (cage.loops[k].size() < 3) c.fail("cage.loops[" + std::to_string(k) + "]", "needs at least 3 vertices");
-        if ((signed_area(cage.loops[k]) > 0) != (k == 0)) std::reverse(cage.loops[k].begin(), cage.loops[k].end());
+        // The outer loop counter-clockwise, holes clockwise (cage.h); keyframe
+        // coefficients follow their vertices (to_full_layout).
+        if ((signed_area(cage.loops[k]) > 0) != (k == 0)) {
+          std::reverse(cage.loops[k].begin(), cage.loops[k].end());
+          reversed[k] = true;
+        }
       }
       try {
         check_cage(s.shape, cage);
@@ -220,6 +333,7 @@ Scene parse_scene(const std::string& text, const std::filesystem::path& base_dir
       const std::string p = "keyframes[" + std::to_string(k) + "]";
       const json& kf = (*kfs)[k];
       if (!kf.is_object()) c.fail(p, "expected an object");
+      check_keys(c, kf, p, {"time", "targets", "layout", "phi", "psi", "timing"});
       Keyframe key;
       const json* t = field(kf, "time");
       if (!t) c.fail(p, "missing \"time\"");
@@ -234,14 +348,32 @@ Scene parse_scene(const std::string& text, const std::filesystem::path& base_dir
       }
       const json* phi = field(kf, "phi");
       const json* psi = field(kf, "psi");
+      Layout layout = Layout::Full;
+      if (const json* l = field(kf, "layout")) {
+        if (!l->is_string() || (*l != "full" && *l != "reduced"))
+          c.fail(p + ".layout", "expected \"full\" or \"reduced\", got " + (l->is_string() ? "\"" + l->get<std::string>() + "\"" : type_name(*l)));
+        if (!phi && !psi) c.fail(p + ".layout", "describes coefficients \"phi\" and \"psi\", which this keyframe does not give");
+        layout = *l == "reduced" ? Layout::Reduced : Layout::Full;
+      }
       if (phi || psi) {
         if (!phi || !psi) c.fail(p, "coefficients need both \"phi\" and \"psi\"");
         HarmonicMap m{coefficients(c, *phi, p + ".phi"), coefficients(c, *psi, p + ".psi")};
         if (m.phi.size() != m.psi.size()) c.fail(p, "\"phi\" and \"psi\" differ in length");
         if (full < 0) c.fail(p, "coefficients need the scene's cage (\"cage\": {\"loops\", \"hole_points\"}) to be given");
-        if (m.phi.size() != full)
-          c.fail(p + ".phi", "has " + std::to_string(m.phi.size()) + " coefficients; the cage needs " + std::to_string(full) +
-                                 " (its vertices plus one per hole)");
+        const int reduced = MapSpace(file_cage, Gauge::Map).n();
+        const int want = layout == Layout::Full ? full : reduced;
+        if (m.phi.size() != want) {
+          const std::string counts = std::to_string(full) + " in the full layout (every cage vertex, then one per hole) or " +
+                                     std::to_string(reduced) +
+                                     " in the reduced layout (\"layout\": \"reduced\": each hole loop without its first two "
+                                     "vertices, then one per hole)";
+          const bool looks_reduced = layout == Layout::Full && m.phi.size() == reduced && reduced != full;
+          c.fail(p + ".phi", "has " + std::to_string(m.phi.size()) + " coefficients" +
+                                 (layout == Layout::Reduced ? " in the reduced layout" : "") + "; the cage needs " + counts +
+                                 (looks_reduced ? "; for the reduced layout add \"layout\": \"reduced\" to the keyframe" : ""));
+        }
+        m.phi = to_full_layout(m.phi, layout, file_cage, reversed);
+        m.psi = to_full_layout(m.psi, layout, file_cage, reversed);
         key.coefficients = std::move(m);
       }
       if (const json* tm = field(kf, "timing")) {

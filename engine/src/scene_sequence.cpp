@@ -48,7 +48,7 @@ SceneSequence interpolate_scene(Scene& scene, const SceneSequenceOptions& option
                                 std::unique_ptr<NewtonCore> core, std::shared_ptr<const ShapeSetup> setup) {
   if (scene.keyframes.size() < 2)
     throw InputError((scene.source.empty() ? "scene '" + scene.name + "'" : scene.source) + ": interpolation needs at least two keyframes (it has " +
-                     std::to_string(scene.keyframes.size()) + ")");
+                     std::to_string(scene.keyframes.size()) + "); " + kHowToAddKeyframes);
   if (options.frames < 2) throw InputError("a sequence needs at least 2 frames (got " + std::to_string(options.frames) + ")");
   if (!setup) setup = scene_setup(scene, options.samples, options.hessian_ratio);
   solve_scene_keyframes(scene, *setup);

@@ -43,4 +43,11 @@ void check_cage(const Shape& shape, const Cage& cage, double min_distance = 2e-3
 // Smallest distance from the shape's boundary to the cage, and to the hole points.
 double cage_clearance(const Shape& shape, const Cage& cage);
 
+// The inscribed radius from which build_cage always keeps a hole's cage loop at
+// check_cage's distance (min_distance of the shape's size `size`): the hole's cage is
+// offset hole_clearance·r into it and decimation keeps min_clearance of that offset, so
+// r ≥ min_distance·size / (hole_clearance·min_clearance) suffices. A narrower hole may
+// still get a cage; below it build_cage can fail with "comes within".
+double sufficient_hole_radius(double size, const CageOptions& options = {}, double min_distance = 2e-3);
+
 }  // namespace hsi

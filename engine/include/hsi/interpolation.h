@@ -85,6 +85,12 @@ struct FrameResult {
 // NaN in every field when not certified.
 Distortion certified_distortion(const CertificateResult& c);
 
+// Frame times with `per_interval` equal steps between each pair of neighbouring
+// keyframes, so that every keyframe time is a frame time exactly (and its frame is the
+// keyframe itself): (keys − 1)·per_interval + 1 times. Throws InputError for
+// per_interval < 1 or fewer than two keyframe times.
+std::vector<double> frame_times(const std::vector<double>& key_times, int per_interval);
+
 class Interpolator {
  public:
   // keyframes: certified maps at increasing times (at least two).
@@ -101,6 +107,10 @@ class Interpolator {
   FrameResult frame(double t, const Eigen::VectorXd& warm_start = {}, const CertificateResult* warm_certificate = nullptr);
   // F frames uniform over [t_begin, t_end], each warm-started from the previous one.
   std::vector<FrameResult> sequence(int frames, const std::function<void(const FrameResult&, int, int)>& progress = {});
+  // Frames at the given times (increasing, within [t_begin, t_end]; e.g. frame_times()),
+  // each warm-started from the previous one.
+  std::vector<FrameResult> sequence(const std::vector<double>& times,
+                                    const std::function<void(const FrameResult&, int, int)>& progress = {});
 
   // The blended metric at every sample of G (paper §4.1; timing.h for other timings).
   std::vector<Metric> blended_metric(double t) const;

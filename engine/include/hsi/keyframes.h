@@ -59,6 +59,27 @@ std::vector<cd> map_points(const Cage& cage, const HarmonicMap& map, std::span<c
 
 namespace hsi {
 
+// How a user adds handles and keyframes, for messages that stop at "needs at least two
+// keyframes" (hsi interpolate, hsi info, interpolate_scene).
+inline constexpr const char* kHowToAddKeyframes =
+    "add handles and keyframes in hsi-viewer SCENE (click the shape to add a handle, K adds a keyframe, drag a handle "
+    "to pose it, Ctrl+S saves), or with hsi keyframes SCENE --handle X,Y ... --keyframe 0 --keyframe '1: X,Y ...' -o OUT.json";
+
+// Adds a handle at rest point `rest`, which must lie on the shape (its closure). Every
+// keyframe keeps its pose: one with coefficients gets the handle's image as its target;
+// a keyframe given by targets only cannot (its map is not known yet) and is refused,
+// naming it. Throws InputError.
+void add_handle(Scene& scene, cd rest);
+
+// Adds a keyframe at `time` with one target per handle (`targets` empty: the rest pose,
+// targets = handles), in time order; a time that is already a keyframe's is refused.
+// Returns its index. Throws InputError.
+int add_keyframe(Scene& scene, double time, std::vector<cd> targets);
+
+}  // namespace hsi
+
+namespace hsi {
+
 struct SceneKeyframe {
   int index = 0;
   bool solved = false;     // authored from targets now (else certified coefficients)

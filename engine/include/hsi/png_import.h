@@ -9,10 +9,18 @@
 // separated. Loops are classified as boundaries (opaque on their inside) or holes,
 // each hole is given to the smallest boundary that contains it, and only the
 // largest piece (boundary area minus its holes) is kept; smaller pieces and holes
-// under 4 px² are dropped with a warning. Each loop is then simplified with
+// under min_hole_area (4 px²) are dropped with a warning. A piece under
+// kPngMinShapeArea is refused (too small to interpolate: a one-pixel sprite would be
+// a 3-vertex triangle). Each loop is then simplified with
 // Douglas–Peucker for closed polylines; a loop whose simplification would cross
 // itself or another loop is simplified again at a smaller tolerance, down to no
 // simplification at all (the traced loops are simple and disjoint).
+//
+// The import checks its own output: the scene must get a cage (build_cage with the
+// default options). A hole too narrow for its cage (a sliver, inscribed radius under
+// sufficient_hole_radius(), cage.h) is filled, narrowest first and only while the cage
+// cannot be built, with a warning naming it (pixel position, area, width); if the cage
+// still cannot be built the import is refused, naming why and what to try.
 //
 // Coordinates: pixel (i, j) (column i, row j from the top) covers the output square
 // [i, i+1] × [H−j−1, H−j] times pixel_size, so y points up and texture_rect, which
@@ -34,7 +42,12 @@ struct PngImportOptions {
   double alpha_threshold = 0.5;  // in (0,1); the contour is the iso-line of alpha at this level
   double tolerance = 0.75;       // simplification tolerance in pixels (Douglas–Peucker on closed loops)
   double pixel_size = 1.0;       // output units per pixel
+  double min_hole_area = 4.0;    // px²: smaller holes are dropped (filled) with a warning
+  bool fill_narrow_holes = true; // fill holes too narrow for a cage (else refuse, naming them)
 };
+
+// Smallest accepted shape (the kept piece, holes subtracted), in square pixels.
+inline constexpr double kPngMinShapeArea = 16.0;
 
 struct PngShape {
   Shape shape;                          // normalized (outer CCW, holes CW) and validated

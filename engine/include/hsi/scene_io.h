@@ -12,20 +12,41 @@
 //                                                //   covers (default: the shape's bounding box)
 //   "cage": { "clearance": 0.06,                 // optional: automatic cage options, or
 //             "max_vertices_per_loop": 32,
-//             "loops": [[[x, y], ...], ...],     //   a user cage: one loop per shape loop
-//             "hole_points": [[x, y], ...] },    //   and one point per hole (both or neither)
+//             "loops": [[[x, y], ...], ...],     //   a user cage: one loop per shape loop, any
+//             "hole_points": [[x, y], ...] },    //   orientation, and one point per hole (both or neither)
 //   "samples": 10000,                            // optional |G|
 //   "hessian_ratio": 0.2,                        // optional r
 //   "handles": [[x, y], ...],                    // optional handle positions on the shape
 //   "keyframes": [ { "time": 0.0,                // keyframes, in increasing time
 //                    "targets": [[x, y], ...],   //   one per handle, and/or
-//                    "phi": [[re, im], ...],     //   coefficients over the cage (m + N each)
+//                    "layout": "full",           //   optional: "full" (default) or "reduced"
+//                    "phi": [[re, im], ...],     //   coefficients over the user cage
 //                    "psi": [[re, im], ...],
 //                    "timing": "smooth" } ]      //   optional (version 2): how the interval leaving this
 //                                                //   keyframe is travelled: "linear" (default, the
 //                                                //   paper's), "smooth" (C¹ through the keyframes),
 //                                                //   "ease" (in and out), "hold" (timing.h)
 // }
+// Any other key is refused, naming its JSON path and the nearest known key (a misspelt
+// "sample" must not silently fall back to the default).
+//
+// Keyframe coefficients (the map f(w) = Σ C_j φ_j + conj(Σ C_j ψ_j), harmonic_map.h)
+// need a user cage and index it as the file gives it, loop by loop in the order of
+// "cage.loops", each loop's vertices in the order written; φ and ψ have the same
+// length and layout, one [re, im] pair per column:
+//   "full" (m + N columns): every vertex of cage loop 0 (the outer loop), then every
+//     vertex of loop 1, ..., of loop N, then one log|w − ρ_i| column per hole i (its ψ
+//     entry must equal conj of its φ entry).
+//   "reduced" (m_0 + Σ_{k≥1} (m_k − 2) + N columns, the CW17 family's layout): every
+//     vertex of the outer loop, then each hole loop without its first two vertices
+//     (they carry only the null directions a + b w of that loop: map_space.h), then
+//     one log column per hole. Read as full with those columns 0: the same map.
+// A count that fits neither is refused naming both counts. Loops are stored in the
+// normal orientation (outer counter-clockwise, holes clockwise): a loop given the
+// other way round is reversed on loading, and its coefficients with it, so every
+// coefficient stays with its vertex and the map is the same either way. Saved scenes
+// hold the normalized cage and full coefficients.
+//
 // Every error names the file, the JSON path and, for syntax errors, line and column.
 #pragma once
 
