@@ -1,12 +1,12 @@
 /* Baked playback of an hsi sequence: a tiny, dependency-free C99 runtime (this header
- * and engine/src/baked_runtime.c, nothing else) that plays a .hsib file back on any
+ * and its source baked_runtime.c, nothing else) that plays a .hsib file back on any
  * render mesh (its own, or the shape's triangulation stored in the file). It
  * precomputes the mesh's basis rows once (Cauchy coordinates of the cage and one log
  * term per hole, written out below) and then makes each frame's vertices with one
- * small matrix product: vertex = rows(vertex) · W(frame) + translation. The same
- * product runs in a vertex shader (shaders/hsib_playback.glsl, installed beside this
- * header as hsib_playback.glsl). An stb-style single-file copy of this runtime,
- * hsib.h, is generated from this header and baked_runtime.c at build time.
+ * small matrix product: vertex = rows(vertex) · W(frame) + translation. An
+ * stb-style single-file copy of this runtime, hsib.h (installed too), is
+ * generated from this header and baked_runtime.c at build time. More in README.md,
+ * section "Game engines" (installed in share/doc/hsi).
  *
  * ---------------------------------------------------------------------------------
  * File format .hsib, version 2 (this runtime also reads version 1, which lacks the
