@@ -36,3 +36,6 @@ endforeach()
 install(FILES ${HSIB_SINGLE_FILE} DESTINATION ${CMAKE_INSTALL_INCLUDEDIR} COMPONENT capi)
 # The installed headers cite README.md (scene files, the C API, baked playback): it is installed with them.
 install(FILES ${PROJECT_SOURCE_DIR}/README.md DESTINATION ${CMAKE_INSTALL_DOCDIR} COMPONENT capi)
+# The GPU playback shader and its per-API preambles, beside the runtime's header.
+install(FILES ${PROJECT_SOURCE_DIR}/shaders/hsib_playback.glsl ${PROJECT_SOURCE_DIR}/shaders/hsib_preamble_vulkan.glsl
+              ${PROJECT_SOURCE_DIR}/shaders/hsib_preamble_gl.glsl DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}/hsi COMPONENT capi)

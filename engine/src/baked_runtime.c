@@ -793,6 +793,7 @@ void hsib_unbind(hsib_binding* b) {
 }
 
 size_t hsib_binding_vertex_count(const hsib_binding* b) { return b ? b->vertices : 0; }
+const hsib_sequence* hsib_binding_sequence(const hsib_binding* b) { return b ? b->sequence : NULL; }
 
 size_t hsib_binding_memory_size(const hsib_sequence* s, size_t vertex_count) {
   if (!s) return 0;
@@ -944,4 +945,53 @@ hsib_status hsib_evaluate_range(const hsib_binding* b, uint32_t frame, size_t fi
 hsib_status hsib_evaluate(const hsib_binding* b, uint32_t frame, float* out_xy, size_t out_stride) {
   if (!b) return HSIB_ERROR_ARGUMENT;
   return hsib_evaluate_range(b, frame, 0, b->vertices, out_xy, out_stride);
+}
+
+/* ---------------------------------------------------------------- GPU playback */
+
+uint32_t hsib_gpu_texels_per_vertex(const hsib_sequence* s) { return s ? (s->info.row_length + 3u) / 4u : 0u; }
+
+size_t hsib_gpu_rows_floats(const hsib_binding* b, uint32_t width) {
+  if (!b || width == 0) return 0;
+  const size_t texels = b->vertices * hsib_gpu_texels_per_vertex(b->sequence);
+  const size_t lines = (texels + width - 1) / width;
+  return 4u * (size_t)width * (lines ? lines : 1u);
+}
+
+hsib_status hsib_gpu_rows(const hsib_binding* b, uint32_t width, float* texels) {
+  if (!b || !texels || width == 0) return HSIB_ERROR_ARGUMENT;
+  const uint32_t R = b->sequence->info.row_length, T = hsib_gpu_texels_per_vertex(b->sequence);
+  memset(texels, 0, sizeof(float) * hsib_gpu_rows_floats(b, width));
+  for (size_t v = 0; v < b->vertices; ++v) {
+    const float* panel = b->rows + (v / HSIB_PANEL) * (size_t)R * HSIB_PANEL;
+    float* out = texels + 4u * (v * T);  /* texel v*T + q, 4 floats each, line after line */
+    for (uint32_t r = 0; r < R; ++r) out[r] = panel[(size_t)r * HSIB_PANEL + v % HSIB_PANEL];
+  }
+  return HSIB_OK;
+}
+
+hsib_status hsib_gpu_uniforms(const hsib_sequence* s, const hsib_blend* b, float* uniforms) {
+  if (!hsib__blend_valid(s, b) || !uniforms) return HSIB_ERROR_ARGUMENT;
+  const uint32_t R = s->info.row_length;
+  double* w = (double*)hsib_alloc(sizeof(double) * 4 * R);
+  if (!w) return HSIB_ERROR_MEMORY;
+  double c0[2], c1[2];
+  hsib__frame_weights(s, b->frame0, w, c0);
+  hsib__frame_weights(s, b->frame1, w + 2 * (size_t)R, c1);
+  uniforms[0] = (float)c0[0];
+  uniforms[1] = (float)c0[1];
+  uniforms[2] = (float)c1[0];
+  uniforms[3] = (float)c1[1];
+  uniforms[4] = b->s;
+  uniforms[5] = (float)R;
+  uniforms[6] = (float)hsib_gpu_texels_per_vertex(s);
+  uniforms[7] = 0.0f;
+  for (uint32_t k = 0; k < R; ++k) {
+    uniforms[8 + 4 * k] = (float)w[2 * k];
+    uniforms[8 + 4 * k + 1] = (float)w[2 * k + 1];
+    uniforms[8 + 4 * k + 2] = (float)w[2 * (size_t)R + 2 * k];
+    uniforms[8 + 4 * k + 3] = (float)w[2 * (size_t)R + 2 * k + 1];
+  }
+  hsib_free(w);
+  return HSIB_OK;
 }

@@ -3,7 +3,10 @@
  * render mesh (its own, or the shape's triangulation stored in the file). It
  * precomputes the mesh's basis rows once (Cauchy coordinates of the cage and one log
  * term per hole, written out below) and then makes each frame's vertices with one
- * small matrix product: vertex = rows(vertex) · W(frame) + translation. An
+ * small matrix product: vertex = rows(vertex) · W(frame) + translation. The same
+ * product runs in a vertex shader: hsi/hsib_playback.glsl with its preambles
+ * hsi/hsib_preamble_vulkan.glsl and hsi/hsib_preamble_gl.glsl (OpenGL, WebGL2),
+ * installed beside this header (hsib_gpu_* below fill its data). An
  * stb-style single-file copy of this runtime, hsib.h (installed too), is
  * generated from this header and baked_runtime.c at build time. More in README.md,
  * section "Game engines" (installed in share/doc/hsi).
@@ -270,6 +273,7 @@ HSIB_API hsib_status hsib_bind_ex(const hsib_sequence* sequence, const float* re
                                   const hsib_bind_options* options, hsib_binding** out, char* error, size_t error_size);
 HSIB_API void hsib_unbind(hsib_binding* binding);
 HSIB_API size_t hsib_binding_vertex_count(const hsib_binding* binding);
+HSIB_API const hsib_sequence* hsib_binding_sequence(const hsib_binding* binding);
 HSIB_API size_t hsib_binding_bytes(const hsib_binding* binding);
 /* Bytes a binding of vertex_count vertices takes (0 if that overflows). */
 HSIB_API size_t hsib_binding_memory_size(const hsib_sequence* sequence, size_t vertex_count);
@@ -293,6 +297,18 @@ HSIB_API hsib_status hsib_blend_weights(const hsib_sequence* sequence, const hsi
                                         float translation[2]);
 /* One vertex's basis row (R floats), as a binding stores it. */
 HSIB_API hsib_status hsib_basis_row(const hsib_sequence* sequence, double x, double y, float* row);
+
+/* GPU playback (hsi/hsib_playback.glsl): the data its vertex shader reads.
+ * Rows: each vertex's R basis rows as T = ceil(R/4) RGBA32F texels (4 rows a texel,
+ * zero-padded), texel v*T + q of an image `width` texels wide, line after line (or
+ * a storage buffer of vec4 under Vulkan); hsib_gpu_rows_floats says how many floats
+ * (4 * width * lines). Uniforms, per draw: 4 * (2 + R) floats, std140-compatible:
+ * (c0.x, c0.y, c1.x, c1.y), (s, R, T, 0), then per row (w0.x, w0.y, w1.x, w1.y) of the
+ * blend's two frames (hsib_blend_at_time), which the shader mixes with s. */
+HSIB_API uint32_t hsib_gpu_texels_per_vertex(const hsib_sequence* sequence);
+HSIB_API size_t hsib_gpu_rows_floats(const hsib_binding* binding, uint32_t width);
+HSIB_API hsib_status hsib_gpu_rows(const hsib_binding* binding, uint32_t width, float* texels);
+HSIB_API hsib_status hsib_gpu_uniforms(const hsib_sequence* sequence, const hsib_blend* blend, float* uniforms);
 
 /* CRC-32 (IEEE) of bytes, as the format uses it. */
 HSIB_API uint32_t hsib_crc32(const void* data, size_t size);
