@@ -209,6 +209,13 @@ static hsib_status hsib__read_header(const unsigned char* b, size_t size, hsib_l
     return hsib__fail(error, es, HSIB_ERROR_FORMAT, "static section size %llu, the header's sizes give %llu (at byte 80)",
                 (unsigned long long)y->static_bytes, (unsigned long long)want_static);
   y->total_bytes = H + want_static + (uint64_t)y->F * y->S;
+  /* Before anything is allocated: the memory a sequence takes is bounded by its file's size. */
+  if ((uint64_t)size < y->total_bytes)
+    return hsib__fail(error, es, HSIB_ERROR_TRUNCATED, "truncated: the file has %zu bytes, its header announces %llu (%u frames)", size,
+                      (unsigned long long)y->total_bytes, y->F);
+  if ((uint64_t)size > y->total_bytes)
+    return hsib__fail(error, es, HSIB_ERROR_TRUNCATED, "%llu trailing bytes after the last of %u frames",
+                      (unsigned long long)(size - y->total_bytes), y->F);
   const uint64_t block = hsib__block_size(y);
   if (block > (uint64_t)(size_t)-1 / 2) return hsib__fail(error, es, HSIB_ERROR_FORMAT, "the header announces %llu bytes", (unsigned long long)block);
   y->block_bytes = (size_t)block;
@@ -217,11 +224,6 @@ static hsib_status hsib__read_header(const unsigned char* b, size_t size, hsib_l
 
 static hsib_status hsib__parse(const unsigned char* b, size_t size, const hsib_layout* y, hsib_sequence* s, char* error, size_t es) {
   const uint32_t L = y->L, m = y->m, N = y->N, R = y->R, D = y->D, Z = y->Z, F = y->F, S = y->S;
-  if ((uint64_t)size < y->total_bytes)
-    return hsib__fail(error, es, HSIB_ERROR_TRUNCATED, "truncated: the file has %zu bytes, its header announces %llu (%u frames)", size,
-                (unsigned long long)y->total_bytes, F);
-  if ((uint64_t)size > y->total_bytes)
-    return hsib__fail(error, es, HSIB_ERROR_TRUNCATED, "%llu trailing bytes after the last of %u frames", (unsigned long long)(size - y->total_bytes), F);
   const unsigned char* st = b + y->header_bytes;
   if (hsib__rd_u32(b + 88) != hsib_crc32(st, (size_t)y->static_bytes))
     return hsib__fail(error, es, HSIB_ERROR_CHECKSUM, "static section checksum mismatch (bytes %u..%llu): the file is corrupt", y->header_bytes,
@@ -856,9 +858,9 @@ hsib_status hsib_bind_ex(const hsib_sequence* s, const float* rest_xy, size_t co
   b->vertices = count;
   b->panels = (count + HSIB_PANEL - 1) / HSIB_PANEL;
   b->rows = (float*)(void*)((unsigned char*)b + hsib__align16(sizeof *b));
-  double stack_C[512];
+  double stack_C[2048]; /* 16 KB: a single-loop cage of up to 341 vertices */
   const size_t scratch = 2 * (size_t)s->info.cage_vertex_count + 4 * hsib__max_loop(s);
-  double* C = scratch <= 512 ? stack_C : (double*)hsib_alloc(sizeof(double) * scratch);
+  double* C = scratch <= 2048 ? stack_C : (double*)hsib_alloc(sizeof(double) * scratch);
   if (!C) {
     hsib_unbind(b);
     return hsib__fail(error, es, HSIB_ERROR_MEMORY, "out of memory (%zu bytes of scratch)", sizeof(double) * scratch);

@@ -115,8 +115,10 @@
  * once. hsib_set_allocator must be called before anything else and is not
  * thread-safe. Memory: only what hsib_* allocates, through the allocator hooks; or
  * none at all for a sequence and a binding placed in the caller's memory
- * (hsib_open_in_place, hsib_bind_options.memory): then only evaluation of rows longer
- * than 256 and basis rows of cages over ~250 vertices take scratch from the hooks.
+ * (hsib_open_in_place, hsib_bind_options.memory): then only evaluation with rows
+ * longer than R = 256, binding with cages whose 2m + 4 (largest loop) exceeds 2048
+ * (a single loop of 341 vertices), hsib_basis_row, hsib_blend_weights and
+ * hsib_gpu_uniforms take scratch from the hooks.
  */
 #ifndef HSI_BAKED_RUNTIME_H
 #define HSI_BAKED_RUNTIME_H
