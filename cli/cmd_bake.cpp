@@ -7,6 +7,7 @@
 
 #include "commands.h"
 #include "hsi/baked.h"
+#include "hsi/baked_runtime.h"
 #include "hsi/scene_sequence.h"
 #include "sequence_source.h"
 
@@ -49,6 +50,7 @@ void register_bake(CLI::App& app) {
     double ratio = 0;
     bool f64 = false, allow_unconverged = false;
     int max_iterations = 100;
+    int blend_substeps = 4, mesh_vertices = 2000;
   };
   auto o = std::make_shared<Opts>();
   CLI::App* cmd = app.add_subcommand(
@@ -66,6 +68,14 @@ void register_bake(CLI::App& app) {
   cmd->add_option("--from", o->from, "Bake the frames of an earlier hsi interpolate (its folder or frames.hsif) instead");
   cmd->add_option("--max-iterations", o->max_iterations, "Newton iterations per frame at most")->capture_default_str()->check(CLI::Range(1, 1000000));
   cmd->add_flag("--allow-unconverged", o->allow_unconverged, "Exit 0 when certified frames did not converge (still flagged in the file)");
+  cmd->add_option("--blend-substeps", o->blend_substeps,
+                  "k: certify the blends of every two neighbouring certified frames at k-1 sub-steps, so the runtime may blend\n"
+                  "there (0: nearest-frame playback only)")
+      ->capture_default_str()
+      ->check(CLI::Range(0, 1000));
+  cmd->add_option("--mesh-vertices", o->mesh_vertices, "The shape's triangulation stored in the file, about this many vertices")
+      ->capture_default_str()
+      ->check(CLI::Range(16, 10000000));
   cmd->add_flag("--f64", o->f64, "Store per-frame coefficients as f64 (default f32, about 1e-7 of the shape's size)");
   cmd->callback([o] {
     Scene scene = load_scene(o->scene);
@@ -82,6 +92,10 @@ void register_bake(CLI::App& app) {
     }
     BakeOptions bo;
     bo.single_precision = !o->f64;
+    bo.blend_substeps = o->blend_substeps;
+    bo.mesh_vertices = o->mesh_vertices;
+    bo.certificate_samples = o->samples > 0 ? o->samples : scene.samples;
+    bo.texture_rect = scene.texture_rect_or_bounds();
     const std::string bytes = encode_baked(scene.shape, ff, bo);
     write_file_atomic(o->out, bytes);
     int uncertified = 0, not_converged = 0, overlapping = 0;
@@ -94,6 +108,21 @@ void register_bake(CLI::App& app) {
                 ff.frames.size(), bytes.size(),
                 static_cast<double>(bytes.size()) / 1024.0 / static_cast<double>(std::max<size_t>(1, ff.frames.size())), uncertified,
                 not_converged);
+    // What the runtime will blend, read back from the file as a game reads it.
+    if (o->blend_substeps >= 2 && ff.frames.size() >= 2) {
+      int blendable = 0;
+      hsib_sequence* seq = nullptr;
+      if (hsib_open_memory(bytes.data(), bytes.size(), &seq, nullptr, 0) == HSIB_OK) {
+        for (uint32_t i = 0; i + 1 < ff.frames.size(); ++i) {
+          uint32_t flags = 0;
+          hsib_frame_info(seq, i, nullptr, &flags);
+          blendable += (flags & HSIB_FRAME_BLEND_CERTIFIED) != 0;
+        }
+        hsib_close(seq);
+      }
+      std::printf("blends certified at %d sub-steps in %d of %zu intervals (the runtime plays the nearest frame in the others)\n",
+                  o->blend_substeps, blendable, ff.frames.size() - 1);
+    }
     if (overlapping > 0)
       std::printf("WARNING: %d frame(s) overlap themselves (the image of the boundary crosses itself); flagged "
                   "HSIB_FRAME_OVERLAPS in the baked file\n",

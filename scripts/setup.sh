@@ -9,6 +9,7 @@ pkgs=(
   libvulkan-dev libvulkan-volk-dev glslang-tools spirv-tools mesa-vulkan-drivers vulkan-validationlayers
   libtinygltf-dev
   libglfw3-dev libimgui-dev xvfb xauth
+  emscripten node-acorn chromium
 )
 missing=()
 for p in "${pkgs[@]}"; do
@@ -32,4 +33,9 @@ root="$(cd "$(dirname "$0")/.." && pwd)"
 if [ ! -f "$root/.tools/node_modules/gltf-validator/package.json" ]; then
   echo "[setup] installing gltf-validator into .tools/"
   npm install --no-audit --no-fund --silent --prefix "$root/.tools" gltf-validator@2.0.0-dev.3.10
+fi
+# three.js for the web player (web/) and its browser test (ctest web_player), also in .tools/.
+if [ ! -f "$root/.tools/node_modules/three/build/three.module.js" ]; then
+  echo "[setup] installing three into .tools/"
+  npm install --no-audit --no-fund --silent --prefix "$root/.tools" three@0.160.0
 fi

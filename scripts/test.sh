@@ -9,5 +9,7 @@ export HSI_REQUIRE_VULKAN=1
 export HSI_REQUIRE_GLTF_VALIDATOR=1
 # setup.sh installs Xvfb: the viewer test (hsi-viewer under xvfb-run) must run, not skip.
 export HSI_REQUIRE_VIEWER=1
+# setup.sh installs emscripten, chromium and three.js: the web player test must run, not skip.
+export HSI_REQUIRE_WEB=1
 cd build
 ctest --output-on-failure -j"$(nproc)" --timeout 900

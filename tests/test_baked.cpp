@@ -7,7 +7,10 @@
 
 #include "hsi/baked.h"
 #include "hsi/baked_runtime.h"
+#include "hsi/certificate.h"
+#include "hsi/samples.h"
 #include "hsi/scene_sequence.h"
+#include "hsi/triangulate.h"
 #include "test_shapes.h"
 
 using namespace hsi;
@@ -83,7 +86,10 @@ TEST_CASE("baked playback matches direct evaluation of every frame", "[baked]") 
     // Compact: the cage once, then a few kilobytes per frame.
     const double per_frame = static_cast<double>(48 + info.coefficient_count * (single ? 4 : 8) + 4);
     CHECK(per_frame < 4096);
-    CHECK(static_cast<double>(bytes.size()) < 20000 + static_cast<double>(F.seq.frames.size()) * per_frame);
+    // The static part: the cage, the outline and the stored triangulation (8 bytes a vertex, 12 a triangle).
+    const double mesh_bytes = 8.0 * info.mesh_vertex_count + 12.0 * info.mesh_triangle_count;
+    CHECK(info.mesh_vertex_count > 1000);
+    CHECK(static_cast<double>(bytes.size()) < 20000 + mesh_bytes + static_cast<double>(F.seq.frames.size()) * per_frame);
     hsib_binding* b = nullptr;
     char error[256];
     REQUIRE(hsib_bind(S.s, xy.data(), pts.size(), 0, &b, error, sizeof error) == HSIB_OK);
@@ -95,7 +101,7 @@ TEST_CASE("baked playback matches direct evaluation of every frame", "[baked]") 
       uint32_t flags;
       REQUIRE(hsib_frame_info(S.s, f, &t, &flags) == HSIB_OK);
       CHECK(t == fr.t);
-      CHECK(flags == ((fr.certified ? 1u : 0u) | (fr.keyframe ? 2u : 0u) | (fr.converged ? 4u : 0u) |
+      CHECK((flags & 15u) == ((fr.certified ? 1u : 0u) | (fr.keyframe ? 2u : 0u) | (fr.converged ? 4u : 0u) |
                       (fr.overlap.overlaps() ? 8u : 0u)));
       REQUIRE(hsib_evaluate(b, f, out.data(), 0) == HSIB_OK);
       const VectorXcd want = evaluate_map(rows, fr.map).f;
@@ -208,10 +214,10 @@ TEST_CASE("damaged baked files give clear errors", "[baked]") {
   REQUIRE(open(bytes) == HSIB_OK);
   CHECK(open("XXXX" + bytes.substr(4), &msg) == HSIB_ERROR_FORMAT);
   CHECK_THAT(msg, Contains("not an hsi baked sequence"));
-  std::string v2 = bytes;
-  v2[4] = 2;
-  CHECK(open(v2, &msg) == HSIB_ERROR_VERSION);
-  CHECK_THAT(msg, Contains("unsupported baked format version 2") && Contains("reads version 1"));
+  std::string v3 = bytes;
+  v3[4] = 3;
+  CHECK(open(v3, &msg) == HSIB_ERROR_VERSION);
+  CHECK_THAT(msg, Contains("unsupported baked format version 3") && Contains("reads versions 1 and 2"));
   // Truncated anywhere: a clear error that says so, never a crash.
   for (size_t cut = 0; cut < bytes.size(); cut += 13) {
     INFO("cut at " << cut);
@@ -286,4 +292,339 @@ TEST_CASE("baked frames carry the overlaps-itself flag (8)", "[baked][overlap]")
     CHECK(((flags & HSIB_FRAME_OVERLAPS) != 0) == seq.frames[f].overlap.overlaps());
     CHECK(((flags & HSIB_FRAME_CERTIFIED) != 0) == seq.frames[f].certified);
   }
+}
+
+namespace {
+
+// The engine's map at points, for comparisons with the runtime.
+VectorXcd engine_map(const Cage& cage, const std::vector<cd>& pts, const HarmonicMap& map) {
+  return evaluate_map(evaluate_basis(cage, pts, kBasisC), map).f;
+}
+
+HarmonicMap blend_of(const HarmonicMap& a, const HarmonicMap& b, double s) {
+  return {(1 - s) * a.phi + s * b.phi, (1 - s) * a.psi + s * b.psi};
+}
+
+}  // namespace
+
+TEST_CASE("baked blends: certified at k sub-steps, played only where certified", "[baked][blend]") {
+  BakedFixture& F = fixture();
+  const ShapeSetup& setup = *F.seq.setup;
+  const FrameFile ff = F.seq.frame_file();
+  BakeOptions bo;
+  bo.blend_substeps = 4;
+  bo.certificate_samples = 1000;
+  Sequence S(encode_baked(setup.shape, ff, bo));
+  REQUIRE(S.status == HSIB_OK);
+  hsib_info info;
+  hsib_get_info(S.s, &info);
+  CHECK(info.version == 2);
+  CHECK(info.blend_substeps == 4);
+  const std::vector<cd> pts = rest_vertices(setup, 400);
+  const std::vector<float> xy = packed(pts);
+  hsib_binding* b = nullptr;
+  REQUIRE(hsib_bind(S.s, xy.data(), pts.size(), 0, &b, nullptr, 0) == HSIB_OK);
+  const Certifier certifier(setup.shape, setup.cage, sample_boundary(setup.shape, 1000));
+  std::vector<float> out(xy.size());
+  for (uint32_t i = 0; i + 1 < info.frame_count; ++i) {
+    uint32_t flags = 0;
+    double t0, t1;
+    REQUIRE(hsib_frame_info(S.s, i, &t0, &flags) == HSIB_OK);
+    REQUIRE(hsib_frame_info(S.s, i + 1, &t1, nullptr) == HSIB_OK);
+    // The flag is the engine's certificate of every sub-step blend.
+    bool all = true;
+    for (int j = 1; j < 4; ++j) all = all && certifier.certify(blend_of(ff.frames[i].map, ff.frames[i + 1].map, j / 4.0)).certified;
+    INFO("interval " << i);
+    CHECK(((flags & HSIB_FRAME_BLEND_CERTIFIED) != 0) == all);
+    REQUIRE(all);  // the two-hole scene's small steps blend certifiably
+    for (int j = 0; j <= 4; ++j) {
+      // Certified steps: the time a bit past sub-step j snaps to it; the map is the blend.
+      const double t = t0 + (t1 - t0) * (j + 0.1) / 4.0;
+      const hsib_blend bl = hsib_blend_at_time(S.s, t, HSIB_PLAY_CERTIFIED_STEPS);
+      CHECK((bl.flags & HSIB_FRAME_CERTIFIED) != 0);
+      REQUIRE(hsib_evaluate_blend(b, &bl, out.data(), 0) == HSIB_OK);
+      const VectorXcd want = engine_map(setup.cage, pts, blend_of(ff.frames[i].map, ff.frames[i + 1].map, j / 4.0));
+      double worst = 0;
+      for (size_t v = 0; v < pts.size(); ++v) worst = std::max(worst, std::abs(cd(out[2 * v], out[2 * v + 1]) - want(static_cast<Eigen::Index>(v))));
+      CHECK(worst < 1e-5 * setup.size);
+      if (j == 0 || j == 4) {
+        CHECK(bl.frame0 == bl.frame1);
+        CHECK((bl.flags & HSIB_BLEND_BLENDED) == 0);
+      } else {
+        CHECK(bl.frame0 == i);
+        CHECK(bl.frame1 == i + 1);
+        CHECK(bl.s == Approx(j / 4.0));
+        CHECK((bl.flags & HSIB_BLEND_BLENDED) != 0);
+      }
+    }
+    // Exact blending: between sub-steps the map is not called certified.
+    const hsib_blend mid = hsib_blend_at_time(S.s, t0 + (t1 - t0) * 0.3, HSIB_PLAY_BLEND);
+    CHECK(mid.s == Approx(0.3));
+    CHECK(mid.flags == HSIB_BLEND_BLENDED);
+    const hsib_blend near = hsib_blend_at_time(S.s, t0 + (t1 - t0) * 0.3, HSIB_PLAY_NEAREST);
+    CHECK(near.frame0 == i);
+    CHECK(near.frame1 == i);
+  }
+  hsib_unbind(b);
+  // No sub-steps baked: every mode plays the nearest frame.
+  bo.blend_substeps = 0;
+  Sequence N(encode_baked(setup.shape, ff, bo));
+  REQUIRE(N.status == HSIB_OK);
+  double t0, t1;
+  hsib_frame_info(N.s, 1, &t0, nullptr);
+  hsib_frame_info(N.s, 2, &t1, nullptr);
+  const hsib_blend nb = hsib_blend_at_time(N.s, t0 + 0.4 * (t1 - t0), HSIB_PLAY_BLEND);
+  CHECK(nb.frame0 == 1);
+  CHECK(nb.frame1 == 1);
+  CHECK(nb.s == 0.0f);
+  // An uncertified frame: the intervals on both sides are not blended.
+  FrameFile bad = ff;
+  bad.frames[2].certified = false;
+  bo.blend_substeps = 4;
+  Sequence U(encode_baked(setup.shape, bad, bo));
+  REQUIRE(U.status == HSIB_OK);
+  for (uint32_t i = 0; i + 1 < info.frame_count; ++i) {
+    uint32_t flags = 0;
+    hsib_frame_info(U.s, i, nullptr, &flags);
+    CHECK(((flags & HSIB_FRAME_BLEND_CERTIFIED) != 0) == (i != 1 && i != 2));
+  }
+  CHECK(hsib_blend_at_time(U.s, t0 + 0.4 * (t1 - t0), HSIB_PLAY_BLEND).frame1 == 1);
+}
+
+TEST_CASE("baked blends through a degenerate map are not certified", "[baked][blend]") {
+  // f0 = identity, f1 = rotation by pi: both certified, but the blend at s = 1/2 is the
+  // zero map. k = 4 has that sub-step and refuses the interval; k = 3 (s = 1/3, 2/3,
+  // maps ±w/3) certifies it, and exact blending at s = 1/2 is then reported uncertified.
+  BakedFixture& F = fixture();
+  const ShapeSetup& setup = *F.seq.setup;
+  FrameFile ff;
+  ff.cage = setup.cage;
+  ff.frames.resize(2);
+  ff.frames[0].t = 0;
+  ff.frames[1].t = 1;
+  ff.frames[0].map = identity_map(setup.cage);
+  ff.frames[1].map = affine_map(setup.cage, cd(-1, 0), cd(0, 0), cd(0, 0));
+  for (StoredFrame& f : ff.frames) f.certified = f.converged = true;
+  BakeOptions bo;
+  bo.certificate_samples = 1000;
+  bo.blend_substeps = 4;
+  Sequence K4(encode_baked(setup.shape, ff, bo));
+  REQUIRE(K4.status == HSIB_OK);
+  uint32_t flags = 0;
+  hsib_frame_info(K4.s, 0, nullptr, &flags);
+  CHECK((flags & HSIB_FRAME_BLEND_CERTIFIED) == 0);
+  CHECK(hsib_blend_at_time(K4.s, 0.45, HSIB_PLAY_CERTIFIED_STEPS).s == 0.0f);  // nearest frame: 0
+  CHECK(hsib_blend_at_time(K4.s, 0.55, HSIB_PLAY_BLEND).frame0 == 1);
+  bo.blend_substeps = 3;
+  Sequence K3(encode_baked(setup.shape, ff, bo));
+  REQUIRE(K3.status == HSIB_OK);
+  hsib_frame_info(K3.s, 0, nullptr, &flags);
+  CHECK((flags & HSIB_FRAME_BLEND_CERTIFIED) != 0);
+  const hsib_blend half = hsib_blend_at_time(K3.s, 0.5, HSIB_PLAY_BLEND);
+  CHECK(half.s == 0.5f);
+  CHECK((half.flags & HSIB_FRAME_CERTIFIED) == 0);
+  const hsib_blend step = hsib_blend_at_time(K3.s, 0.5, HSIB_PLAY_CERTIFIED_STEPS);
+  CHECK((step.s == Approx(1 / 3.0) || step.s == Approx(2 / 3.0)));
+  CHECK((step.flags & HSIB_FRAME_CERTIFIED) != 0);
+}
+
+TEST_CASE("baked runtime reads version 1 files (nearest-frame playback, no mesh)", "[baked][blend]") {
+  // Written by the version 1 baker: hsi bake assets/annulus.json --frames 3 --samples 1000.
+  hsib_sequence* s1 = nullptr;
+  char error[256];
+  const std::string golden = std::string(HSI_TESTS_DIR) + "/golden/annulus_v1.hsib";
+  REQUIRE(hsib_open_file(golden.c_str(), &s1, error, sizeof error) == HSIB_OK);
+  hsib_info info;
+  hsib_get_info(s1, &info);
+  CHECK(info.version == 1);
+  CHECK(info.frame_count == 3);
+  CHECK(info.blend_substeps == 0);
+  CHECK(info.mesh_vertex_count == 0);
+  hsib_mesh mesh;
+  CHECK(hsib_get_mesh(s1, &mesh) == HSIB_ERROR_VERSION);
+  const hsib_blend bl = hsib_blend_at_time(s1, 0.3, HSIB_PLAY_BLEND);
+  CHECK(bl.frame0 == bl.frame1);
+  // The same scene baked now plays the same frames.
+  Scene scene = load_scene(std::filesystem::path(HSI_ASSETS_DIR) / "annulus.json");
+  SceneSequenceOptions o;
+  o.frames = 3;
+  o.samples = 1000;
+  const SceneSequence seq = interpolate_scene(scene, o);
+  Sequence S2(encode_baked(seq.setup->shape, seq.frame_file()));
+  REQUIRE(S2.status == HSIB_OK);
+  const std::vector<float> xy = packed(rest_vertices(*seq.setup, 200));
+  hsib_binding *b1 = nullptr, *b2 = nullptr;
+  REQUIRE(hsib_bind(s1, xy.data(), xy.size() / 2, 0, &b1, nullptr, 0) == HSIB_OK);
+  REQUIRE(hsib_bind(S2.s, xy.data(), xy.size() / 2, 0, &b2, nullptr, 0) == HSIB_OK);
+  std::vector<float> o1(xy.size()), o2(xy.size());
+  for (uint32_t f = 0; f < 3; ++f) {
+    REQUIRE(hsib_evaluate(b1, f, o1.data(), 0) == HSIB_OK);
+    REQUIRE(hsib_evaluate(b2, f, o2.data(), 0) == HSIB_OK);
+    for (size_t k = 0; k < xy.size(); ++k) CHECK(std::abs(o1[k] - o2[k]) < 1e-4 * seq.setup->size);
+  }
+  hsib_unbind(b1);
+  hsib_unbind(b2);
+  hsib_close(s1);
+}
+
+TEST_CASE("baked files carry the shape's triangulation, outline and texture coordinates", "[baked][mesh]") {
+  BakedFixture& F = fixture();
+  const ShapeSetup& setup = *F.seq.setup;
+  BakeOptions bo;
+  bo.mesh_vertices = 500;
+  bo.texture_rect = std::array<double, 4>{-2.0, -1.5, 3.0, 2.5};
+  Sequence S(encode_baked(setup.shape, F.seq.frame_file(), bo));
+  REQUIRE(S.status == HSIB_OK);
+  hsib_mesh mesh;
+  REQUIRE(hsib_get_mesh(S.s, &mesh) == HSIB_OK);
+  TriangulateOptions to;
+  to.max_edge = edge_for_vertex_count(setup.shape, 500);
+  const TriMesh want = triangulate(setup.shape, to);
+  REQUIRE(mesh.vertex_count == static_cast<uint32_t>(want.vertex_count()));
+  REQUIRE(mesh.triangle_count == static_cast<uint32_t>(want.triangle_count()));
+  for (uint32_t v = 0; v < mesh.vertex_count; ++v) {
+    CHECK(mesh.xy[2 * v] == static_cast<float>(want.vertices[v].real()));
+    CHECK(mesh.uv[2 * v] == Approx((mesh.xy[2 * v] - -2.0) / 5.0).margin(1e-6));
+    CHECK(mesh.uv[2 * v + 1] == Approx((2.5 - mesh.xy[2 * v + 1]) / 4.0).margin(1e-6));
+  }
+  for (uint32_t t = 0; t < mesh.triangle_count; ++t)
+    for (int k = 0; k < 3; ++k) CHECK(mesh.triangles[3 * t + k] == static_cast<uint32_t>(want.triangles[t][static_cast<size_t>(k)]));
+  CHECK(mesh.texture_rect[2] == 3.0);
+  // The whole mesh binds (its boundary vertices lie on the shape, inside the cage).
+  hsib_binding* b = nullptr;
+  REQUIRE(hsib_bind(S.s, mesh.xy, mesh.vertex_count, 0, &b, nullptr, 0) == HSIB_OK);
+  hsib_unbind(b);
+}
+
+TEST_CASE("baked point regions match the engine's inside tests", "[baked][mesh]") {
+  BakedFixture& F = fixture();
+  const ShapeSetup& setup = *F.seq.setup;
+  Sequence S(encode_baked(setup.shape, F.seq.frame_file()));
+  REQUIRE(S.status == HSIB_OK);
+  const BoundingBox bb = bounding_box(setup.cage.loops[0]);
+  int counts[3] = {0, 0, 0};
+  const int n = 60;
+  for (int i = 0; i <= n; ++i)
+    for (int j = 0; j <= n; ++j) {
+      const cd p(bb.lo.real() - 0.1 + (bb.hi.real() - bb.lo.real() + 0.2) * i / n, bb.lo.imag() - 0.1 + (bb.hi.imag() - bb.lo.imag() + 0.2) * j / n);
+      double near = 1e300;
+      for (const Loop& l : setup.cage.loops) near = std::min(near, loop_distance(l, p));
+      for (int l = 0; l < setup.shape.loop_count(); ++l) near = std::min(near, loop_distance(setup.shape.loop(l), p));
+      if (near < 1e-6 * setup.size) continue;  // on a boundary: either answer
+      bool in_cage = point_in_loop(setup.cage.loops[0], p);
+      for (size_t l = 1; l < setup.cage.loops.size(); ++l) in_cage = in_cage && !point_in_loop(setup.cage.loops[l], p);
+      bool in_shape = point_in_loop(setup.shape.outer, p);
+      for (const Loop& h : setup.shape.holes) in_shape = in_shape && !point_in_loop(h, p);
+      const hsib_region want = !in_cage ? HSIB_REGION_OUTSIDE : (in_shape ? HSIB_REGION_SHAPE : HSIB_REGION_CAGE);
+      INFO(p);
+      CHECK(hsib_point_region(S.s, p.real(), p.imag()) == want);
+      ++counts[want];
+    }
+  CHECK(counts[0] > 50);
+  CHECK(counts[1] > 50);
+  CHECK(counts[2] > 50);
+}
+
+TEST_CASE("baked bindings clamp vertices outside the cage per vertex", "[baked][mesh]") {
+  BakedFixture& F = fixture();
+  const ShapeSetup& setup = *F.seq.setup;
+  Sequence S(encode_baked(setup.shape, F.seq.frame_file()));
+  REQUIRE(S.status == HSIB_OK);
+  const cd inside = test::interior_points(setup.shape, 1)[0];
+  const BoundingBox bb = bounding_box(setup.cage.loops[0]);
+  const cd far_right(bb.hi.real() + 0.5, 0.5 * (bb.lo.imag() + bb.hi.imag()));
+  const cd hole = setup.cage.hole_points[0];
+  const std::vector<cd> pts{inside, far_right, hole};
+  const std::vector<float> xy = packed(pts);
+  hsib_binding* b = nullptr;
+  char error[512];
+  // Refusing stays the default, and its message names the way out.
+  CHECK(hsib_bind(S.s, xy.data(), 3, 0, &b, error, sizeof error) == HSIB_ERROR_DOMAIN);
+  CHECK_THAT(error, Contains("rest vertex 1") && Contains("HSIB_OUTSIDE_CLAMP"));
+  std::vector<uint8_t> region(3, 99);
+  hsib_bind_options o{};
+  o.outside = HSIB_OUTSIDE_CLAMP;
+  o.vertex_region = region.data();
+  REQUIRE(hsib_bind_ex(S.s, xy.data(), 3, 0, &o, &b, error, sizeof error) == HSIB_OK);
+  CHECK(region[0] == HSIB_REGION_SHAPE);
+  CHECK(region[1] == HSIB_REGION_OUTSIDE);
+  CHECK(region[2] == HSIB_REGION_OUTSIDE);
+  // A clamped vertex follows the map at the nearest point of the cage domain.
+  std::vector<float> out(6);
+  REQUIRE(hsib_evaluate(b, 2, out.data(), 0) == HSIB_OK);
+  const HarmonicMap& map = F.seq.frames[2].map;
+  auto nearest_on = [&](const Loop& loop, cd p) {
+    cd best = loop[0];
+    for (size_t i = 0; i < loop.size(); ++i) {
+      const cd a = loop[i], c = loop[(i + 1) % loop.size()];
+      const double t = std::clamp(std::real((p - a) * std::conj(c - a)) / std::norm(c - a), 0.0, 1.0);
+      if (std::abs(a + t * (c - a) - p) < std::abs(best - p)) best = a + t * (c - a);
+    }
+    return best;
+  };
+  const cd edge_point = nearest_on(setup.cage.loops[0], far_right);
+  const cd inward = 1e-4 * setup.size * (inside - edge_point) / std::abs(inside - edge_point);
+  const VectorXcd want = engine_map(setup.cage, {inside, edge_point + inward}, map);
+  CHECK(std::abs(cd(out[0], out[1]) - want(0)) < 1e-5 * setup.size);
+  CHECK(std::abs(cd(out[2], out[3]) - want(1)) < 1e-2 * setup.size);
+  hsib_unbind(b);
+}
+
+namespace {
+struct CountingAllocator {
+  static inline int allocations = 0;
+  static void* allocate(size_t bytes, void*) {
+    ++allocations;
+    return std::malloc(bytes);
+  }
+  static void release(void* p, void*) { std::free(p); }
+};
+}  // namespace
+
+TEST_CASE("baked sequences and bindings live in caller-provided memory", "[baked][mesh]") {
+  BakedFixture& F = fixture();
+  const ShapeSetup& setup = *F.seq.setup;
+  const std::string bytes = encode_baked(setup.shape, F.seq.frame_file());
+  size_t need = 0;
+  char error[256];
+  REQUIRE(hsib_sequence_bytes(bytes.data(), bytes.size(), &need, error, sizeof error) == HSIB_OK);
+  REQUIRE(need > 0);
+  std::vector<std::max_align_t> memory(need / sizeof(std::max_align_t) + 2);
+  const std::vector<cd> pts = rest_vertices(setup, 100);
+  const std::vector<float> xy = packed(pts);
+  const hsib_allocator counting{CountingAllocator::allocate, CountingAllocator::release, nullptr};
+  hsib_set_allocator(&counting);
+  CountingAllocator::allocations = 0;
+  hsib_sequence* s = nullptr;
+  // Too small and misaligned memory are refused with a message.
+  CHECK(hsib_open_in_place(bytes.data(), bytes.size(), memory.data(), need - 16, &s, error, sizeof error) == HSIB_ERROR_MEMORY);
+  CHECK_THAT(error, Contains("the sequence needs " + std::to_string(need)));
+  CHECK(hsib_open_in_place(bytes.data(), bytes.size(), reinterpret_cast<char*>(memory.data()) + 4, need, &s, error, sizeof error) ==
+        HSIB_ERROR_ARGUMENT);
+  REQUIRE(hsib_open_in_place(bytes.data(), bytes.size(), memory.data(), memory.size() * sizeof(std::max_align_t), &s, error,
+                             sizeof error) == HSIB_OK);
+  hsib_info info;
+  hsib_get_info(s, &info);
+  CHECK(info.sequence_bytes == need);
+  const size_t bind_need = hsib_binding_memory_size(s, pts.size());
+  std::vector<std::max_align_t> bind_memory(bind_need / sizeof(std::max_align_t) + 1);
+  hsib_bind_options o{};
+  o.memory = bind_memory.data();
+  o.memory_bytes = bind_memory.size() * sizeof(std::max_align_t);
+  hsib_binding* b = nullptr;
+  REQUIRE(hsib_bind_ex(s, xy.data(), pts.size(), 0, &o, &b, error, sizeof error) == HSIB_OK);
+  std::vector<float> out(xy.size());
+  REQUIRE(hsib_evaluate(b, 1, out.data(), 0) == HSIB_OK);
+  hsib_unbind(b);
+  hsib_close(s);
+  CHECK(CountingAllocator::allocations == 0);
+  hsib_set_allocator(nullptr);
+  // Same numbers as a sequence the runtime allocated.
+  Sequence A(bytes);
+  hsib_binding* ba = nullptr;
+  REQUIRE(hsib_bind(A.s, xy.data(), pts.size(), 0, &ba, nullptr, 0) == HSIB_OK);
+  std::vector<float> out_a(xy.size());
+  REQUIRE(hsib_evaluate(ba, 1, out_a.data(), 0) == HSIB_OK);
+  CHECK(out == out_a);
+  hsib_unbind(ba);
 }

@@ -11,6 +11,10 @@ run(0 ${HSI_CLI} bake ${HSI_SCENE} -o ${HSI_WORK_DIR}/seq.hsib ${common})
 if(NOT RUN_OUTPUT MATCHES "5 frames, [0-9]+ bytes .* 0 uncertified")
   message(FATAL_ERROR "hsi bake: unexpected output")
 endif()
+# Blends between neighbouring frames certified at the default 4 sub-steps (issue #25).
+if(NOT RUN_OUTPUT MATCHES "blends certified at 4 sub-steps in 4 of 4 intervals")
+  message(FATAL_ERROR "hsi bake: the blend certification line is missing or not 4 of 4")
+endif()
 file(READ ${HSI_WORK_DIR}/seq.hsib magic LIMIT 4 HEX)
 if(NOT magic STREQUAL "48534942")  # "HSIB"
   message(FATAL_ERROR "seq.hsib does not start with HSIB")

@@ -6,7 +6,11 @@
 #include <map>
 
 #include "hsi/baked_runtime.h"
+#include "hsi/certificate.h"
 #include "hsi/map_space.h"
+#include "hsi/overlap.h"
+#include "hsi/samples.h"
+#include "hsi/triangulate.h"
 
 namespace hsi {
 namespace {
@@ -35,6 +39,43 @@ struct LEWriter {
     f64(p.imag());
   }
 };
+
+// Flags 16 / 32 of frame i: the blends toward frame i + 1 at the k − 1 interior
+// sub-steps, each certified (the engine's certificate: proved, not sampled) and
+// checked for self-overlap. Only between two certified frames with increasing time.
+std::vector<uint32_t> blend_flags(const Shape& shape, const FrameFile& frames, const BakeOptions& o) {
+  const size_t F = frames.frames.size();
+  std::vector<uint32_t> flags(F, 0);
+  const int k = o.blend_substeps;
+  if (k > 1000) throw InputError("bake: " + std::to_string(k) + " blend sub-steps per interval; at most 1000");
+  if (k < 2 || F < 2) return flags;
+  const Certifier certifier(shape, frames.cage, sample_boundary(shape, std::max(100, o.certificate_samples)));
+  const OverlapChecker overlap(frames.cage, certifier.segments());
+  const long intervals = static_cast<long>(F) - 1;
+  std::string error;
+#pragma omp parallel for schedule(dynamic)
+  for (long i = 0; i < intervals; ++i) {
+    const StoredFrame& a = frames.frames[static_cast<size_t>(i)];
+    const StoredFrame& b = frames.frames[static_cast<size_t>(i) + 1];
+    if (!a.certified || !b.certified || !(b.t > a.t)) continue;
+    bool certified = true, overlaps = false;
+    for (int j = 1; j < k && certified; ++j) {
+      const double s = static_cast<double>(j) / k;
+      const HarmonicMap blend{(1 - s) * a.map.phi + s * b.map.phi, (1 - s) * a.map.psi + s * b.map.psi};
+      try {  // nothing may leave an OpenMP region: an error leaves the interval unflagged, and is reported below
+        certified = certifier.certify(blend).certified;
+        overlaps = overlaps || overlap.check(blend).overlaps();
+      } catch (const std::exception& e) {
+        certified = false;
+#pragma omp critical(hsi_bake_error)
+        if (error.empty()) error = "bake: certifying the blends after frame " + std::to_string(i) + ": " + e.what();
+      }
+    }
+    if (certified) flags[static_cast<size_t>(i)] = HSIB_FRAME_BLEND_CERTIFIED | (overlaps ? HSIB_FRAME_BLEND_OVERLAPS : 0u);
+  }
+  if (!error.empty()) throw InputError(error);
+  return flags;
+}
 
 }  // namespace
 
@@ -101,13 +142,37 @@ std::string encode_baked(const Shape& shape, const FrameFile& frames, const Bake
     st.u32(e.source);
     st.f64(e.value);
   }
+  // v2: the outline, the texture rectangle and the triangulation.
+  for (int l = 0; l < shape.loop_count(); ++l) st.u32(static_cast<uint32_t>(shape.loop(l).size()));
+  uint32_t Ms = 0;
+  for (int l = 0; l < shape.loop_count(); ++l)
+    for (const cd& p : shape.loop(l)) {
+      st.point(p);
+      ++Ms;
+    }
+  const BoundingBox bb = bounding_box(shape);
+  const std::array<double, 4> rect = options.texture_rect.value_or(std::array<double, 4>{bb.lo.real(), bb.lo.imag(), bb.hi.real(), bb.hi.imag()});
+  if (!(rect[2] > rect[0]) || !(rect[3] > rect[1])) throw InputError("bake: the texture rectangle is empty");
+  for (double r : rect) st.f64(r);
+  TriangulateOptions to;
+  to.max_edge = edge_for_vertex_count(shape, std::max(16, options.mesh_vertices));
+  const TriMesh mesh = triangulate(shape, to);
+  for (const cd& v : mesh.vertices) {
+    st.f32(static_cast<float>(v.real()));
+    st.f32(static_cast<float>(v.imag()));
+  }
+  for (const auto& t : mesh.triangles)
+    for (int v : t) st.u32(static_cast<uint32_t>(v));
+
+  for (size_t i = 0; i < frames.frames.size(); ++i)
+    if (frames.frames[i].map.phi.size() != basis_size(cage) || frames.frames[i].map.psi.size() != basis_size(cage))
+      throw InputError("bake: frame " + std::to_string(i) + " has " + std::to_string(frames.frames[i].map.phi.size()) +
+                       " coefficients; the cage needs " + std::to_string(basis_size(cage)));
+  const std::vector<uint32_t> blends = blend_flags(shape, frames, options);
 
   LEWriter fr;
   for (size_t i = 0; i < frames.frames.size(); ++i) {
     const StoredFrame& f = frames.frames[i];
-    if (f.map.phi.size() != basis_size(cage) || f.map.psi.size() != basis_size(cage))
-      throw InputError("bake: frame " + std::to_string(i) + " has " + std::to_string(f.map.phi.size()) +
-                       " coefficients; the cage needs " + std::to_string(basis_size(cage)));
     if (i > 0 && !(f.t >= frames.frames[i - 1].t)) throw InputError("bake: frame times must not decrease (frame " + std::to_string(i) + ")");
     MapSpace::Canonical c;
     try {
@@ -117,7 +182,7 @@ std::string encode_baked(const Shape& shape, const FrameFile& frames, const Bake
     }
     const size_t start = fr.out.size();
     fr.f64(f.t);
-    fr.u32((f.certified ? 1u : 0u) | (f.keyframe ? 2u : 0u) | (f.converged ? 4u : 0u) | (f.overlaps ? 8u : 0u));
+    fr.u32((f.certified ? 1u : 0u) | (f.keyframe ? 2u : 0u) | (f.converged ? 4u : 0u) | (f.overlaps ? 8u : 0u) | blends[i]);
     fr.u32(0);
     fr.point(c.rotation);
     fr.point(c.translation);
@@ -130,7 +195,6 @@ std::string encode_baked(const Shape& shape, const FrameFile& frames, const Bake
     fr.u32(hsib_crc32(fr.out.data() + start, fr.out.size() - start));
   }
 
-  const BoundingBox bb = bounding_box(shape);
   LEWriter h;
   h.out = "HSIB";
   h.u32(HSIB_FORMAT_VERSION);
@@ -150,6 +214,12 @@ std::string encode_baked(const Shape& shape, const FrameFile& frames, const Bake
   h.f64(bb.hi.imag());
   h.u64(st.out.size());
   h.u32(hsib_crc32(st.out.data(), st.out.size()));
+  h.u32(static_cast<uint32_t>(std::max(0, options.blend_substeps)));
+  h.u32(static_cast<uint32_t>(mesh.vertices.size()));
+  h.u32(static_cast<uint32_t>(mesh.triangles.size()));
+  h.u32(static_cast<uint32_t>(shape.loop_count()));
+  h.u32(Ms);
+  for (int r = 0; r < 3; ++r) h.u32(0);
   h.u32(hsib_crc32(h.out.data(), h.out.size()));
   return h.out + st.out + fr.out;
 }

@@ -613,17 +613,27 @@ hsi_status hsi_sequence_coefficients(const hsi_sequence* s, uint32_t frame, doub
   });
 }
 
+// As hsi bake: the scene's texture rectangle for the stored mesh, its samples for the blend certificates.
+static BakeOptions scene_bake_options(const hsi_sequence* s, int single_precision) {
+  BakeOptions o;
+  o.single_precision = single_precision != 0;
+  o.texture_rect = s->scene->texture_rect_or_bounds();
+  o.certificate_samples = s->scene->samples;
+  return o;
+}
+
 hsi_status hsi_sequence_bake_file(const hsi_sequence* s, const char* path, int single_precision) {
   return guard([&] {
     require(s && path, "hsi_sequence_bake_file", "sequence or path is NULL");
-    write_baked(path, s->scene->shape, s->seq.frame_file(), {single_precision != 0});
+    write_baked(path, s->scene->shape, s->seq.frame_file(), scene_bake_options(s, single_precision));
   });
 }
 
 hsi_status hsi_sequence_bake_memory(const hsi_sequence* s, int single_precision, void* buffer, size_t capacity, size_t* size) {
   return guard([&] {
     require(s, "hsi_sequence_bake_memory", "sequence is NULL");
-    copy_out(encode_baked(s->scene->shape, s->seq.frame_file(), {single_precision != 0}), static_cast<char*>(buffer), capacity, size, false);
+    copy_out(encode_baked(s->scene->shape, s->seq.frame_file(), scene_bake_options(s, single_precision)), static_cast<char*>(buffer),
+             capacity, size, false);
   });
 }
 

@@ -26,21 +26,24 @@ uint64_t rd64(const uint8_t* p) {
 }
 void wr32(uint8_t* p, uint32_t v) { std::memcpy(p, &v, 4); }
 
-// Recomputes the header, static-section and frame checksums where they fit.
+// Recomputes the header, static-section and frame checksums where they fit (the
+// header's size and the place of its own checksum depend on the version: 1 or 2).
 void fix_checksums(std::vector<uint8_t>& b) {
-  if (b.size() < HSIB_HEADER_SIZE) return;
+  if (b.size() < 8) return;
+  const uint32_t H = rd32(b.data() + 4) == 1 ? HSIB_HEADER_SIZE_V1 : HSIB_HEADER_SIZE;
+  if (b.size() < H) return;
   const uint64_t static_bytes = rd64(b.data() + 80);
   const uint32_t F = rd32(b.data() + 40), S = rd32(b.data() + 44);
-  if (static_bytes <= b.size() - HSIB_HEADER_SIZE) {
-    wr32(b.data() + 88, hsib_crc32(b.data() + HSIB_HEADER_SIZE, static_bytes));
-    const uint64_t frames_at = HSIB_HEADER_SIZE + static_bytes;
+  if (static_bytes <= b.size() - H) {
+    wr32(b.data() + 88, hsib_crc32(b.data() + H, static_bytes));
+    const uint64_t frames_at = H + static_bytes;
     if (S >= 8)
       for (uint64_t f = 0; f < F && frames_at + (f + 1) * S <= b.size(); ++f) {
         uint8_t* fr = b.data() + frames_at + f * S;
         wr32(fr + S - 4, hsib_crc32(fr, S - 4));
       }
   }
-  wr32(b.data() + 92, hsib_crc32(b.data(), 92));
+  wr32(b.data() + H - 4, hsib_crc32(b.data(), H - 4));
 }
 
 void exercise(const uint8_t* data, size_t size) {
@@ -84,6 +87,34 @@ void exercise(const uint8_t* data, size_t size) {
     std::vector<float> w(2 * static_cast<size_t>(info.row_length));
     float c[2];
     if (hsib_frame_weights(s, 0, w.data(), c) != HSIB_OK) std::abort();
+  }
+  // Version 2: the stored mesh binds (vertices clamped where outside the cage), blends
+  // at any time play, and the GPU data fill; regions of the vertices are defined.
+  hsib_mesh mesh;
+  if (info.frame_count > 0 && hsib_get_mesh(s, &mesh) == HSIB_OK && mesh.vertex_count <= 4096) {
+    std::vector<uint8_t> region(mesh.vertex_count);
+    hsib_bind_options o{};
+    o.outside = HSIB_OUTSIDE_CLAMP;
+    o.vertex_region = region.data();
+    hsib_binding* b = nullptr;
+    if (hsib_bind_ex(s, mesh.xy, mesh.vertex_count, 0, &o, &b, error, sizeof error) == HSIB_OK) {
+      for (uint8_t r : region)
+        if (r > HSIB_REGION_SHAPE) std::abort();
+      std::vector<float> out(2 * static_cast<size_t>(mesh.vertex_count));
+      for (double u : {-0.5, 0.0, 0.37, 0.5, 1.0, 2.0})
+        for (const hsib_playback m : {HSIB_PLAY_NEAREST, HSIB_PLAY_CERTIFIED_STEPS, HSIB_PLAY_BLEND}) {
+          const hsib_blend bl = hsib_blend_at_time(s, info.t_begin + u * (info.t_end - info.t_begin), m);
+          if (hsib_evaluate_blend(b, &bl, out.data(), 0) != HSIB_OK) std::abort();
+        }
+      std::vector<float> texels(hsib_gpu_rows_floats(b, 64));
+      if (hsib_gpu_rows(b, 64, texels.data()) != HSIB_OK) std::abort();
+      std::vector<float> u(4 * (2 + static_cast<size_t>(info.row_length)));
+      const hsib_blend first{0, 0, 0.0f, 0};
+      if (hsib_gpu_uniforms(s, &first, u.data()) != HSIB_OK) std::abort();
+      hsib_unbind(b);
+    }
+    for (uint32_t t = 0; t < mesh.triangle_count && t < 64; ++t)
+      if (mesh.triangles[3 * t] >= mesh.vertex_count) std::abort();
   }
   hsib_close(s);
 }

@@ -87,8 +87,8 @@ typedef struct hsi_sequence hsi_sequence;
 
 /* ------------------------------------------------------------------ scenes */
 
-/* [any thread] A scene from a file (JSON, format in the project's README and
- * engine/include/hsi/scene_io.h) or from JSON text in memory; base_dir resolves the
+/* [any thread] A scene from a file (JSON, format in README.md, section "Scene files",
+ * installed in share/doc/hsi) or from JSON text in memory; base_dir resolves the
  * texture (NULL: the working directory). The shape and any user cage are validated. */
 HSI_API hsi_status hsi_scene_load_file(const char* path, hsi_scene** out);
 HSI_API hsi_status hsi_scene_load_memory(const char* json, size_t size, const char* base_dir, hsi_scene** out);
@@ -211,7 +211,7 @@ typedef struct hsi_frame_report {
   double bound_excess;  /* relative excess over the envelope (0 = within) */
   /* The image of the shape's boundary crosses itself (the frame is locally injective
    * at most, not globally: two layers of the shape overlap), sampled at the boundary
-   * breakpoints (engine/include/hsi/overlap.h); crossings: how many segment pairs. */
+   * breakpoints (README.md, section "Global overlap"); crossings: how many segment pairs. */
   int overlaps, crossings;
 } hsi_frame_report;
 

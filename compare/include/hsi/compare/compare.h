@@ -17,7 +17,7 @@
 #include "hsi/newton.h"
 #include "hsi/shape_setup.h"
 
-namespace hsi::vk {
+namespace hsi::compute {
 class Context;
 }
 

@@ -13,7 +13,7 @@
 #include "hsi/scene_texture.h"
 #include "hsi/draw/raster.h"
 
-namespace hsi::vk {
+namespace hsi::compute {
 class Context;
 }
 

@@ -1,0 +1,39 @@
+// GPU playback of a baked sequence (.hsib) under Vulkan: the basis rows of a bound
+// mesh in a storage buffer, a blend's uniforms in a uniform buffer, and
+// shaders/hsib_playback.glsl (the same function a game's vertex shader calls) run as
+// a compute pass over `instances` copies of the mesh, writing every position. For
+// tests against the C runtime and for bench_hsib_gpu; a game draws with its own
+// vertex shader instead.
+#pragma once
+
+#include <vector>
+
+#include "hsi/baked_runtime.h"
+#include "hsi/compute/vulkan_context.h"
+
+namespace hsi::compute {
+
+class HsibPlayback {
+ public:
+  // positions: where the output lives; kReadback lets positions() read it back.
+  HsibPlayback(const Context& context, const hsib_binding* binding, uint32_t instances,
+               MemoryUse positions = MemoryUse::kReadback);
+  // The uniforms of `blend` (hsib_gpu_uniforms); throws InputError for an invalid blend.
+  void set_blend(const hsib_blend& blend);
+  // Runs the pass and waits; returns its GPU time in ms by timestamps (negative where
+  // the queue has none).
+  double run();
+  // x, y per vertex, instance after instance (only with MemoryUse::kReadback).
+  std::vector<float> positions() const;
+  uint32_t row_length() const { return row_length_; }
+
+ private:
+  const Context* context_;
+  const hsib_sequence* sequence_;
+  uint32_t vertices_, instances_, row_length_;
+  Buffer rows_, uniforms_, positions_;
+  ComputePipeline pipeline_;
+  DescriptorSet set_;
+};
+
+}  // namespace hsi::compute

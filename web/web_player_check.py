@@ -1,0 +1,143 @@
+#!/usr/bin/env python3
+"""The web player in a real browser (ctest web_player, web/test_web_player.cmake).
+
+Serves SITE over HTTP on 127.0.0.1 (python's http.server, an ephemeral port), loads
+player.html in headless Chromium (WebGL2 on SwiftShader, no GPU needed) at the times
+of the given frames of SITE/seq.hsib, takes a screenshot each, and compares it with
+`hsi render`'s PNG of the same frame (RENDER/frame_NNNN.png, same size and view).
+
+Tolerance (stated in the README): the shape's coverage (pixels that differ from the
+white background by more than 24/255 in some channel) agrees with IoU >= 0.98, and
+over the pixels both cover, the mean absolute difference per channel is <= 4/255
+(measured: IoU 0.998, 0.7/255; a neighbouring frame instead gives IoU 0.57, 52/255).
+Both draw the same triangulation with the same texture; they differ in antialiasing
+and texture filtering only.
+
+usage: web_player_check.py CHROMIUM SITE RENDER WIDTH HEIGHT FRAME [FRAME ...]
+"""
+import functools
+import http.server
+import os
+import struct
+import subprocess
+import sys
+import tempfile
+import threading
+import zlib
+
+
+def read_png(path):
+    """RGB(A) 8-bit non-interlaced PNG -> (width, height, rows of RGB tuples)."""
+    data = open(path, "rb").read()
+    assert data[:8] == b"\x89PNG\r\n\x1a\n", f"{path}: not a PNG"
+    pos, idat, w = 8, b"", 0
+    while pos < len(data):
+        n, kind = struct.unpack(">I4s", data[pos:pos + 8])
+        chunk = data[pos + 8:pos + 8 + n]
+        if kind == b"IHDR":
+            w, h, depth, ctype, _, _, interlace = struct.unpack(">IIBBBBB", chunk)
+            assert depth == 8 and ctype in (2, 6) and interlace == 0, f"{path}: unsupported PNG ({depth} bit, type {ctype})"
+            bpp = 3 if ctype == 2 else 4
+        elif kind == b"IDAT":
+            idat += chunk
+        pos += 12 + n
+    raw = zlib.decompress(idat)
+    stride = w * bpp
+    rows, prev = [], bytearray(stride)
+    for y in range(h):
+        f = raw[y * (stride + 1)]
+        line = bytearray(raw[y * (stride + 1) + 1:(y + 1) * (stride + 1)])
+        for i in range(stride):
+            a = line[i - bpp] if i >= bpp else 0
+            b = prev[i]
+            c = prev[i - bpp] if i >= bpp else 0
+            if f == 1:
+                line[i] = (line[i] + a) & 255
+            elif f == 2:
+                line[i] = (line[i] + b) & 255
+            elif f == 3:
+                line[i] = (line[i] + (a + b) // 2) & 255
+            elif f == 4:
+                p = a + b - c
+                pa, pb, pc = abs(p - a), abs(p - b), abs(p - c)
+                line[i] = (line[i] + (a if pa <= pb and pa <= pc else (b if pb <= pc else c))) & 255
+        prev = line
+        px = []
+        for x in range(w):
+            r, g, bl = line[x * bpp:x * bpp + 3]
+            if bpp == 4:  # over white, as the page's background
+                al = line[x * bpp + 3] / 255.0
+                r, g, bl = (round(v * al + 255 * (1 - al)) for v in (r, g, bl))
+            px.append((r, g, bl))
+        rows.append(px)
+    return w, h, rows
+
+
+def frame_times(path):
+    b = open(path, "rb").read()
+    header, frames, record = struct.unpack_from("<I", b, 8)[0], struct.unpack_from("<I", b, 40)[0], struct.unpack_from("<I", b, 44)[0]
+    static = struct.unpack_from("<Q", b, 80)[0]
+    start = header + static
+    return [struct.unpack_from("<d", b, start + f * record)[0] for f in range(frames)]
+
+
+def compare(a, b):
+    (wa, ha, A), (wb, hb, B) = a, b
+    assert (wa, ha) == (wb, hb), f"sizes differ: {wa}x{ha} and {wb}x{hb}"
+    inter = union = 0
+    diff_sum = diff_n = 0
+    for y in range(ha):
+        for x in range(wa):
+            pa, pb = A[y][x], B[y][x]
+            ca = max(255 - v for v in pa) > 24
+            cb = max(255 - v for v in pb) > 24
+            union += ca or cb
+            inter += ca and cb
+            if ca and cb:
+                diff_sum += sum(abs(u - v) for u, v in zip(pa, pb))
+                diff_n += 3
+    return inter / max(union, 1), diff_sum / max(diff_n, 1), union
+
+
+def main():
+    chromium, site, render, width, height = sys.argv[1], sys.argv[2], sys.argv[3], int(sys.argv[4]), int(sys.argv[5])
+    frames = [int(f) for f in sys.argv[6:]]
+    times = frame_times(os.path.join(site, "seq.hsib"))
+    class Quiet(http.server.SimpleHTTPRequestHandler):
+        def log_message(self, *args):
+            pass
+
+    handler = functools.partial(Quiet, directory=site)
+    server = http.server.ThreadingHTTPServer(("127.0.0.1", 0), handler)
+    threading.Thread(target=server.serve_forever, daemon=True).start()
+    port = server.server_address[1]
+    failed = False
+    try:
+        for f in frames:
+            shot = os.path.join(site, f"browser_{f:04d}.png")
+            url = (f"http://127.0.0.1:{port}/player.html?hsib=seq.hsib&texture=texture.png&w={width}&h={height}"
+                   f"&t={times[f]!r}&view_frames={','.join(map(str, frames))}")
+            with tempfile.TemporaryDirectory() as profile:
+                cmd = [chromium, "--headless=new", "--no-sandbox", "--no-first-run", f"--user-data-dir={profile}",
+                       "--use-angle=swiftshader", "--enable-unsafe-swiftshader", "--ignore-gpu-blocklist", "--hide-scrollbars",
+                       "--force-device-scale-factor=1", f"--window-size={width},{height}", "--virtual-time-budget=30000",
+                       f"--screenshot={shot}", url]
+                r = subprocess.run(cmd, capture_output=True, text=True, timeout=180)
+            if r.returncode != 0 or not os.path.exists(shot):
+                print(f"frame {f}: chromium failed ({r.returncode}):\n{r.stderr[-3000:]}")
+                failed = True
+                continue
+            want = os.path.join(render, f"frame_{f:04d}.png")
+            iou, mad, covered = compare(read_png(shot), read_png(want))
+            ok = iou >= 0.98 and mad <= 4 and covered > 0.05 * width * height
+            print(f"frame {f} (t = {times[f]:.4f}): coverage IoU {iou:.4f} (>= 0.98), mean abs difference {mad:.2f}/255 (<= 4), "
+                  f"{covered} pixels covered: {'ok' if ok else 'FAILED'}  [{shot} vs {want}]")
+            failed = failed or not ok
+    finally:
+        server.shutdown()
+    print("web player: FAILED" if failed else f"web player ok: {len(frames)} frames match hsi render")
+    return 1 if failed else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
