@@ -104,7 +104,7 @@ const std::vector<Case> kLoadCases = {
     // structure, types, versions
     {"top_level_array.json", {"expected a JSON object at the top level, got array"}},
     {"missing_version.json", {"missing \"hsi_scene\""}},
-    {"unknown_version.json", {"hsi_scene: unsupported version 2", "reads version 1"}},
+    {"unknown_version.json", {"hsi_scene: unsupported version 99", "reads versions 1 to 2"}},
     {"version_wraps.json", {"hsi_scene: unsupported version 4294967297"}},
     {"version_string.json", {"hsi_scene: expected an integer version, got string"}},
     {"version_fraction.json", {"hsi_scene: expected an integer version, got number"}},

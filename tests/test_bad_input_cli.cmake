@@ -30,7 +30,7 @@ endfunction()
 set(C ${HSI_CORPUS})
 # hsi interpolate: refused while loading, and refused while making the keyframes certified.
 refuse(truncated "truncated.json: invalid JSON at line 2" ${HSI_CLI} interpolate ${C}/truncated.json -o @OUT@)
-refuse(unknown_version "unsupported version 2" ${HSI_CLI} interpolate ${C}/unknown_version.json -o @OUT@)
+refuse(unknown_version "unsupported version 99" ${HSI_CLI} interpolate ${C}/unknown_version.json -o @OUT@)
 refuse(number_overflow "number overflow" ${HSI_CLI} interpolate ${C}/number_overflow.json -o @OUT@)
 refuse(bow_tie "outer loop intersects itself" ${HSI_CLI} interpolate ${C}/bow_tie.json -o @OUT@)
 refuse(hole_outside "hole 1 lies outside the outer loop" ${HSI_CLI} interpolate ${C}/hole_outside.json -o @OUT@)

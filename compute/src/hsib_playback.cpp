@@ -41,7 +41,7 @@ HsibPlayback::HsibPlayback(const Context& context, const hsib_binding* binding, 
   uniforms_ = Buffer(context, 16ull * (2 + kMaxRows), VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT, MemoryUse::kUpload);
   positions_ = Buffer(context, 8ull * vertices_ * instances_, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, positions);
   pipeline_ = ComputePipeline(context, hsib_playback_probe, kBindings, sizeof(Push));
-  set_ = DescriptorSet(context, pipeline_);
+  set_ = DescriptorSet(context, pipeline_.layout());
   set_.bind(0, rows_);
   set_.bind(1, uniforms_);
   set_.bind(2, positions_);

@@ -9,6 +9,8 @@
 #include <vector>
 
 #include "hsi/baked_runtime.h"
+#include "hsi/compute/compute_pipeline.h"
+#include "hsi/compute/descriptor_set.h"
 #include "hsi/compute/vulkan_context.h"
 
 namespace hsi::compute {
