@@ -5,6 +5,7 @@
 // the keyframes' range), a run of --run consecutive ones from --first; GE warm-starts
 // each from the previous one (the first from the nearest keyframe). One thread.
 // Timings only: never run by the test suite.
+#include "hsi/stopwatch.h"
 #include <CLI/CLI.hpp>
 #include <algorithm>
 #include <chrono>
@@ -21,7 +22,6 @@ using namespace hsi::baselines;
 
 namespace {
 using Clock = std::chrono::steady_clock;
-double ms_since(Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); }
 }  // namespace
 
 int main(int argc, char** argv) {

@@ -3,6 +3,7 @@
 // calls alone (the Hessian's ZGEMM, a Cholesky factor-and-solve of its size), and a
 // warm-started interpolation sequence with each backend. Prints Markdown tables with
 // CUDA/CPU ratios. Not a test: timings only.
+#include "hsi/stopwatch.h"
 #include <CLI/CLI.hpp>
 #include <Eigen/Cholesky>
 #include <chrono>
@@ -24,7 +25,6 @@ namespace hc = hsi::cuda;
 namespace {
 
 using Clock = std::chrono::steady_clock;
-double ms_since(Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); }
 
 using bench::Loaded;
 using bench::load;

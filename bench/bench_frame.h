@@ -11,6 +11,7 @@
 // (the certificate is always double: its bounds need it).
 #pragma once
 
+#include "hsi/stopwatch.h"
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -27,7 +28,6 @@ namespace hsi::bench {
 inline void frame_table(const compute::Context& ctx, const std::vector<std::string>& scenes, const std::vector<int>& sizes,
                         int frames, int msaa, const std::vector<compute::Rasterizer>& rasterizers, bool boundary = true) {
   using Clock = std::chrono::steady_clock;
-  auto ms_since = [](Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); };
   auto median = [](std::vector<double> v) {
     std::sort(v.begin(), v.end());
     return v.empty() ? 0.0 : v[v.size() / 2];

@@ -6,6 +6,7 @@
 // device time (timestamps) and its wall time with the uniform upload, submit and wait.
 // The CPU path would also upload N x V x 8 bytes of positions per frame; the GPU path
 // uploads 16 x (R + 2) bytes of uniforms. Prints a table with the ratios.
+#include "hsi/stopwatch.h"
 #include <CLI/CLI.hpp>
 #include <algorithm>
 #include <chrono>
@@ -22,7 +23,6 @@ using namespace hsi;
 
 namespace {
 using Clock = std::chrono::steady_clock;
-double ms_since(Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); }
 
 // Median of `repeats` runs of fn (ms each).
 template <class F>

@@ -4,6 +4,7 @@
 // the CPU evaluation of the same mesh vertices in the same run.
 #pragma once
 
+#include "hsi/stopwatch.h"
 #include <algorithm>
 #include <array>
 #include <chrono>
@@ -81,7 +82,6 @@ inline compute::View frame_view(const VulkanScene& v, const TriMesh& mesh, int n
 inline void render_table(const compute::Context& ctx, const std::vector<std::string>& scenes, const std::vector<int>& sizes,
                          int frames, bool use_float) {
   using Clock = std::chrono::steady_clock;
-  auto ms_since = [](Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); };
   auto median = [](std::vector<double> v) {
     std::sort(v.begin(), v.end());
     return v.empty() ? 0.0 : v[v.size() / 2];

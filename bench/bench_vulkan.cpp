@@ -3,6 +3,7 @@
 // 1024², 2048² over a scene's shape, ms per frame and the ratio. Then dense
 // certification (compute/dense_certify.h) against the CPU hsi::Certifier on the
 // scene's keyframes. Prints the device and Markdown tables. Not a test: timings only.
+#include "hsi/stopwatch.h"
 #include <CLI/CLI.hpp>
 #include <algorithm>
 #include <chrono>
@@ -23,7 +24,6 @@ using namespace hsi;
 namespace {
 
 using Clock = std::chrono::steady_clock;
-double ms_since(Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); }
 
 // The 1-minute load average: timings on a shared machine are only as good as this.
 std::string load_average() {

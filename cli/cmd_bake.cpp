@@ -5,6 +5,7 @@
 
 #include <cstdio>
 
+#include "hsi/sample_limits.h"
 #include "commands.h"
 #include "hsi/baked.h"
 #include "hsi/baked_runtime.h"
@@ -63,7 +64,7 @@ void register_bake(CLI::App& app) {
   cmd->add_option("scene", o->scene, "Scene file (.json) with two or more keyframes")->required()->check(CLI::ExistingFile);
   cmd->add_option("-o,--output", o->out, "Baked file to write")->capture_default_str();
   cmd->add_option("--frames", o->frames, "Frames over the keyframes' time range")->capture_default_str()->check(CLI::Range(2, 1000000));
-  cmd->add_option("--samples", o->samples, "Boundary samples |G| (default: the scene's)")->check(CLI::Range(100, 10000000));
+  cmd->add_option("--samples", o->samples, "Boundary samples |G| (default: the scene's)")->check(CLI::Range(kMinSamples, kMaxSamples));
   cmd->add_option("--ratio", o->ratio, "Hessian sample ratio r (default: the scene's)")->check(CLI::Range(1e-6, 1.0));
   cmd->add_option("--from", o->from, "Bake the frames of an earlier hsi interpolate (its folder or frames.hsif) instead");
   cmd->add_option("--max-iterations", o->max_iterations, "Newton iterations per frame at most")->capture_default_str()->check(CLI::Range(1, 1000000));

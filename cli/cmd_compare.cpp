@@ -9,6 +9,7 @@
 #include <cstdio>
 #include <memory>
 
+#include "hsi/sample_limits.h"
 #include "commands.h"
 #include "hsi/compare/compare.h"
 #include "hsi/compare/runs.h"
@@ -108,7 +109,7 @@ void register_compare(CLI::App& app) {
       ->capture_default_str()->check(CLI::Range(2, 100000));
   cmd->add_option("--mesh-vertices", o->run.mesh_vertices, "Vertices of the mesh the baselines run on and the figures use (about)")
       ->capture_default_str()->check(CLI::Range(100, 5000000));
-  cmd->add_option("--samples", o->run.samples, "Boundary samples |G| (default: the scene's)")->check(CLI::Range(100, 10000000));
+  cmd->add_option("--samples", o->run.samples, "Boundary samples |G| (default: the scene's)")->check(CLI::Range(kMinSamples, kMaxSamples));
   cmd->add_option("--size", o->size, "Longer side of each panel of the side-by-side figures, in pixels")->capture_default_str();
   cmd->add_option("--segment", o->run.segment, "Keyframe interval of the side-by-side figures (0: keyframes 0 to 1)")->capture_default_str();
   cmd->add_option("--ratios", o->run.ratios, "Hessian sample ratios r of Table 2")->capture_default_str()->delimiter(',');

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cstdio>
 
+#include "hsi/sample_limits.h"
 #include "commands.h"
 #include "hsi/gltf_export.h"
 #include "sequence_source.h"
@@ -38,7 +39,7 @@ void register_export(CLI::App& app) {
   cmd->add_option("--csv", o->csv, "Write the report as CSV (one line per frame)");
   cmd->add_option("--from", o->from, "Use the frames of an earlier hsi interpolate (its folder or frames.hsif); glTF and PNG only");
   cmd->add_option("--frames", o->frames, "Frames over the keyframes' time range")->capture_default_str()->check(CLI::Range(2, 1000000));
-  cmd->add_option("--samples", o->samples, "Boundary samples |G| (default: the scene's)")->check(CLI::Range(100, 10000000));
+  cmd->add_option("--samples", o->samples, "Boundary samples |G| (default: the scene's)")->check(CLI::Range(kMinSamples, kMaxSamples));
   cmd->add_option("--ratio", o->ratio, "Hessian sample ratio r (default: the scene's)")->check(CLI::Range(1e-6, 1.0));
   cmd->add_option("--max-iterations", o->max_iterations, "Newton iterations per frame at most")->capture_default_str()->check(CLI::Range(1, 1000000));
   cmd->add_flag("--allow-unconverged", o->allow_unconverged, "Exit 0 when certified frames did not converge (still flagged in the outputs)");

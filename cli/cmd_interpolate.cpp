@@ -6,6 +6,7 @@
 #include <chrono>
 #include <cstdio>
 
+#include "hsi/sample_limits.h"
 #include "commands.h"
 #include "hsi/frames_io.h"
 #include "hsi/interpolation.h"
@@ -49,7 +50,7 @@ void register_interpolate(CLI::App& app) {
                   "Instead of --frames: this many equal steps between neighbouring keyframes, so every keyframe time is a frame")
       ->check(CLI::Range(1, 1000000))
       ->excludes(frames_opt);
-  cmd->add_option("--samples", o->samples, "Boundary samples |G| (default: the scene's, 10000)")->check(CLI::Range(100, 10000000));
+  cmd->add_option("--samples", o->samples, "Boundary samples |G| (default: the scene's, 10000)")->check(CLI::Range(kMinSamples, kMaxSamples));
   cmd->add_option("--ratio", o->ratio, "Hessian sample ratio r (default: the scene's, 0.2)")->check(CLI::Range(1e-6, 1.0));
   cmd->add_option("--tolerance", o->tolerance, "Stop a frame when its energy decreases by less than this fraction of itself (and not in a slow linear crawl)")->capture_default_str();
   cmd->add_option("--max-iterations", o->max_iterations, "Newton iterations per frame at most")->capture_default_str();

@@ -109,3 +109,42 @@ TEST_CASE("C API: auto reports the backend used and why it fell back, cuda is re
   CHECK(hsi_interpolator_create(l.scene, &o, &interp) == HSI_ERROR_INVALID_ARGUMENT);
   CHECK_THAT(hsi_last_error(), Contains("backend 3"));
 }
+
+TEST_CASE("C API: keyframe timing (issue #26): the scene's by default, one for all when asked, bad values refused", "[c_api][timing]") {
+  Loaded l;
+  hsi_interpolation_options o;
+  hsi_interpolation_options_default(&o);
+  CHECK(o.timing == HSI_TIMING_SCENE);
+  const auto frame1 = [&](hsi_timing timing, std::string* json) {
+    o.timing = timing;
+    hsi_interpolator* interp = nullptr;
+    REQUIRE(hsi_interpolator_create(l.scene, &o, &interp) == HSI_OK);
+    hsi_sequence* seq = nullptr;
+    REQUIRE(hsi_interpolator_sequence(interp, 5, nullptr, nullptr, &seq) == HSI_OK);  // t = 0, 0.5, 1, 1.5, 2
+    hsi_frame_report r;
+    REQUIRE(hsi_sequence_frame_report(seq, 1, &r) == HSI_OK);
+    size_t n = 0;
+    REQUIRE(hsi_sequence_report_json(seq, nullptr, 0, &n) == HSI_ERROR_BUFFER_TOO_SMALL);
+    json->assign(n + 1, '\0');
+    REQUIRE(hsi_sequence_report_json(seq, json->data(), n + 1, &n) == HSI_OK);
+    hsi_sequence_destroy(seq);
+    hsi_interpolator_destroy(interp);
+    return r;
+  };
+  std::string json;
+  const hsi_frame_report held = frame1(HSI_TIMING_HOLD, &json);
+  CHECK(held.certified == 1);
+  CHECK(held.iterations == 0);  // keyframe 0 itself
+  CHECK(held.energy == 2.0);
+  CHECK_THAT(json, Contains("\"hold\""));
+  const hsi_frame_report linear = frame1(HSI_TIMING_LINEAR, &json);
+  CHECK(linear.iterations > 0);
+  CHECK(linear.energy > 2.0);
+  const hsi_frame_report smooth = frame1(HSI_TIMING_SMOOTH, &json);
+  CHECK(smooth.certified == 1);
+  CHECK_THAT(json, Contains("\"smooth\""));
+  o.timing = static_cast<hsi_timing>(7);
+  hsi_interpolator* interp = nullptr;
+  CHECK(hsi_interpolator_create(l.scene, &o, &interp) == HSI_ERROR_INVALID_ARGUMENT);
+  CHECK_THAT(hsi_last_error(), Contains("timing 7"));
+}

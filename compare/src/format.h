@@ -1,6 +1,7 @@
 // hsi compare's number formatting and reductions, shared by its stages (private).
 #pragma once
 
+#include "hsi/stopwatch.h"
 #include <algorithm>
 #include <chrono>
 #include <cstdarg>
@@ -16,7 +17,6 @@
 namespace hsi::compare {
 
 using Clock = std::chrono::steady_clock;
-inline double ms_since(Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); }
 inline double s_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
 
 // For report.md: NaN as "n/a", ±inf as "∞" / "−∞".

@@ -1,4 +1,5 @@
 // CPU Newton core (the reference for every backend) and the certified Newton loop.
+#include "hsi/stopwatch.h"
 #include "hsi/newton.h"
 
 #include <Eigen/Cholesky>
@@ -12,7 +13,6 @@ namespace hsi {
 namespace {
 
 using Clock = std::chrono::steady_clock;
-double ms_since(Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); }
 
 // A real 2×2 block K acting on u ∈ C ≅ R² as K u = α u + β conj(u).
 inline void complex_form(double k11, double k12, double k21, double k22, cd& alpha, cd& beta) {

@@ -1,5 +1,6 @@
 // Scene JSON reading and writing (format documented in hsi/scene_io.h).
 #include "hsi/scene_io.h"
+#include "hsi/sample_limits.h"
 
 #include <algorithm>
 #include <cctype>
@@ -310,7 +311,7 @@ Scene parse_scene(const std::string& text, const std::filesystem::path& base_dir
     }
   }
   if (const json* v = field(j, "samples")) {
-    if (!v->is_number_integer() || v->get<long long>() < 100 || v->get<long long>() > 10000000)
+    if (!v->is_number_integer() || v->get<long long>() < kMinSamples || v->get<long long>() > kMaxSamples)
       c.fail("samples", "expected an integer between 100 and 10,000,000");
     s.samples = v->get<int>();
   }

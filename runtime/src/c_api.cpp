@@ -401,6 +401,7 @@ void hsi_interpolation_options_default(hsi_interpolation_options* o) {
   o->max_iterations = d.max_iterations;
   o->projection = HSI_PROJECTION_PARTPROJ;
   o->backend = HSI_BACKEND_CPU;
+  o->timing = HSI_TIMING_SCENE;
 }
 
 hsi_status hsi_interpolator_create(hsi_scene* s, const hsi_interpolation_options* options, hsi_interpolator** out) {
@@ -415,6 +416,9 @@ hsi_status hsi_interpolator_create(hsi_scene* s, const hsi_interpolation_options
     if (o.backend != HSI_BACKEND_CPU && o.backend != HSI_BACKEND_AUTO && o.backend != HSI_BACKEND_CUDA)
       fail(HSI_ERROR_INVALID_ARGUMENT, "hsi_interpolator_create: backend " + std::to_string(static_cast<int>(o.backend)) +
                                            " is not HSI_BACKEND_CPU (0), HSI_BACKEND_AUTO (1) or HSI_BACKEND_CUDA (2)");
+    if (o.timing < HSI_TIMING_SCENE || o.timing > HSI_TIMING_HOLD)
+      fail(HSI_ERROR_INVALID_ARGUMENT, "hsi_interpolator_create: timing " + std::to_string(static_cast<int>(o.timing)) +
+                                           " is not HSI_TIMING_SCENE (0), _LINEAR (1), _SMOOTH (2), _EASE (3) or _HOLD (4)");
     if (s->scene.keyframes.size() < 2)
       fail(HSI_ERROR_INPUT, "scene '" + s->scene.name + "': interpolation needs at least two keyframes (it has " +
                                 std::to_string(s->scene.keyframes.size()) + ")");
@@ -426,6 +430,8 @@ hsi_status hsi_interpolator_create(hsi_scene* s, const hsi_interpolation_options
     io.projection = o.projection == HSI_PROJECTION_FULLPROJ ? HessianProjection::FullProj
                     : o.projection == HSI_PROJECTION_DELETE ? HessianProjection::Delete
                                                             : HessianProjection::PartProj;
+    static constexpr KeyTiming kTimings[] = {KeyTiming::Linear, KeyTiming::Linear, KeyTiming::Smooth, KeyTiming::Ease, KeyTiming::Hold};
+    io.timing = o.timing == HSI_TIMING_SCENE ? scene_timings(s->scene) : std::vector<KeyTiming>{kTimings[o.timing]};
     std::vector<double> times;
     std::vector<HarmonicMap> maps;
     for (const Keyframe& k : s->scene.keyframes) {
@@ -488,6 +494,7 @@ hsi_status hsi_interpolator_frame(hsi_interpolator* i, double t, hsi_sequence** 
     try {
       s->scene = i->scene;
       s->seq.setup = i->setup;
+      s->seq.options = i->interp->options();  // so the report records what was used
       s->seq.frames.push_back(i->interp->frame(t, i->warm));
       s->seq.total_s = s->seq.frames.back().ms / 1000;
       if (s->seq.frames.back().certified) i->warm = s->seq.frames.back().x;
@@ -510,6 +517,7 @@ hsi_status hsi_interpolator_sequence(hsi_interpolator* i, uint32_t frame_count, 
     try {
       s->scene = i->scene;
       s->seq.setup = i->setup;
+      s->seq.options = i->interp->options();
       const auto t0 = std::chrono::steady_clock::now();
       s->seq.frames = i->interp->sequence(static_cast<int>(frame_count), [&](const FrameResult& f, int k, int n) {
         if (!progress) return;

@@ -11,6 +11,7 @@
 #include <exception>
 #include <stdexcept>
 
+#include "hsi/sample_limits.h"
 #include "app.h"
 #include "hsi/compute/vulkan_context.h"
 #include "hsi/domain.h"
@@ -106,7 +107,7 @@ int main(int argc, char** argv) {
   app.add_flag("!--paused", o.play, "Start paused");
   app.add_option("--backend", o.backend, hsi::runtime::kBackendHelp)
       ->capture_default_str()->check(CLI::IsMember(hsi::runtime::backend_names()));
-  app.add_option("--samples", o.samples, "Boundary samples |G| (default: the scene's)")->check(CLI::Range(100, 1000000));
+  app.add_option("--samples", o.samples, "Boundary samples |G| (default: the scene's)")->check(CLI::Range(hsi::kMinSamples, hsi::kMaxSamples));
   app.add_option("--mesh-vertices", o.mesh_vertices, "Render mesh size")->capture_default_str()->check(CLI::Range(100, 2000000));
   app.add_option("--overlays", o.overlays,
                  "Overlays on at start, comma-separated: distortion, boundary, cage, handles, status, help, none")

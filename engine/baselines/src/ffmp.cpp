@@ -1,6 +1,7 @@
 // FFMP interpolation (hsi/baselines/ffmp.h): connection maps between edge-adjacent
 // triangles blended linearly, the frames from one sparse least-squares solve per frame,
 // the positions from ARAP's factorised Poisson system.
+#include "hsi/stopwatch.h"
 #include "hsi/baselines/ffmp.h"
 
 #include <Eigen/SparseCholesky>
@@ -20,7 +21,6 @@ using namespace detail;
 
 namespace {
 using Clock = std::chrono::steady_clock;
-double ms_since(Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); }
 }  // namespace
 
 struct FfmpInterpolation::Impl {

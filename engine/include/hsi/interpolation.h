@@ -120,6 +120,7 @@ class Interpolator {
   const Distortion& keyframe_distortion(int k) const { return key_distortion_[static_cast<size_t>(k)]; }
   const Distortion& keyframe_certified_distortion(int k) const { return key_certified_[static_cast<size_t>(k)]; }
   NewtonCore& core() { return *core_; }
+  const InterpolationOptions& options() const { return options_; }
 
  private:
   int segment(double t) const;

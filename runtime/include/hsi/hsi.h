@@ -169,11 +169,23 @@ HSI_API const char* hsi_backend_name(hsi_backend backend);
  * thread. */
 HSI_API int hsi_backend_available(hsi_backend backend, const char** why);
 
+/* How keyframe intervals are travelled (the scene file's per-keyframe "timing"; README
+ * "Timing through keyframes"). SCENE: each keyframe's own (linear where none is given);
+ * the others apply to every interval. */
+typedef enum hsi_timing {
+  HSI_TIMING_SCENE = 0,
+  HSI_TIMING_LINEAR = 1, /* the paper's linear blend of the metrics */
+  HSI_TIMING_SMOOTH = 2, /* C1 through the keyframes (log-Euclidean cubic Hermite) */
+  HSI_TIMING_EASE = 3,   /* ease in and out */
+  HSI_TIMING_HOLD = 4    /* each keyframe held until the next */
+} hsi_timing;
+
 typedef struct hsi_interpolation_options {
   double tolerance;        /* stop a frame when E_k - E_k+1 < tolerance * E_k (relative); default 5e-8 */
   int max_iterations;      /* Newton iterations per frame; default 100 */
   hsi_projection projection; /* default HSI_PROJECTION_PARTPROJ */
   hsi_backend backend;     /* default HSI_BACKEND_CPU (0.1's only core) */
+  hsi_timing timing;       /* default HSI_TIMING_SCENE */
 } hsi_interpolation_options;
 /* [any thread] */
 HSI_API void hsi_interpolation_options_default(hsi_interpolation_options* options);
