@@ -1,7 +1,7 @@
 # What a game engine takes of the baked runtime beyond the hsi_baked library
 # (cmake/hsi_capi.cmake): the single-file hsib.h generated from the runtime's one
 # source, the GLSL playback shader, pkg-config files, the installed docs the headers
-# cite, and libhsi's export list. Included from engine/CMakeLists.txt after hsi_capi.cmake.
+# cite, and libhsi's export list. Included from runtime/CMakeLists.txt, after libhsi (hsi_capi) is defined.
 include(GNUInstallDirs)
 
 # hsib.h (stb style), regenerated whenever the runtime's header or source changes.
