@@ -148,27 +148,10 @@ FrameResult Interpolator::frame(double t, const Eigen::VectorXd& warm_start, con
   const int k = segment(t);
   r.bound = envelope(key_distortion_[static_cast<size_t>(k)], key_distortion_[static_cast<size_t>(k) + 1]);
   r.certified_bound = envelope(key_certified_[static_cast<size_t>(k)], key_certified_[static_cast<size_t>(k) + 1]);
-  // At a keyframe time the blended metric is the keyframe's own: its map is the
-  // minimiser (energy 2), so return it exactly.
-  for (size_t j = 0; j < times_.size(); ++j)
-    if (t == times_[j]) {
-      r.keyframe = r.certified = r.converged = true;
-      r.map = keys_[j];
-      r.x = key_x_[j];
-      r.energy = 2.0;
-      r.certificate = setup_.certifier.certify(r.map);
-      r.distortion = key_distortion_[j];
-      r.overlap = setup_.overlap.check(r.map);
-      r.distortion_certified = key_certified_[j];
-      r.message = "keyframe " + std::to_string(j);
-      r.ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
-      return r;
-    }
-  // A held keyframe (Hold timing): the keyframe itself, exactly, as at its own time.
-  if (interval_timing(times_, options_.timing, t) == KeyTiming::Hold) {
-    const std::vector<double> w = key_weights(times_, options_.timing, t);
-    const size_t j = static_cast<size_t>(std::max_element(w.begin(), w.end()) - w.begin());
-    r.held = r.certified = r.converged = true;
+  // Keyframe j itself, exactly: at its own time (the blended metric is the keyframe's
+  // own, whose minimiser it is, energy 2) and through a Hold interval that leaves it.
+  const auto keyframe_itself = [&](size_t j, std::string message) {
+    r.certified = r.converged = true;
     r.map = keys_[j];
     r.x = key_x_[j];
     r.energy = 2.0;
@@ -176,11 +159,21 @@ FrameResult Interpolator::frame(double t, const Eigen::VectorXd& warm_start, con
     r.distortion = key_distortion_[j];
     r.overlap = setup_.overlap.check(r.map);
     r.distortion_certified = key_certified_[j];
-    r.bound_excess = excess(r.distortion, r.bound);
+    r.bound_excess = excess(r.distortion, r.bound);  // 0: j is one of the envelope's keyframes
     r.certified_bound_excess = excess(r.distortion_certified, r.certified_bound);
-    r.message = "keyframe " + std::to_string(j) + " held";
+    r.message = std::move(message);
     r.ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
     return r;
+  };
+  for (size_t j = 0; j < times_.size(); ++j)
+    if (t == times_[j]) {
+      r.keyframe = true;
+      return keyframe_itself(j, "keyframe " + std::to_string(j));
+    }
+  // In a Hold interval t < t_k+1 (t_k+1 itself is its keyframe, above): keyframe k held.
+  if (interval_timing(times_, options_.timing, t) == KeyTiming::Hold) {
+    r.held = true;
+    return keyframe_itself(static_cast<size_t>(k), "keyframe " + std::to_string(k) + " held");
   }
   core_->set_targets(blended_metric(t));
   NewtonOptions no;
