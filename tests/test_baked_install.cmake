@@ -3,18 +3,11 @@
 # find_package(hsi COMPONENTS ...) that works or says why, and installed headers that
 # cite only installed files.
 # -D: HSI_BUILD_DIR, HSI_WORK_DIR, HSI_PLAYER (tests/c_api_consumer/player.c), HSI_GOLDEN (a .hsib),
-#     HSI_GENERATOR, HSI_CC
+#     HSI_GENERATOR, HSI_CC, HSI_CONSUMER_LINK_FLAGS (the build's; a sanitizer build installs
+#     instrumented static libraries, so the players link as it did)
 cmake_minimum_required(VERSION 3.20)
 file(REMOVE_RECURSE ${HSI_WORK_DIR})
-function(step name)
-  execute_process(COMMAND ${ARGN} RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
-  message(STATUS "${name}:\n${out}${err}")
-  if(NOT rc EQUAL 0)
-    message(FATAL_ERROR "${name} failed (${rc})")
-  endif()
-  set(STEP_OUTPUT "${out}" PARENT_SCOPE)
-  set(STEP_ERROR "${err}" PARENT_SCOPE)
-endfunction()
+include(${CMAKE_CURRENT_LIST_DIR}/install_step.cmake)
 set(prefix ${HSI_WORK_DIR}/prefix)
 step(install ${CMAKE_COMMAND} --install ${HSI_BUILD_DIR} --prefix ${prefix} --component capi)
 file(GLOB_RECURSE pcs ${prefix}/*.pc)
@@ -31,7 +24,8 @@ set(ENV{PKG_CONFIG_PATH} ${pcdir})
 foreach(pkg hsi-baked hsi)
   step(pkg-config-${pkg} ${PKG_CONFIG} --cflags --libs ${pkg})
   separate_arguments(flags UNIX_COMMAND "${STEP_OUTPUT}")
-  step(compile-${pkg} ${HSI_CC} -std=c99 -o ${HSI_WORK_DIR}/player-${pkg} ${HSI_PLAYER} ${flags})
+  separate_arguments(link_flags UNIX_COMMAND "${HSI_CONSUMER_LINK_FLAGS}")
+  step(compile-${pkg} ${HSI_CC} -std=c99 -o ${HSI_WORK_DIR}/player-${pkg} ${HSI_PLAYER} ${flags} ${link_flags})
   set(ENV{LD_LIBRARY_PATH} ${pcdir}/..)
   step(run-${pkg} ${HSI_WORK_DIR}/player-${pkg} ${HSI_GOLDEN})
   if(NOT STEP_OUTPUT MATCHES "player ok: 3 frames")
