@@ -2,6 +2,7 @@
 // engine's results; status codes, messages, the buffer protocol, allocator hooks,
 // cancellation; only hsi_* / hsib_* symbols are exported.
 #include <catch2/catch.hpp>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
@@ -279,4 +280,57 @@ TEST_CASE("C API: frame reports and the summary say which frames overlap themsel
   CHECK(sum.overlapping >= 1);
   hsi_sequence_destroy(seq);
   hsi_interpolator_destroy(it);
+}
+
+TEST_CASE("C API: frame reports carry the certificate's bounds beside the sampled values, and the summary counts unconverged frames",
+          "[c_api]") {
+  hsi_scene* s = nullptr;
+  REQUIRE(hsi_scene_load_file((std::string(HSI_TESTS_DIR) + "/../assets/annulus.json").c_str(), &s) == HSI_OK);
+  hsi_interpolation_options o;
+  hsi_interpolation_options_default(&o);
+  hsi_interpolator* it = nullptr;
+  REQUIRE(hsi_interpolator_create(s, &o, &it) == HSI_OK);
+  hsi_sequence* seq = nullptr;
+  REQUIRE(hsi_interpolator_sequence(it, 5, nullptr, nullptr, &seq) == HSI_OK);
+  uint32_t not_converged = 0, within_certified = 0;
+  for (uint32_t f = 0; f < hsi_sequence_frame_count(seq); ++f) {
+    hsi_frame_report r{};
+    REQUIRE(hsi_sequence_frame_report(seq, f, &r) == HSI_OK);
+    REQUIRE(r.certified == 1);
+    not_converged += r.converged ? 0 : 1;
+    // The certificate bounds what the samples observe: σ1 and κ from above, σ2 from below.
+    CHECK(std::isfinite(r.certified_sigma1_max));
+    CHECK(r.certified_sigma1_max >= r.sigma1_max);
+    CHECK(r.certified_sigma2_min <= r.sigma2_min);
+    CHECK(r.certified_sigma2_min > 0);
+    CHECK(r.certified_conformal_max >= r.conformal_max);
+    CHECK(r.certified_isometric_max >= r.isometric_max);
+    CHECK(r.certified_bound_sigma1_max >= r.bound_sigma1_max);
+    CHECK(r.certified_bound_excess >= 0);
+    within_certified += r.certified_bound_excess == 0 ? 1 : 0;
+  }
+  hsi_sequence_summary sum{};
+  REQUIRE(hsi_sequence_summary_get(seq, &sum) == HSI_OK);
+  CHECK(sum.not_converged == not_converged);
+  CHECK(sum.within_certified_bounds == within_certified);
+  hsi_sequence_destroy(seq);
+
+  // A solve cut to one iteration stops unconverged: the frame says so and the summary counts it.
+  hsi_interpolator_destroy(it);
+  o.max_iterations = 1;
+  REQUIRE(hsi_interpolator_create(s, &o, &it) == HSI_OK);
+  REQUIRE(hsi_interpolator_sequence(it, 5, nullptr, nullptr, &seq) == HSI_OK);
+  REQUIRE(hsi_sequence_summary_get(seq, &sum) == HSI_OK);
+  CHECK(sum.not_converged > 0);
+  uint32_t flagged = 0;
+  for (uint32_t f = 0; f < hsi_sequence_frame_count(seq); ++f) {
+    hsi_frame_report r{};
+    REQUIRE(hsi_sequence_frame_report(seq, f, &r) == HSI_OK);
+    flagged += r.converged ? 0 : 1;
+    if (!r.certified) CHECK(std::isnan(r.certified_sigma1_max));
+  }
+  CHECK(sum.not_converged == flagged);
+  hsi_sequence_destroy(seq);
+  hsi_interpolator_destroy(it);
+  hsi_scene_destroy(s);
 }

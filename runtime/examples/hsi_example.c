@@ -29,8 +29,11 @@
 
 static int on_frame(uint32_t frame, uint32_t count, const hsi_frame_report* r, void* user) {
   (void)user;
-  printf("  frame %u/%u  t = %.4f  %d iterations  %s\n", frame + 1, count, r->t, r->iterations,
-         r->certified ? "certified" : "NOT CERTIFIED");
+  printf("  frame %u/%u  t = %.4f  %d iterations  %s%s%s", frame + 1, count, r->t, r->iterations,
+         r->certified ? "certified locally injective" : "NOT CERTIFIED", r->converged ? "" : ", NOT CONVERGED",
+         r->overlaps ? ", OVERLAPS ITSELF" : "");
+  /* Sampled distortion, and what the certificate proves (NaN when not certified). */
+  printf("  sigma1 %.4f sampled, <= %.4f certified\n", r->sigma1_max, r->certified_sigma1_max);
   return 0; /* non-zero would cancel */
 }
 
@@ -129,8 +132,9 @@ int main(int argc, char** argv) {
   CHECK(hsi_interpolator_sequence(interp, frames, on_frame, NULL, &seq));
   hsi_sequence_summary sum;
   CHECK(hsi_sequence_summary_get(seq, &sum));
-  printf("%u frames, %u certified, mean %.2f iterations, %.1f ms per frame\n", sum.frames, sum.certified, sum.mean_iterations,
-         sum.mean_ms);
+  printf("%u frames, %u certified locally injective, %u not converged, %u overlapping themselves, mean %.2f iterations, "
+         "%.1f ms per frame\n",
+         sum.frames, sum.certified, sum.not_converged, sum.overlapping, sum.mean_iterations, sum.mean_ms);
 
   /* Every frame's map at the handles. */
   double* handles = (double*)malloc(2 * (info.handle_count + 1) * sizeof(double));

@@ -131,6 +131,17 @@ hsi_frame_report to_report(const FrameResult& f) {
   r.bound_excess = f.bound_excess;
   r.overlaps = f.overlap.overlaps();
   r.crossings = f.overlap.crossings;
+  r.held = f.held;
+  // distortion_certified and certified_bound_excess are NaN for an uncertified frame.
+  r.certified_sigma1_max = f.distortion_certified.sigma1_max;
+  r.certified_sigma2_min = f.distortion_certified.sigma2_min;
+  r.certified_conformal_max = f.distortion_certified.conformal_max;
+  r.certified_isometric_max = f.distortion_certified.isometric_max;
+  r.certified_bound_sigma1_max = f.certified_bound.sigma1_max;
+  r.certified_bound_sigma2_min = f.certified_bound.sigma2_min;
+  r.certified_bound_conformal_max = f.certified_bound.conformal_max;
+  r.certified_bound_isometric_max = f.certified_bound.isometric_max;
+  r.certified_bound_excess = f.certified_bound_excess;
   return r;
 }
 
@@ -570,6 +581,9 @@ hsi_status hsi_sequence_summary_get(const hsi_sequence* s, hsi_sequence_summary*
     r.total_s = m.total_s;
     r.max_bound_excess = m.max_bound_excess;
     r.overlapping = static_cast<uint32_t>(m.overlapping);
+    r.not_converged = static_cast<uint32_t>(m.not_converged);
+    r.within_certified_bounds = static_cast<uint32_t>(m.within_certified_bounds);
+    r.max_certified_bound_excess = m.max_certified_bound_excess;
     *out = r;
   });
 }

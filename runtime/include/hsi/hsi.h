@@ -40,13 +40,15 @@ extern "C" {
 #endif
 
 #define HSI_VERSION_MAJOR 0
-#define HSI_VERSION_MINOR 2
+#define HSI_VERSION_MINOR 3
 #define HSI_VERSION_PATCH 0
 /* major * 10000 + minor * 100 + patch, comparable with hsi_version(). Before 1.0 the
  * minor version is the ABI: a struct that grows (0.2: hsi_interpolation_options gained
- * its backend) bumps it, and so the library's soname (libhsi.so.0.2). */
+ * its backend; 0.3: hsi_frame_report and hsi_sequence_summary gained the certified
+ * bounds and the frames that did not converge) bumps it, and so the library's soname
+ * (libhsi.so.0.3). */
 #define HSI_VERSION (HSI_VERSION_MAJOR * 10000 + HSI_VERSION_MINOR * 100 + HSI_VERSION_PATCH)
-#define HSI_VERSION_STRING "0.2.0"
+#define HSI_VERSION_STRING "0.3.0"
 
 typedef enum hsi_status {
   HSI_OK = 0,
@@ -218,13 +220,27 @@ typedef struct hsi_frame_report {
   int iterations;
   double energy;        /* mean isometric energy against the blended metric (2 = exact) */
   double ms;
-  double sigma1_max, sigma2_min, conformal_max, isometric_max; /* distortion over the shape */
-  double bound_sigma1_max, bound_sigma2_min, bound_conformal_max, bound_isometric_max; /* keyframes' envelope */
-  double bound_excess;  /* relative excess over the envelope (0 = within) */
+  /* Distortion SAMPLED at the certificate's breakpoints on the boundary (observed
+   * values, not bounds: a denser sampling can exceed them). */
+  double sigma1_max, sigma2_min, conformal_max, isometric_max;
+  double bound_sigma1_max, bound_sigma2_min, bound_conformal_max, bound_isometric_max; /* keyframes' envelope of the same */
+  double bound_excess;  /* relative excess of the sampled values over that envelope (0 = within) */
   /* The image of the shape's boundary crosses itself (the frame is locally injective
    * at most, not globally: two layers of the shape overlap), sampled at the boundary
    * breakpoints (README.md, section "Global overlap"); crossings: how many segment pairs. */
   int overlaps, crossings;
+  /* 0.3. held: t lies in a Hold interval and the frame is the held keyframe itself. */
+  int held;
+  /* CERTIFIED bounds over the whole shape, from the certificate: sigma1 and
+   * conformal (sigma1/sigma2) and isometric upper bounds, sigma2 a LOWER bound. NaN
+   * when the frame is not certified. */
+  double certified_sigma1_max, certified_sigma2_min, certified_conformal_max, certified_isometric_max;
+  /* The two neighbouring keyframes' envelope of their certified bounds, and the
+   * relative excess of this frame's certified bounds over it (0 = within; NaN when
+   * the frame is not certified). */
+  double certified_bound_sigma1_max, certified_bound_sigma2_min, certified_bound_conformal_max,
+      certified_bound_isometric_max;
+  double certified_bound_excess;
 } hsi_frame_report;
 
 /* Called after each frame; return non-zero to stop (HSI_ERROR_CANCELLED). */
@@ -243,9 +259,17 @@ HSI_API uint32_t hsi_sequence_frame_count(const hsi_sequence* sequence);
 HSI_API hsi_status hsi_sequence_frame_report(const hsi_sequence* sequence, uint32_t frame, hsi_frame_report* report);
 
 typedef struct hsi_sequence_summary {
+  /* within_bounds, max_bound_excess: SAMPLED distortion against the keyframes' sampled envelope */
   uint32_t frames, certified, uncertified, within_bounds;
   double mean_iterations, mean_ms, max_ms, total_s, max_bound_excess;
   uint32_t overlapping; /* frames that overlap themselves (hsi_frame_report.overlaps) */
+  /* 0.3. Frames whose solve stopped without meeting its tolerance (certified or not:
+   * hsi_frame_report.converged == 0); `hsi interpolate` exits 4 for these. */
+  uint32_t not_converged;
+  /* Certified frames whose certified bounds lie within the keyframes' certified
+   * envelope, and the largest certified excess (certified frames only). */
+  uint32_t within_certified_bounds;
+  double max_certified_bound_excess;
 } hsi_sequence_summary;
 /* [per handle, const] */
 HSI_API hsi_status hsi_sequence_summary_get(const hsi_sequence* sequence, hsi_sequence_summary* summary);
