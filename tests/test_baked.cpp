@@ -757,7 +757,7 @@ TEST_CASE("baked distortion matches the engine's singular values", "[baked][dist
     CHECK(pos == pos_plain);
   }
   INFO("largest error " << worst << " of sigma1");
-  CHECK(worst < 2e-5);
+  CHECK(worst < 5e-6);  // measured 1e-6
   CHECK(folds == 0);  // certified frames: locally injective on the shape, and these points are in it or on its outline
   // Strides and ranges: sigma of vertices [10, 30) at 16 bytes apart.
   std::vector<float> strided(4 * 20, -7.0f);
@@ -824,10 +824,10 @@ TEST_CASE("baked blend distortion is the singular values of the blended Jacobian
       sigma_blend_gap = std::max(sigma_blend_gap, std::abs((1 - s) * s0[2 * i] + s * s1[2 * i] - want1) / want1);
     }
     INFO("J " << worst_J << ", SVD " << worst_svd << ", engine " << worst_engine << ", blend of sigma off by " << sigma_blend_gap);
-    CHECK(worst_J < 1e-5);
-    CHECK(worst_svd < 2e-5);
-    CHECK(worst_engine < 2e-5);
-    CHECK(sigma_blend_gap > 100 * 2e-5);  // the test tells the two apart
+    CHECK(worst_J < 5e-6);  // measured about 8e-7 for all three
+    CHECK(worst_svd < 5e-6);
+    CHECK(worst_engine < 5e-6);
+    CHECK(sigma_blend_gap > 1000 * 5e-6);  // the test tells the two apart (measured 0.03)
   }
   float J[4] = {0, 2, -2, 0}, sv[2];  // a rotation by 90° scaled by 2: f_z = 2i, f_zbar = 0
   hsib_singular_values(J, sv);
