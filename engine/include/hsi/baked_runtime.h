@@ -120,8 +120,9 @@
  * (sigma2 <= 0: the map folds or flips orientation at that vertex). hsi's distortion
  * measures follow from them: conformal sigma1/sigma2 and isometric (symmetric
  * Dirichlet) (sigma1^2 + sigma1^-2 + sigma2^2 + sigma2^-2)/2, both for sigma2 > 0.
- * These are SAMPLED values, the map's own at the bound vertices (float arithmetic,
- * about 1e-5 relative), not the certificate's bounds: between vertices, and for a
+ * These are SAMPLED values, the map's own at the bound vertices (float arithmetic:
+ * about 1e-6 of sigma1 on hsi's tests, more near the cage, where the rows are large
+ * and cancel), not the certificate's bounds: between vertices, and for a
  * blend between certified sub-steps, nothing is proved. A blend blends J linearly, as
  * it blends positions, and its sigma is that of the blended J (not the blend of the
  * two frames' sigma). A clamped vertex (HSIB_OUTSIDE_CLAMP) reports the Jacobian at
@@ -144,8 +145,9 @@
  * hsib_basis_row_derivatives, hsib_blend_weights and hsib_gpu_uniforms take scratch
  * from the hooks.
  *
- * ABI: everything since hsi 0.2.0 is additive (new functions and macros; no struct
- * changed), so a program built against an older header runs unchanged.
+ * ABI: the distortion calls (hsib_bind_flags and after) were added without changing
+ * any struct or existing function, so a program built against a header without them
+ * runs unchanged; one that calls them needs a library that has them.
  */
 #ifndef HSI_BAKED_RUNTIME_H
 #define HSI_BAKED_RUNTIME_H
