@@ -6,6 +6,8 @@
 // device time (timestamps) and its wall time with the uniform upload, submit and wait.
 // The CPU path would also upload N x V x 8 bytes of positions per frame; the GPU path
 // uploads 16 x (R + 2) bytes of uniforms. Prints a table with the ratios.
+// --distortion: both paths also compute every vertex's singular values (sigma1, sigma2,
+// from derivative rows: hsib_evaluate_blend_distortion, hsib_singular_values in GLSL).
 #include "hsi/stopwatch.h"
 #include <CLI/CLI.hpp>
 #include <algorithm>
@@ -43,11 +45,13 @@ int main(int argc, char** argv) {
   CLI::App app{"GPU playback of .hsib (Vulkan) vs the CPU runtime: N instances of a V-vertex sprite"};
   std::string scene_path = std::string(HSI_ASSETS_DIR) + "/bar_holes.json";
   int vertices = 10000, repeats = 9;
+  bool distortion = false;
   std::vector<int> instance_counts{1, 100, 1000};
   app.add_option("--scene", scene_path, "Scene file")->capture_default_str();
   app.add_option("--vertices", vertices, "Sprite mesh size (approximate vertex count)")->capture_default_str();
   app.add_option("--instances", instance_counts, "Instance counts (one table row each)");
   app.add_option("--repeats", repeats, "Timed runs per measurement (the median is shown)")->capture_default_str();
+  app.add_flag("--distortion", distortion, "Also compute sigma1, sigma2 per vertex (derivative rows) on both paths");
   CLI11_PARSE(app, argc, argv);
 
   bench::Loaded L = bench::load(scene_path, 2000, 0.2);
@@ -74,7 +78,7 @@ int main(int argc, char** argv) {
   }
   const size_t P = mesh.vertices.size();
   hsib_binding* b = nullptr;
-  if (hsib_bind(seq, rest.data(), P, 0, &b, error, sizeof error) != HSIB_OK) {
+  if (hsib_bind_flags(seq, rest.data(), P, 0, nullptr, distortion ? HSIB_BIND_DERIVATIVES : 0u, &b, error, sizeof error) != HSIB_OK) {
     std::fprintf(stderr, "bench_hsib_gpu: %s\n", error);
     return 1;
   }
@@ -89,24 +93,28 @@ int main(int argc, char** argv) {
     compute::Context ctx(co);
     std::printf("scene %s: sprite of %zu vertices, row length R = %u; device %s (%s); CPU %d threads\n", L.name.c_str(), P,
                 info.row_length, ctx.info().name.c_str(), ctx.info().type_name().c_str(), threads);
-    std::printf("every instance shows the blend of frames %u and %u at s = %.1f; median of %d runs\n\n", blend.frame0, blend.frame1,
-                static_cast<double>(blend.s), repeats);
+    std::printf("every instance shows the blend of frames %u and %u at s = %.1f%s; median of %d runs\n\n", blend.frame0, blend.frame1,
+                static_cast<double>(blend.s), distortion ? ", positions and sigma1, sigma2" : "", repeats);
     std::printf("| instances | vertices | CPU 1 thread ms | CPU %d threads ms | GPU pass ms (device) | GPU ms (wall: uniforms, submit, wait) "
                 "| CPU 1 thread / GPU device | CPU %d threads / GPU device | CPU %d threads / GPU wall | upload per frame CPU path / GPU path |\n",
                 threads, threads, threads);
     std::printf("|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n");
     for (const int n : instance_counts) {
-      std::vector<float> out(2 * P * static_cast<size_t>(n));
+      std::vector<float> out(2 * P * static_cast<size_t>(n)), sigma(distortion ? out.size() : 0);
+      const auto instance = [&](int i) {
+        hsib_evaluate_blend(b, &blend, out.data() + 2 * P * static_cast<size_t>(i), 0);
+        if (distortion) hsib_evaluate_blend_distortion(b, &blend, sigma.data() + 2 * P * static_cast<size_t>(i), 0);
+      };
       omp_set_num_threads(1);
       const double cpu1 = median_ms(std::max(1, repeats / 3), [&] {
-        for (int i = 0; i < n; ++i) hsib_evaluate_blend(b, &blend, out.data() + 2 * P * static_cast<size_t>(i), 0);
+        for (int i = 0; i < n; ++i) instance(i);
       });
       omp_set_num_threads(threads);
       const double cpuN = median_ms(repeats, [&] {
 #pragma omp parallel for schedule(static)
-        for (int i = 0; i < n; ++i) hsib_evaluate_blend(b, &blend, out.data() + 2 * P * static_cast<size_t>(i), 0);
+        for (int i = 0; i < n; ++i) instance(i);
       });
-      compute::HsibPlayback gpu(ctx, b, static_cast<uint32_t>(n), compute::MemoryUse::kDeviceLocal);
+      compute::HsibPlayback gpu(ctx, b, static_cast<uint32_t>(n), compute::MemoryUse::kDeviceLocal, distortion);
       std::vector<double> device;
       const double wall = median_ms(repeats, [&] {
         gpu.set_blend(blend);
@@ -115,7 +123,7 @@ int main(int argc, char** argv) {
       device.erase(device.begin());  // the warm-up run
       std::sort(device.begin(), device.end());
       const double dev = device[device.size() / 2];
-      const double cpu_upload = 8.0 * static_cast<double>(P) * n, gpu_upload = 16.0 * (info.row_length + 2);
+      const double cpu_upload = (distortion ? 16.0 : 8.0) * static_cast<double>(P) * n, gpu_upload = 16.0 * (info.row_length + 2);
       std::printf("| %d | %zu | %.3f | %.3f | %.4f | %.4f | %.2fx | %.2fx | %.2fx | %.0f KB / %.1f KB |\n", n, P * static_cast<size_t>(n), cpu1,
                   cpuN, dev, wall, cpu1 / dev, cpuN / dev, cpuN / wall, cpu_upload / 1024, gpu_upload / 1024);
     }

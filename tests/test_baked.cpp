@@ -1,6 +1,8 @@
 // Baked playback (.hsib, hsi/baked.h + the C runtime hsi/baked_runtime.h): the
 // runtime reproduces direct evaluation of every frame at any rest vertices; damaged
 // files give clear errors.
+#include <Eigen/SVD>
+#include <array>
 #include <catch2/catch.hpp>
 #include <cstring>
 #include <fstream>
@@ -627,4 +629,213 @@ TEST_CASE("baked sequences and bindings live in caller-provided memory", "[baked
   REQUIRE(hsib_evaluate(ba, 1, out_a.data(), 0) == HSIB_OK);
   CHECK(out == out_a);
   hsib_unbind(ba);
+}
+
+// ---------------------------------------------------------------- distortion (issue #25)
+
+namespace {
+
+// hsi's singular values of a map at points, from the engine's own basis (in double):
+// sigma1 = |f_z| + |f_zbar|, sigma2 = |f_z| − |f_zbar|.
+std::vector<std::array<double, 2>> engine_sigmas(const Cage& cage, const std::vector<cd>& pts, const HarmonicMap& map) {
+  const MapValues v = evaluate_map(evaluate_basis(cage, pts, kBasisD), map);
+  std::vector<std::array<double, 2>> out;
+  for (Eigen::Index i = 0; i < v.f_z.size(); ++i) {
+    const double a = std::abs(v.f_z(i)), b = std::abs(v.fzbar_conj(i));
+    out.push_back({a + b, a - b});
+  }
+  return out;
+}
+
+// The row sources of a baked file (the static section after the cage and hole points,
+// as hsi/baked_runtime.h lays it out), so that a test can name each row's function.
+std::vector<uint32_t> row_sources(const std::string& bytes, const hsib_info& info) {
+  const size_t header = info.version == 1 ? HSIB_HEADER_SIZE_V1 : HSIB_HEADER_SIZE;
+  const size_t at = header + 4ull * info.loop_count + 16ull * info.cage_vertex_count + 16ull * info.hole_count;
+  std::vector<uint32_t> src(info.row_length);
+  std::memcpy(src.data(), bytes.data() + at, 4ull * info.row_length);
+  return src;
+}
+
+BakeOptions exact_bake() {
+  BakeOptions o;
+  o.single_precision = false;  // the engine's coefficients exactly: the comparisons below see the runtime's own error only
+  o.blend_substeps = 0;
+  return o;
+}
+
+}  // namespace
+
+TEST_CASE("baked derivative rows are the derivatives of the basis rows", "[baked][distortion]") {
+  BakedFixture& F = fixture();
+  const ShapeSetup& setup = *F.seq.setup;
+  const std::string bytes = encode_baked(setup.shape, F.seq.frame_file(), exact_bake());
+  Sequence S(bytes);
+  REQUIRE(S.status == HSIB_OK);
+  hsib_info info;
+  hsib_get_info(S.s, &info);
+  const uint32_t R = info.row_length;
+  const std::vector<uint32_t> src = row_sources(bytes, info);
+  const int m = setup.cage.vertex_count();
+  const std::vector<cd> pts = rest_vertices(setup, 200);
+  const BasisRows engine = evaluate_basis(setup.cage, pts, kBasisD);
+  std::vector<float> row(R), dx(R), dy(R), rp(R), rm(R);
+  // Central differences of the runtime's own (float) rows: h is large enough that the
+  // rows' rounding (about 1e-7 of a row) stays far below the tolerance, small enough
+  // that the truncation error h²/6 f''' does too.
+  const double h = 3e-4 * setup.size;
+  double worst_fd = 0, worst_engine = 0;
+  for (size_t i = 0; i < pts.size(); ++i) {
+    const double x = pts[i].real(), y = pts[i].imag();
+    REQUIRE(hsib_basis_row_derivatives(S.s, x, y, row.data(), dx.data(), dy.data()) == HSIB_OK);
+    std::vector<float> plain(R);
+    REQUIRE(hsib_basis_row(S.s, x, y, plain.data()) == HSIB_OK);
+    CHECK(plain == row);
+    double scale = 1.0 / setup.size;  // derivatives are 1/length
+    for (uint32_t r = 0; r < R; ++r) scale = std::max(scale, std::max(std::abs(double(dx[r])), std::abs(double(dy[r]))));
+    for (int axis = 0; axis < 2; ++axis) {
+      const double ex = axis == 0 ? h : 0, ey = axis == 0 ? 0 : h;
+      if (hsib_basis_row(S.s, x + ex, y + ey, rp.data()) != HSIB_OK || hsib_basis_row(S.s, x - ex, y - ey, rm.data()) != HSIB_OK)
+        continue;  // a margin point within h of the cage
+      for (uint32_t r = 0; r < R; ++r) {
+        const double fd = (double(rp[r]) - double(rm[r])) / (2 * h);
+        const double got = axis == 0 ? dx[r] : dy[r];
+        worst_fd = std::max(worst_fd, std::abs(got - fd) / scale);
+      }
+    }
+    // Against the engine's closed-form C' (basis.cpp's D), through the row sources:
+    // Re C: (Re D, −Im D); Im C: (Im D, Re D); log|w − ρ|: D = 1/(w − ρ), (Re D, −Im D).
+    for (uint32_t r = 0; r < R; ++r) {
+      const uint32_t part = src[r] & 3u, col = src[r] >> 2;
+      const cd D = engine.D(static_cast<Eigen::Index>(i), part == 2u ? m + static_cast<int>(col) : static_cast<int>(col));
+      const double want_x = part == 1u ? D.imag() : D.real(), want_y = part == 1u ? D.real() : -D.imag();
+      worst_engine = std::max(worst_engine, std::max(std::abs(dx[r] - want_x), std::abs(dy[r] - want_y)) / scale);
+    }
+  }
+  INFO("finite differences: largest error " << worst_fd << ", engine's C': " << worst_engine << " (relative to the row's largest derivative)");
+  CHECK(worst_fd < 1e-3);
+  CHECK(worst_engine < 1e-6);  // the same closed form, rounded to float once
+  CHECK(hsib_basis_row_derivatives(S.s, 1e9, 0, row.data(), dx.data(), dy.data()) == HSIB_ERROR_DOMAIN);
+  CHECK(hsib_basis_row_derivatives(S.s, 0, 0, row.data(), nullptr, dy.data()) == HSIB_ERROR_ARGUMENT);
+}
+
+TEST_CASE("baked distortion matches the engine's singular values", "[baked][distortion]") {
+  BakedFixture& F = fixture();
+  const ShapeSetup& setup = *F.seq.setup;
+  Sequence S(encode_baked(setup.shape, F.seq.frame_file(), exact_bake()));
+  REQUIRE(S.status == HSIB_OK);
+  hsib_info info;
+  hsib_get_info(S.s, &info);
+  const std::vector<cd> pts = rest_vertices(setup, 2000);
+  const std::vector<float> xy = packed(pts);
+  hsib_binding* b = nullptr;
+  hsib_binding* plain = nullptr;
+  char error[256];
+  REQUIRE(hsib_bind_flags(S.s, xy.data(), pts.size(), 0, nullptr, HSIB_BIND_DERIVATIVES, &b, error, sizeof error) == HSIB_OK);
+  REQUIRE(hsib_bind(S.s, xy.data(), pts.size(), 0, &plain, error, sizeof error) == HSIB_OK);
+  CHECK(hsib_binding_flags(b) == HSIB_BIND_DERIVATIVES);
+  CHECK(hsib_binding_flags(plain) == 0u);
+  // Opt in: a plain binding costs what it did; one with derivatives three times the rows.
+  CHECK(hsib_binding_bytes(plain) == hsib_binding_memory_size(S.s, pts.size()));
+  CHECK(hsib_binding_bytes(b) == hsib_binding_memory_size_flags(S.s, pts.size(), HSIB_BIND_DERIVATIVES));
+  CHECK(hsib_binding_bytes(b) - hsib_binding_bytes(plain) == 2 * (hsib_binding_bytes(plain) - hsib_binding_memory_size(S.s, 0)));
+  std::vector<float> sigma(pts.size() * 2), pos(xy.size()), pos_plain(xy.size());
+  double worst = 0, folds = 0;
+  for (uint32_t f = 0; f < info.frame_count; ++f) {
+    const FrameResult& fr = F.seq.frames[f];
+    REQUIRE(hsib_evaluate_distortion(b, f, sigma.data(), 0) == HSIB_OK);
+    const auto want = engine_sigmas(setup.cage, pts, fr.map);
+    for (size_t i = 0; i < pts.size(); ++i) {
+      // float arithmetic over R products: relative to the Jacobian's size, sigma1
+      const double rel = std::max(std::abs(sigma[2 * i] - want[i][0]), std::abs(sigma[2 * i + 1] - want[i][1])) / want[i][0];
+      worst = std::max(worst, rel);
+      folds += sigma[2 * i + 1] <= 0;
+    }
+    // The positions of a binding with derivatives are the plain binding's, bit for bit.
+    REQUIRE(hsib_evaluate(b, f, pos.data(), 0) == HSIB_OK);
+    REQUIRE(hsib_evaluate(plain, f, pos_plain.data(), 0) == HSIB_OK);
+    CHECK(pos == pos_plain);
+  }
+  INFO("largest error " << worst << " of sigma1");
+  CHECK(worst < 5e-6);  // measured 1e-6
+  CHECK(folds == 0);  // certified frames: locally injective on the shape, and these points are in it or on its outline
+  // Strides and ranges: sigma of vertices [10, 30) at 16 bytes apart.
+  std::vector<float> strided(4 * 20, -7.0f);
+  const hsib_blend one{2, 2, 0.0f, 0};
+  REQUIRE(hsib_evaluate_blend_distortion_range(b, &one, 10, 20, strided.data(), 16) == HSIB_OK);
+  REQUIRE(hsib_evaluate_distortion(b, 2, sigma.data(), 0) == HSIB_OK);
+  for (size_t i = 0; i < 20; ++i) {
+    CHECK(strided[4 * i] == sigma[2 * (10 + i)]);
+    CHECK(strided[4 * i + 1] == sigma[2 * (10 + i) + 1]);
+    CHECK(strided[4 * i + 2] == -7.0f);
+  }
+  // Refusals: no derivative rows, a range past the end, unknown flags.
+  CHECK(hsib_evaluate_distortion(plain, 0, sigma.data(), 0) == HSIB_ERROR_ARGUMENT);
+  CHECK(hsib_gpu_derivative_rows_floats(plain, 8) == 0);
+  CHECK(hsib_gpu_derivative_rows(plain, 8, sigma.data()) == HSIB_ERROR_ARGUMENT);
+  CHECK(hsib_evaluate_blend_distortion_range(b, &one, pts.size() - 1, 2, sigma.data(), 0) == HSIB_ERROR_ARGUMENT);
+  CHECK(hsib_evaluate_distortion(b, info.frame_count, sigma.data(), 0) == HSIB_ERROR_ARGUMENT);
+  hsib_binding* bad = nullptr;
+  CHECK(hsib_bind_flags(S.s, xy.data(), pts.size(), 0, nullptr, 6u, &bad, error, sizeof error) == HSIB_ERROR_ARGUMENT);
+  CHECK_THAT(error, Contains("unknown flags 0x6"));
+  CHECK(bad == nullptr);
+  CHECK(hsib_binding_memory_size_flags(S.s, 10, 2u) == 0);
+  hsib_unbind(plain);
+  hsib_unbind(b);
+}
+
+TEST_CASE("baked blend distortion is the singular values of the blended Jacobian", "[baked][distortion][blend]") {
+  BakedFixture& F = fixture();
+  const ShapeSetup& setup = *F.seq.setup;
+  const FrameFile ff = F.seq.frame_file();
+  Sequence S(encode_baked(setup.shape, ff, exact_bake()));
+  REQUIRE(S.status == HSIB_OK);
+  const std::vector<cd> pts = rest_vertices(setup, 1000);
+  const std::vector<float> xy = packed(pts);
+  hsib_binding* b = nullptr;
+  REQUIRE(hsib_bind_flags(S.s, xy.data(), pts.size(), 0, nullptr, HSIB_BIND_DERIVATIVES, &b, nullptr, 0) == HSIB_OK);
+  const size_t n = pts.size();
+  for (const hsib_blend blend : {hsib_blend{1, 2, 0.37f, 0}, hsib_blend{0, 4, 0.5f, 0}}) {
+    INFO("frames " << blend.frame0 << ", " << blend.frame1 << " at s = " << blend.s);
+    const double s = blend.s;
+    std::vector<float> J0(4 * n), J1(4 * n), Jb(4 * n), sigma(2 * n), s0(2 * n), s1(2 * n);
+    const hsib_blend f0{blend.frame0, blend.frame0, 0.0f, 0}, f1{blend.frame1, blend.frame1, 0.0f, 0};
+    REQUIRE(hsib_evaluate_jacobian_range(b, &f0, 0, n, J0.data(), 0) == HSIB_OK);
+    REQUIRE(hsib_evaluate_jacobian_range(b, &f1, 0, n, J1.data(), 0) == HSIB_OK);
+    REQUIRE(hsib_evaluate_jacobian_range(b, &blend, 0, n, Jb.data(), 0) == HSIB_OK);
+    REQUIRE(hsib_evaluate_blend_distortion(b, &blend, sigma.data(), 0) == HSIB_OK);
+    REQUIRE(hsib_evaluate_distortion(b, blend.frame0, s0.data(), 0) == HSIB_OK);
+    REQUIRE(hsib_evaluate_distortion(b, blend.frame1, s1.data(), 0) == HSIB_OK);
+    const auto engine = engine_sigmas(setup.cage, pts, blend_of(ff.frames[blend.frame0].map, ff.frames[blend.frame1].map, s));
+    double worst_J = 0, worst_svd = 0, worst_engine = 0, sigma_blend_gap = 0;
+    for (size_t i = 0; i < n; ++i) {
+      // J of the blend = the blend of the Jacobians (as positions blend).
+      Eigen::Matrix2d J;
+      for (int k = 0; k < 4; ++k) J(k % 2, k / 2) = (1 - s) * J0[4 * i + k] + s * J1[4 * i + k];  // column-major: (a, c, b, d)
+      for (int k = 0; k < 4; ++k) worst_J = std::max(worst_J, std::abs(Jb[4 * i + k] - J(k % 2, k / 2)) / J.norm());
+      // Its sigma: the SVD of the blended J, sigma2 signed by the orientation (det J).
+      const Eigen::Vector2d sv = Eigen::JacobiSVD<Eigen::Matrix2d>(J).singularValues();
+      const double det = J(0, 0) * J(1, 1) - J(0, 1) * J(1, 0);
+      const double want1 = sv(0), want2 = (det < 0 ? -1.0 : 1.0) * sv(1);
+      worst_svd = std::max(worst_svd, std::max(std::abs(sigma[2 * i] - want1), std::abs(sigma[2 * i + 1] - want2)) / want1);
+      worst_engine = std::max(worst_engine, std::max(std::abs(sigma[2 * i] - engine[i][0]), std::abs(sigma[2 * i + 1] - engine[i][1])) /
+                                                engine[i][0]);
+      // Not the blend of the two frames' sigma (the measure that would be wrong here).
+      sigma_blend_gap = std::max(sigma_blend_gap, std::abs((1 - s) * s0[2 * i] + s * s1[2 * i] - want1) / want1);
+    }
+    INFO("J " << worst_J << ", SVD " << worst_svd << ", engine " << worst_engine << ", blend of sigma off by " << sigma_blend_gap);
+    CHECK(worst_J < 5e-6);  // measured about 8e-7 for all three
+    CHECK(worst_svd < 5e-6);
+    CHECK(worst_engine < 5e-6);
+    CHECK(sigma_blend_gap > 1000 * 5e-6);  // the test tells the two apart (measured 0.03)
+  }
+  float J[4] = {0, 2, -2, 0}, sv[2];  // a rotation by 90° scaled by 2: f_z = 2i, f_zbar = 0
+  hsib_singular_values(J, sv);
+  CHECK(sv[0] == 2.0f);
+  CHECK(sv[1] == 2.0f);
+  const float flip[4] = {1, 0, 0, -3};  // a reflection: |f_zbar| > |f_z|
+  hsib_singular_values(flip, sv);
+  CHECK(sv[0] == 3.0f);
+  CHECK(sv[1] == -1.0f);
+  hsib_unbind(b);
 }

@@ -14,7 +14,7 @@ uint32_t hsib_web_mesh_triangle_count(const hsib_sequence* s);
 const float* hsib_web_mesh_xy(const hsib_sequence* s);
 const float* hsib_web_mesh_uv(const hsib_sequence* s);
 const uint32_t* hsib_web_mesh_triangles(const hsib_sequence* s);
-hsib_binding* hsib_web_bind(const hsib_sequence* s, const float* xy, uint32_t count);
+hsib_binding* hsib_web_bind(const hsib_sequence* s, const float* xy, uint32_t count, uint32_t flags);
 void hsib_web_blend_at_time(const hsib_sequence* s, double t, int mode, hsib_blend* out);
 
 /* NULL on failure, with the runtime's message on the console. */
@@ -57,10 +57,11 @@ const float* hsib_web_mesh_xy(const hsib_sequence* s) { return mesh_of(s).xy; }
 const float* hsib_web_mesh_uv(const hsib_sequence* s) { return mesh_of(s).uv; }
 const uint32_t* hsib_web_mesh_triangles(const hsib_sequence* s) { return mesh_of(s).triangles; }
 
-hsib_binding* hsib_web_bind(const hsib_sequence* s, const float* xy, uint32_t count) {
+/* flags: hsib_bind_flags's (HSIB_BIND_DERIVATIVES = 1 for the distortion colouring). */
+hsib_binding* hsib_web_bind(const hsib_sequence* s, const float* xy, uint32_t count, uint32_t flags) {
   hsib_binding* b = NULL;
   char error[256];
-  if (hsib_bind(s, xy, count, 0, &b, error, sizeof error) != HSIB_OK) {
+  if (hsib_bind_flags(s, xy, count, 0, NULL, flags, &b, error, sizeof error) != HSIB_OK) {
     fprintf(stderr, "hsib: %s\n", error);
     return NULL;
   }

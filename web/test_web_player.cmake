@@ -2,7 +2,8 @@
 # Interpolates a bundled scene, bakes the frames (hsi bake --from), renders three of
 # them with hsi render, stages the player (build/web: hsib.js/.wasm, player.*, the
 # GLSL) with three.js, the .hsib and the texture, and runs web/web_player_check.py
-# (HTTP server, Chromium screenshots, comparison; its tolerance is stated there).
+# (HTTP server, Chromium screenshots, comparison; its tolerance is stated there),
+# then again with the distortion colouring.
 # Skips when emcc, chromium, python3 or three.js is missing, unless HSI_REQUIRE_WEB=1.
 # -D: HSI_CLI, HSI_SCENE, HSI_WEB_DIR, HSI_THREE, HSI_CHROMIUM, HSI_PYTHON, HSI_EMCC, HSI_COMPARE, HSI_WORK_DIR
 cmake_minimum_required(VERSION 3.20)
@@ -50,3 +51,5 @@ string(JSON texture GET "${scene_json}" texture)
 get_filename_component(scene_dir ${HSI_SCENE} DIRECTORY)
 file(COPY_FILE ${scene_dir}/${texture} ${HSI_WORK_DIR}/site/texture.png)
 run(${HSI_PYTHON} ${HSI_COMPARE} ${HSI_CHROMIUM} ${HSI_WORK_DIR}/site ${HSI_WORK_DIR}/render ${W} ${H} 0 2 4)
+# The distortion colouring (&distortion=LO,HI: derivative rows, hsib_singular_values in WebGL2).
+run(${HSI_PYTHON} ${HSI_COMPARE} ${HSI_CHROMIUM} ${HSI_WORK_DIR}/site ${HSI_WORK_DIR}/render ${W} ${H} --distortion 1,1.5 0 2 4)

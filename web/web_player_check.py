@@ -13,8 +13,18 @@ over the pixels both cover, the mean absolute difference per channel is <= 4/255
 Both draw the same triangulation with the same texture; they differ in antialiasing
 and texture filtering only.
 
-usage: web_player_check.py CHROMIUM SITE RENDER WIDTH HEIGHT FRAME [FRAME ...]
+With --distortion LO,HI the player colours the shape by sigma1/sigma2 at the vertices
+(&distortion=LO,HI): the coverage must still match hsi render's plain picture (IoU >=
+0.98), and every pixel both cover must be that picture's colour under the colour map
+at the player's opacity, 0.15 * render + 0.85 * viridis(t) for some t (the map's
+coefficients read from SITE/render_shade.glsl, the one source of it), to a mean of
+<= 8/255; and the colours must not be the plain texture (mean difference > 20/255).
+This checks that the WebGL2 path draws the distortion through the map; the values of
+sigma themselves are checked against the C runtime by the [hsib_gpu] tests.
+
+usage: web_player_check.py CHROMIUM SITE RENDER WIDTH HEIGHT [--distortion LO,HI] FRAME [FRAME ...]
 """
+import re
 import functools
 import http.server
 import os
@@ -99,9 +109,45 @@ def compare(a, b):
     return inter / max(union, 1), diff_sum / max(diff_n, 1), union
 
 
+def viridis_samples(site, n=64):
+    """The colour map of shaders/render_shade.glsl (staged as SITE/render_shade.glsl), n samples in 0..255."""
+    text = open(os.path.join(site, "render_shade.glsl")).read()
+    c = [tuple(float(v) for v in m.split(",")) for m in re.findall(r"const vec3 c\d = vec3\(([^)]*)\);", text)]
+    assert len(c) == 7, "render_shade.glsl: the colour map's seven coefficients were not found"
+    out = []
+    for i in range(n):
+        t = i / (n - 1)
+        rgb = []
+        for k in range(3):
+            v = 0.0
+            for j in reversed(range(7)):
+                v = v * t + c[j][k]
+            rgb.append(255 * min(max(v, 0.0), 1.0))
+        out.append(tuple(rgb))
+    return out
+
+
+def colour_map_distance(shot, plain, samples):
+    """Mean over pixels both cover of min_t |shot - (0.15 plain + 0.85 viridis(t))| per channel."""
+    (w, h, A), (_, _, B) = shot, plain
+    total = n = 0
+    for y in range(h):
+        for x in range(w):
+            pa, pb = A[y][x], B[y][x]
+            if max(255 - v for v in pa) > 24 and max(255 - v for v in pb) > 24:
+                total += min(sum(abs(pa[k] - (0.15 * pb[k] + 0.85 * s[k])) for k in range(3)) for s in samples) / 3
+                n += 1
+    return total / max(n, 1)
+
+
 def main():
     chromium, site, render, width, height = sys.argv[1], sys.argv[2], sys.argv[3], int(sys.argv[4]), int(sys.argv[5])
-    frames = [int(f) for f in sys.argv[6:]]
+    rest = sys.argv[6:]
+    distortion = None
+    if rest and rest[0] == "--distortion":
+        distortion, rest = rest[1], rest[2:]
+    frames = [int(f) for f in rest]
+    samples = viridis_samples(site) if distortion else None
     times = frame_times(os.path.join(site, "seq.hsib"))
     class Quiet(http.server.SimpleHTTPRequestHandler):
         def log_message(self, *args):
@@ -114,9 +160,9 @@ def main():
     failed = False
     try:
         for f in frames:
-            shot = os.path.join(site, f"browser_{f:04d}.png")
+            shot = os.path.join(site, f"browser_{'distortion_' if distortion else ''}{f:04d}.png")
             url = (f"http://127.0.0.1:{port}/player.html?hsib=seq.hsib&texture=texture.png&w={width}&h={height}"
-                   f"&t={times[f]!r}&view_frames={','.join(map(str, frames))}")
+                   f"&t={times[f]!r}&view_frames={','.join(map(str, frames))}" + (f"&distortion={distortion}" if distortion else ""))
             with tempfile.TemporaryDirectory() as profile:
                 cmd = [chromium, "--headless=new", "--no-sandbox", "--no-first-run", f"--user-data-dir={profile}",
                        "--use-angle=swiftshader", "--enable-unsafe-swiftshader", "--ignore-gpu-blocklist", "--hide-scrollbars",
@@ -128,10 +174,18 @@ def main():
                 failed = True
                 continue
             want = os.path.join(render, f"frame_{f:04d}.png")
-            iou, mad, covered = compare(read_png(shot), read_png(want))
-            ok = iou >= 0.98 and mad <= 4 and covered > 0.05 * width * height
-            print(f"frame {f} (t = {times[f]:.4f}): coverage IoU {iou:.4f} (>= 0.98), mean abs difference {mad:.2f}/255 (<= 4), "
-                  f"{covered} pixels covered: {'ok' if ok else 'FAILED'}  [{shot} vs {want}]")
+            got, plain = read_png(shot), read_png(want)
+            iou, mad, covered = compare(got, plain)
+            if distortion:
+                off_map = colour_map_distance(got, plain, samples)
+                ok = iou >= 0.98 and off_map <= 8 and mad > 20 and covered > 0.05 * width * height
+                print(f"frame {f} (t = {times[f]:.4f}), distortion {distortion}: coverage IoU {iou:.4f} (>= 0.98), off the colour "
+                      f"map by {off_map:.2f}/255 (<= 8), {mad:.1f}/255 from the plain texture (> 20), {covered} pixels covered: "
+                      f"{'ok' if ok else 'FAILED'}  [{shot} vs {want}]")
+            else:
+                ok = iou >= 0.98 and mad <= 4 and covered > 0.05 * width * height
+                print(f"frame {f} (t = {times[f]:.4f}): coverage IoU {iou:.4f} (>= 0.98), mean abs difference {mad:.2f}/255 (<= 4), "
+                      f"{covered} pixels covered: {'ok' if ok else 'FAILED'}  [{shot} vs {want}]")
             failed = failed or not ok
     finally:
         server.shutdown()

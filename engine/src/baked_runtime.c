@@ -611,8 +611,11 @@ hsib_status hsib_frame_weights(const hsib_sequence* s, uint32_t frame, float* we
 
 /* Cauchy coordinates of every cage vertex at w (the formula in hsi/baked_runtime.h; engine/src/basis.cpp is
  * the reference): C_j = 1/(2πi) [B_{j+1}/A_{j+1} log(B_{j+1}/B_j) − B_{j−1}/A_j log(B_j/B_{j−1})],
- * written out in real arithmetic. C has 2m doubles (re, im). */
-static void hsib__cauchy_coordinates(const hsib_sequence* s, double wx, double wy, double* C, double* scratch) {
+ * written out in real arithmetic. C has 2m doubles (re, im). When D is not NULL it
+ * gets (2m doubles) the derivatives C_j'(w) = 1/(2πi) [L_{j−1}/A_j − L_j/A_{j+1}],
+ * L_j = log(B_{j+1}/B_j) (basis.cpp's D): the B_{j±1} factors cancel against
+ * d/dw L = 1/B_j − 1/B_{j+1}, which leaves only the logs. */
+static void hsib__cauchy_coordinates(const hsib_sequence* s, double wx, double wy, double* C, double* D, double* scratch) {
   const double* z = s->cage;
   uint32_t off = 0;
   for (uint32_t l = 0; l < s->info.loop_count; ++l) {
@@ -645,6 +648,13 @@ static void hsib__cauchy_coordinates(const hsib_sequence* s, double wx, double w
       /* divide by 2πi: (dr + i di) / (2π i) = (di − i dr) / (2π) */
       C[2 * (off + j)] = di / (2 * HSIB_PI);
       C[2 * (off + j) + 1] = -dr / (2 * HSIB_PI);
+      if (D) {
+        /* e0 = L_{j−1}/A_j, e1 = L_j/A_{j+1} (L conj(A) / |A|²) */
+        const double e0r = (Lg[2 * jm] * A0r + Lg[2 * jm + 1] * A0i) / n0, e0i = (Lg[2 * jm + 1] * A0r - Lg[2 * jm] * A0i) / n0;
+        const double e1r = (Lg[2 * j] * A1r + Lg[2 * j + 1] * A1i) / n1, e1i = (Lg[2 * j + 1] * A1r - Lg[2 * j] * A1i) / n1;
+        D[2 * (off + j)] = (e0i - e1i) / (2 * HSIB_PI);
+        D[2 * (off + j) + 1] = -(e0r - e1r) / (2 * HSIB_PI);
+      }
     }
     off += k;
   }
@@ -689,32 +699,67 @@ static double hsib__cage_size(const hsib_sequence* s) {
   return hypot(x1 - x0, y1 - y0);
 }
 
-static void hsib__basis_row(const hsib_sequence* s, double wx, double wy, double* C, double* scratch, float* row, size_t row_stride) {
-  hsib__cauchy_coordinates(s, wx, wy, C, scratch);
-  for (uint32_t r = 0; r < s->info.row_length; ++r) {
-    const uint32_t src = s->rows[r], part = src & 3u, col = src >> 2;
-    double v;
-    if (part < 2u)
-      v = C[2 * col + part];
-    else
-      v = 0.5 * log((wx - s->holes[2 * col]) * (wx - s->holes[2 * col]) + (wy - s->holes[2 * col + 1]) * (wy - s->holes[2 * col + 1]));
-    row[(size_t)r * row_stride] = (float)v;
-  }
-}
-
+/* Scratch (doubles) the basis rows at a point take: C and C' (2m each), 4 per vertex of the largest loop. */
 static size_t hsib__max_loop(const hsib_sequence* s) {
   size_t k = 0;
   for (uint32_t l = 0; l < s->info.loop_count; ++l) k = s->loop_sizes[l] > k ? s->loop_sizes[l] : k;
   return k;
 }
+/* C (2m), the loop scratch (4 per vertex of the largest loop), then C' (2m) only for derivatives. */
+static size_t hsib__row_scratch(const hsib_sequence* s, int derivatives) {
+  return (derivatives ? 4 : 2) * (size_t)s->info.cage_vertex_count + 4 * hsib__max_loop(s);
+}
+
+/* The basis row at w (row[r * stride]) and, when dx is not NULL, its derivatives
+ * ∂row/∂x, ∂row/∂y (dx[r * stride], dy[r * stride]). The Cauchy coordinates are
+ * holomorphic, so with C' = D: ∂x Re C = Re D, ∂y Re C = −Im D, ∂x Im C = Im D,
+ * ∂y Im C = Re D; and ∇ log|w − ρ| = (w − ρ)/|w − ρ|². scratch: hsib__row_scratch. */
+static void hsib__basis_row(const hsib_sequence* s, double wx, double wy, double* scratch, float* row, float* dx, float* dy, size_t stride) {
+  const size_t m = s->info.cage_vertex_count;
+  double* C = scratch;
+  double* D = dx ? scratch + 2 * m + 4 * hsib__max_loop(s) : NULL;
+  hsib__cauchy_coordinates(s, wx, wy, C, D, scratch + 2 * m);
+  for (uint32_t r = 0; r < s->info.row_length; ++r) {
+    const uint32_t src = s->rows[r], part = src & 3u, col = src >> 2;
+    double v, vx = 0, vy = 0;
+    if (part < 2u) {
+      v = C[2 * col + part];
+      if (D) {
+        const double Dr = D[2 * col], Di = D[2 * col + 1];
+        vx = part == 0u ? Dr : Di;
+        vy = part == 0u ? -Di : Dr;
+      }
+    } else {
+      const double ex = wx - s->holes[2 * col], ey = wy - s->holes[2 * col + 1], r2 = ex * ex + ey * ey;
+      v = 0.5 * log(r2);
+      vx = ex / r2;
+      vy = ey / r2;
+    }
+    row[(size_t)r * stride] = (float)v;
+    if (dx) {
+      dx[(size_t)r * stride] = (float)vx;
+      dy[(size_t)r * stride] = (float)vy;
+    }
+  }
+}
 
 hsib_status hsib_basis_row(const hsib_sequence* s, double x, double y, float* row) {
   if (!s || !row) return HSIB_ERROR_ARGUMENT;
   if (hsib__outside_cage(s, x, y, 1e-9 * hsib__cage_size(s))) return HSIB_ERROR_DOMAIN;
-  double* C = (double*)hsib_alloc(sizeof(double) * (2 * (size_t)s->info.cage_vertex_count + 4 * hsib__max_loop(s)));
-  if (!C) return HSIB_ERROR_MEMORY;
-  hsib__basis_row(s, x, y, C, C + 2 * (size_t)s->info.cage_vertex_count, row, 1);
-  hsib_free(C);
+  double* scratch = (double*)hsib_alloc(sizeof(double) * hsib__row_scratch(s, 0));
+  if (!scratch) return HSIB_ERROR_MEMORY;
+  hsib__basis_row(s, x, y, scratch, row, NULL, NULL, 1);
+  hsib_free(scratch);
+  return HSIB_OK;
+}
+
+hsib_status hsib_basis_row_derivatives(const hsib_sequence* s, double x, double y, float* row, float* dx, float* dy) {
+  if (!s || !row || !dx || !dy) return HSIB_ERROR_ARGUMENT;
+  if (hsib__outside_cage(s, x, y, 1e-9 * hsib__cage_size(s))) return HSIB_ERROR_DOMAIN;
+  double* scratch = (double*)hsib_alloc(sizeof(double) * hsib__row_scratch(s, 1));
+  if (!scratch) return HSIB_ERROR_MEMORY;
+  hsib__basis_row(s, x, y, scratch, row, dx, dy, 1);
+  hsib_free(scratch);
   return HSIB_OK;
 }
 
@@ -782,11 +827,15 @@ static int hsib__clamp_to_cage(const hsib_sequence* s, double* x, double* y) {
 
 /* ---------------------------------------------------------------- bindings */
 
-/* One block: this struct, then the rows (panels x R x HSIB_PANEL floats). */
+/* One block: this struct, then the rows (panels x R x HSIB_PANEL floats), then, with
+ * HSIB_BIND_DERIVATIVES, the derivative rows (panels x 2R x HSIB_PANEL: per panel
+ * the R rows ∂/∂x, then the R rows ∂/∂y). */
 struct hsib_binding {
   const hsib_sequence* sequence;
   size_t vertices, panels;
   float* rows;
+  float* derivatives; /* NULL without HSIB_BIND_DERIVATIVES */
+  uint32_t flags;
   int caller_memory;
 };
 
@@ -796,28 +845,39 @@ void hsib_unbind(hsib_binding* b) {
 
 size_t hsib_binding_vertex_count(const hsib_binding* b) { return b ? b->vertices : 0; }
 const hsib_sequence* hsib_binding_sequence(const hsib_binding* b) { return b ? b->sequence : NULL; }
+uint32_t hsib_binding_flags(const hsib_binding* b) { return b ? b->flags : 0u; }
 
-size_t hsib_binding_memory_size(const hsib_sequence* s, size_t vertex_count) {
-  if (!s) return 0;
+size_t hsib_binding_memory_size_flags(const hsib_sequence* s, size_t vertex_count, uint32_t flags) {
+  if (!s || (flags & ~(uint32_t)HSIB_BIND_DERIVATIVES)) return 0;
   const size_t panels = (vertex_count + HSIB_PANEL - 1) / HSIB_PANEL;
-  const size_t per_panel = (size_t)s->info.row_length * HSIB_PANEL * sizeof(float);
+  /* rows, and twice as many derivative rows */
+  const size_t per_panel = (size_t)s->info.row_length * HSIB_PANEL * sizeof(float) * ((flags & HSIB_BIND_DERIVATIVES) ? 3u : 1u);
   if (panels && per_panel > ((size_t)-1 / 2) / panels) return 0;
   return hsib__align16(sizeof(hsib_binding)) + panels * per_panel + 16;
 }
 
-size_t hsib_binding_bytes(const hsib_binding* b) { return b ? hsib_binding_memory_size(b->sequence, b->vertices) : 0; }
+size_t hsib_binding_memory_size(const hsib_sequence* s, size_t vertex_count) { return hsib_binding_memory_size_flags(s, vertex_count, 0u); }
+
+size_t hsib_binding_bytes(const hsib_binding* b) { return b ? hsib_binding_memory_size_flags(b->sequence, b->vertices, b->flags) : 0; }
 
 hsib_status hsib_bind(const hsib_sequence* s, const float* rest_xy, size_t count, size_t stride, hsib_binding** out, char* error,
                       size_t es) {
-  return hsib_bind_ex(s, rest_xy, count, stride, NULL, out, error, es);
+  return hsib_bind_flags(s, rest_xy, count, stride, NULL, 0u, out, error, es);
 }
 
 hsib_status hsib_bind_ex(const hsib_sequence* s, const float* rest_xy, size_t count, size_t stride, const hsib_bind_options* options,
                          hsib_binding** out, char* error, size_t es) {
+  return hsib_bind_flags(s, rest_xy, count, stride, options, 0u, out, error, es);
+}
+
+hsib_status hsib_bind_flags(const hsib_sequence* s, const float* rest_xy, size_t count, size_t stride, const hsib_bind_options* options,
+                            uint32_t flags, hsib_binding** out, char* error, size_t es) {
   if (error && es) error[0] = '\0';
   if (!out) return hsib__fail(error, es, HSIB_ERROR_ARGUMENT, "hsib_bind: out is NULL");
   *out = NULL;
   if (!s || (!rest_xy && count)) return hsib__fail(error, es, HSIB_ERROR_ARGUMENT, "hsib_bind: sequence or vertices are NULL");
+  if (flags & ~(uint32_t)HSIB_BIND_DERIVATIVES)
+    return hsib__fail(error, es, HSIB_ERROR_ARGUMENT, "hsib_bind_flags: unknown flags 0x%x (known: HSIB_BIND_DERIVATIVES = 1)", flags);
   if (stride == 0) stride = 2 * sizeof(float);
   if (stride < 2 * sizeof(float)) return hsib__fail(error, es, HSIB_ERROR_ARGUMENT, "hsib_bind: stride %zu is smaller than two floats", stride);
   const hsib_bind_options defaults = {HSIB_OUTSIDE_REFUSE, NULL, NULL, 0};
@@ -839,13 +899,14 @@ hsib_status hsib_bind_ex(const hsib_sequence* s, const float* rest_xy, size_t co
                   v, (double)xy[0], (double)xy[1], l == 1 ? "outside (or on) the cage's outer loop, loop " : "inside (or on) the cage loop of hole ",
                   l == 1 ? 0u : l - 1);
   }
-  const size_t need = hsib_binding_memory_size(s, count);
+  const size_t need = hsib_binding_memory_size_flags(s, count, flags);
   if (!need) return hsib__fail(error, es, HSIB_ERROR_MEMORY, "hsib_bind: %zu vertices are too many", count);
   hsib_binding* b;
   if (o->memory) {
     if (((uintptr_t)o->memory & 15u) != 0) return hsib__fail(error, es, HSIB_ERROR_ARGUMENT, "hsib_bind: the memory is not 16-byte aligned");
     if (o->memory_bytes < need)
-      return hsib__fail(error, es, HSIB_ERROR_MEMORY, "hsib_bind: %zu bytes given, the binding needs %zu (hsib_binding_memory_size)", o->memory_bytes, need);
+      return hsib__fail(error, es, HSIB_ERROR_MEMORY, "hsib_bind: %zu bytes given, the binding needs %zu (hsib_binding_memory_size%s)", o->memory_bytes,
+                        need, flags ? "_flags" : "");
     b = (hsib_binding*)o->memory;
   } else {
     b = (hsib_binding*)hsib_alloc(need);
@@ -853,13 +914,16 @@ hsib_status hsib_bind_ex(const hsib_sequence* s, const float* rest_xy, size_t co
   }
   memset(b, 0, need);
   const uint32_t R = s->info.row_length;
+  const int derivatives = (flags & HSIB_BIND_DERIVATIVES) != 0;
   b->caller_memory = o->memory != NULL;
   b->sequence = s;
   b->vertices = count;
   b->panels = (count + HSIB_PANEL - 1) / HSIB_PANEL;
+  b->flags = flags;
   b->rows = (float*)(void*)((unsigned char*)b + hsib__align16(sizeof *b));
-  double stack_C[2048]; /* 16 KB: a single-loop cage of up to 341 vertices */
-  const size_t scratch = 2 * (size_t)s->info.cage_vertex_count + 4 * hsib__max_loop(s);
+  b->derivatives = derivatives ? b->rows + b->panels * (size_t)R * HSIB_PANEL : NULL;
+  double stack_C[2048]; /* 16 KB: a single-loop cage of up to 341 vertices (170 with derivatives) */
+  const size_t scratch = hsib__row_scratch(s, derivatives);
   double* C = scratch <= 2048 ? stack_C : (double*)hsib_alloc(sizeof(double) * scratch);
   if (!C) {
     hsib_unbind(b);
@@ -881,33 +945,57 @@ hsib_status hsib_bind_ex(const hsib_sequence* s, const float* rest_xy, size_t co
       region = (uint8_t)(s->info.shape_loop_count > 0 && hsib__inside_shape(s, x, y) ? HSIB_REGION_SHAPE : HSIB_REGION_CAGE);
     }
     if (o->vertex_region) o->vertex_region[v] = region;
-    float* panel = b->rows + (v / HSIB_PANEL) * (size_t)R * HSIB_PANEL;
-    hsib__basis_row(s, x, y, C, C + 2 * (size_t)s->info.cage_vertex_count, panel + v % HSIB_PANEL, HSIB_PANEL);
+    const size_t p = v / HSIB_PANEL, i = v % HSIB_PANEL;
+    float* panel = b->rows + p * (size_t)R * HSIB_PANEL;
+    float* dpanel = derivatives ? b->derivatives + p * 2 * (size_t)R * HSIB_PANEL : NULL;
+    hsib__basis_row(s, x, y, C, panel + i, dpanel ? dpanel + i : NULL, dpanel ? dpanel + (size_t)R * HSIB_PANEL + i : NULL, HSIB_PANEL);
   }
   if (C != stack_C) hsib_free(C);
   *out = b;
   return HSIB_OK;
 }
 
+/* A blend's weights as floats (2R) and its translation, on the stack for R <= 256
+ * (so evaluation allocates nothing there), else from the hooks. */
+typedef struct hsib__frame_values {
+  double stack_w[1024];
+  float stack_wf[512];
+  double* w;
+  float* wf;
+  double c[2];
+} hsib__frame_values;
+
+static void hsib__frame_values_release(hsib__frame_values* fv) {
+  if (fv->w && fv->w != fv->stack_w) hsib_free(fv->w);
+  if (fv->wf && fv->wf != fv->stack_wf) hsib_free(fv->wf);
+}
+
+static hsib_status hsib__frame_values_make(const hsib_sequence* s, const hsib_blend* blend, hsib__frame_values* fv) {
+  const uint32_t R = s->info.row_length;
+  fv->w = 4 * (size_t)R <= 1024 ? fv->stack_w : (double*)hsib_alloc(sizeof(double) * 4 * R);
+  fv->wf = 2 * (size_t)R <= 512 ? fv->stack_wf : (float*)hsib_alloc(sizeof(float) * 2 * R);
+  if (!fv->w || !fv->wf) {
+    hsib__frame_values_release(fv);
+    return HSIB_ERROR_MEMORY;
+  }
+  hsib__blend_weights(s, blend, fv->w, fv->wf, fv->c);
+  return HSIB_OK;
+}
+
+static int hsib__range_valid(const hsib_binding* b, const hsib_blend* blend, size_t first, size_t count, const float* out) {
+  return b && (out || !count) && hsib__blend_valid(b->sequence, blend) && first <= b->vertices && count <= b->vertices - first;
+}
+
 hsib_status hsib_evaluate_blend_range(const hsib_binding* b, const hsib_blend* blend, size_t first, size_t count, float* out_xy,
                                       size_t out_stride) {
-  if (!b || (!out_xy && count) || !hsib__blend_valid(b->sequence, blend) || first > b->vertices || count > b->vertices - first)
-    return HSIB_ERROR_ARGUMENT;
+  if (!hsib__range_valid(b, blend, first, count, out_xy)) return HSIB_ERROR_ARGUMENT;
   if (out_stride == 0) out_stride = 2 * sizeof(float);
   const hsib_sequence* s = b->sequence;
   const uint32_t R = s->info.row_length;
-  double stack_w[1024];
-  double* w = 4 * (size_t)R <= 1024 ? stack_w : (double*)hsib_alloc(sizeof(double) * 4 * R);
-  float stack_wf[512];
-  float* wf = 2 * (size_t)R <= 512 ? stack_wf : (float*)hsib_alloc(sizeof(float) * 2 * R);
-  if (!w || !wf) {
-    if (w != stack_w) hsib_free(w);
-    if (wf != stack_wf) hsib_free(wf);
-    return HSIB_ERROR_MEMORY;
-  }
-  double c[2];
-  hsib__blend_weights(s, blend, w, wf, c);
-  const float cx = (float)c[0], cy = (float)c[1];
+  hsib__frame_values fv;
+  if (hsib__frame_values_make(s, blend, &fv) != HSIB_OK) return HSIB_ERROR_MEMORY;
+  const float* wf = fv.wf;
+  const float cx = (float)fv.c[0], cy = (float)fv.c[1];
   unsigned char* out = (unsigned char*)out_xy;
   const size_t end = first + count;
   for (size_t p = first / HSIB_PANEL; p * HSIB_PANEL < end; ++p) {
@@ -929,8 +1017,7 @@ hsib_status hsib_evaluate_blend_range(const hsib_binding* b, const hsib_blend* b
       memcpy(out + (v - first) * out_stride, xy, sizeof xy);
     }
   }
-  if (w != stack_w) hsib_free(w);
-  if (wf != stack_wf) hsib_free(wf);
+  hsib__frame_values_release(&fv);
   return HSIB_OK;
 }
 
@@ -949,15 +1036,99 @@ hsib_status hsib_evaluate(const hsib_binding* b, uint32_t frame, float* out_xy, 
   return hsib_evaluate_range(b, frame, 0, b->vertices, out_xy, out_stride);
 }
 
+/* ---------------------------------------------------------------- distortion */
+
+void hsib_singular_values(const float jacobian[4], float sigma[2]) {
+  /* J = [a b; c d] (columns ∂f/∂x = (a, c), ∂f/∂y = (b, d)): f_z = ½((a + d) + i(c − b)),
+   * f_zbar = ½((a − d) + i(c + b)); σ1 = |f_z| + |f_zbar|, σ2 = |f_z| − |f_zbar|. */
+  const double a = jacobian[0], c = jacobian[1], b = jacobian[2], d = jacobian[3];
+  const double fz = 0.5 * hypot(a + d, c - b), fzbar = 0.5 * hypot(a - d, c + b);
+  sigma[0] = (float)(fz + fzbar);
+  sigma[1] = (float)(fz - fzbar);
+}
+
+/* The blend's Jacobian (jacobian != 0: 4 floats a vertex) or singular values (2 floats)
+ * of vertices [first, first + count): the derivative rows times the blended weights,
+ * panel by panel as hsib_evaluate_blend_range does the positions. */
+static hsib_status hsib__evaluate_derivatives(const hsib_binding* b, const hsib_blend* blend, size_t first, size_t count, float* out_f,
+                                              size_t out_stride, int jacobian) {
+  if (!hsib__range_valid(b, blend, first, count, out_f) || !b->derivatives) return HSIB_ERROR_ARGUMENT;
+  if (out_stride == 0) out_stride = (jacobian ? 4 : 2) * sizeof(float);
+  const hsib_sequence* s = b->sequence;
+  const uint32_t R = s->info.row_length;
+  hsib__frame_values fv;
+  if (hsib__frame_values_make(s, blend, &fv) != HSIB_OK) return HSIB_ERROR_MEMORY;
+  const float* wf = fv.wf;
+  unsigned char* out = (unsigned char*)out_f;
+  const size_t end = first + count;
+  for (size_t p = first / HSIB_PANEL; p * HSIB_PANEL < end; ++p) {
+    /* ∂f/∂x = (a, c), ∂f/∂y = (b, d) */
+    float ja[HSIB_PANEL], jb[HSIB_PANEL], jc[HSIB_PANEL], jd[HSIB_PANEL];
+    for (int i = 0; i < HSIB_PANEL; ++i) ja[i] = jb[i] = jc[i] = jd[i] = 0.0f;
+    const float* panel = b->derivatives + p * 2 * (size_t)R * HSIB_PANEL;
+    for (uint32_t r = 0; r < R; ++r) {
+      const float wx = wf[2 * r], wy = wf[2 * r + 1];
+      const float* dx = panel + (size_t)r * HSIB_PANEL;
+      const float* dy = panel + ((size_t)R + r) * HSIB_PANEL;
+      for (int i = 0; i < HSIB_PANEL; ++i) {
+        ja[i] += dx[i] * wx;
+        jc[i] += dx[i] * wy;
+        jb[i] += dy[i] * wx;
+        jd[i] += dy[i] * wy;
+      }
+    }
+    const size_t v0 = p * HSIB_PANEL > first ? p * HSIB_PANEL : first;
+    const size_t v1 = (p + 1) * HSIB_PANEL < end ? (p + 1) * HSIB_PANEL : end;
+    for (size_t v = v0; v < v1; ++v) {
+      const size_t i = v - p * HSIB_PANEL;
+      const float J[4] = {ja[i], jc[i], jb[i], jd[i]};
+      if (jacobian) {
+        memcpy(out + (v - first) * out_stride, J, sizeof J);
+      } else {
+        float sigma[2];
+        hsib_singular_values(J, sigma);
+        memcpy(out + (v - first) * out_stride, sigma, sizeof sigma);
+      }
+    }
+  }
+  hsib__frame_values_release(&fv);
+  return HSIB_OK;
+}
+
+hsib_status hsib_evaluate_jacobian_range(const hsib_binding* b, const hsib_blend* blend, size_t first, size_t count, float* out_jacobian,
+                                         size_t out_stride) {
+  return hsib__evaluate_derivatives(b, blend, first, count, out_jacobian, out_stride, 1);
+}
+
+hsib_status hsib_evaluate_blend_distortion_range(const hsib_binding* b, const hsib_blend* blend, size_t first, size_t count, float* out_sigma,
+                                                 size_t out_stride) {
+  return hsib__evaluate_derivatives(b, blend, first, count, out_sigma, out_stride, 0);
+}
+
+hsib_status hsib_evaluate_blend_distortion(const hsib_binding* b, const hsib_blend* blend, float* out_sigma, size_t out_stride) {
+  if (!b) return HSIB_ERROR_ARGUMENT;
+  return hsib_evaluate_blend_distortion_range(b, blend, 0, b->vertices, out_sigma, out_stride);
+}
+
+hsib_status hsib_evaluate_distortion(const hsib_binding* b, uint32_t frame, float* out_sigma, size_t out_stride) {
+  const hsib_blend one = {frame, frame, 0.0f, 0};
+  return hsib_evaluate_blend_distortion(b, &one, out_sigma, out_stride);
+}
+
 /* ---------------------------------------------------------------- GPU playback */
 
 uint32_t hsib_gpu_texels_per_vertex(const hsib_sequence* s) { return s ? (s->info.row_length + 3u) / 4u : 0u; }
 
-size_t hsib_gpu_rows_floats(const hsib_binding* b, uint32_t width) {
-  if (!b || width == 0) return 0;
-  const size_t texels = b->vertices * hsib_gpu_texels_per_vertex(b->sequence);
+/* Floats of an image `width` texels wide holding texels_per_vertex texels of every vertex. */
+static size_t hsib__gpu_floats(const hsib_binding* b, uint32_t width, size_t texels_per_vertex) {
+  const size_t texels = b->vertices * texels_per_vertex;
   const size_t lines = (texels + width - 1) / width;
   return 4u * (size_t)width * (lines ? lines : 1u);
+}
+
+size_t hsib_gpu_rows_floats(const hsib_binding* b, uint32_t width) {
+  if (!b || width == 0) return 0;
+  return hsib__gpu_floats(b, width, hsib_gpu_texels_per_vertex(b->sequence));
 }
 
 hsib_status hsib_gpu_rows(const hsib_binding* b, uint32_t width, float* texels) {
@@ -968,6 +1139,27 @@ hsib_status hsib_gpu_rows(const hsib_binding* b, uint32_t width, float* texels) 
     const float* panel = b->rows + (v / HSIB_PANEL) * (size_t)R * HSIB_PANEL;
     float* out = texels + 4u * (v * T);  /* texel v*T + q, 4 floats each, line after line */
     for (uint32_t r = 0; r < R; ++r) out[r] = panel[(size_t)r * HSIB_PANEL + v % HSIB_PANEL];
+  }
+  return HSIB_OK;
+}
+
+size_t hsib_gpu_derivative_rows_floats(const hsib_binding* b, uint32_t width) {
+  if (!b || !b->derivatives || width == 0) return 0;
+  return hsib__gpu_floats(b, width, 2u * (size_t)hsib_gpu_texels_per_vertex(b->sequence));
+}
+
+hsib_status hsib_gpu_derivative_rows(const hsib_binding* b, uint32_t width, float* texels) {
+  if (!b || !b->derivatives || !texels || width == 0) return HSIB_ERROR_ARGUMENT;
+  const uint32_t R = b->sequence->info.row_length, T = hsib_gpu_texels_per_vertex(b->sequence);
+  memset(texels, 0, sizeof(float) * hsib_gpu_derivative_rows_floats(b, width));
+  for (size_t v = 0; v < b->vertices; ++v) {
+    const float* panel = b->derivatives + (v / HSIB_PANEL) * 2 * (size_t)R * HSIB_PANEL + v % HSIB_PANEL;
+    float* out = texels + 4u * (v * 2u * T);  /* texel 2(v*T + q): ∂x rows 4q..4q+3; texel 2(v*T + q) + 1: ∂y rows */
+    for (uint32_t r = 0; r < R; ++r) {
+      const uint32_t q = r / 4u, c = r % 4u;
+      out[8u * q + c] = panel[(size_t)r * HSIB_PANEL];
+      out[8u * q + 4u + c] = panel[((size_t)R + r) * HSIB_PANEL];
+    }
   }
   return HSIB_OK;
 }

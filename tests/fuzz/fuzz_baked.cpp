@@ -97,7 +97,9 @@ void exercise(const uint8_t* data, size_t size) {
     o.outside = HSIB_OUTSIDE_CLAMP;
     o.vertex_region = region.data();
     hsib_binding* b = nullptr;
-    if (hsib_bind_ex(s, mesh.xy, mesh.vertex_count, 0, &o, &b, error, sizeof error) == HSIB_OK) {
+    // Every other input also binds derivative rows and plays the distortion.
+    const uint32_t flags = (size & 1u) ? HSIB_BIND_DERIVATIVES : 0u;
+    if (hsib_bind_flags(s, mesh.xy, mesh.vertex_count, 0, &o, flags, &b, error, sizeof error) == HSIB_OK) {
       for (uint8_t r : region)
         if (r > HSIB_REGION_SHAPE) std::abort();
       std::vector<float> out(2 * static_cast<size_t>(mesh.vertex_count));
@@ -105,7 +107,10 @@ void exercise(const uint8_t* data, size_t size) {
         for (const hsib_playback m : {HSIB_PLAY_NEAREST, HSIB_PLAY_CERTIFIED_STEPS, HSIB_PLAY_BLEND}) {
           const hsib_blend bl = hsib_blend_at_time(s, info.t_begin + u * (info.t_end - info.t_begin), m);
           if (hsib_evaluate_blend(b, &bl, out.data(), 0) != HSIB_OK) std::abort();
+          if ((hsib_evaluate_blend_distortion(b, &bl, out.data(), 0) == HSIB_OK) != (flags != 0)) std::abort();
         }
+      std::vector<float> derivatives(hsib_gpu_derivative_rows_floats(b, 64));
+      if ((hsib_gpu_derivative_rows(b, 64, derivatives.data()) == HSIB_OK) != (flags != 0)) std::abort();
       std::vector<float> texels(hsib_gpu_rows_floats(b, 64));
       if (hsib_gpu_rows(b, 64, texels.data()) != HSIB_OK) std::abort();
       std::vector<float> u(4 * (2 + static_cast<size_t>(info.row_length)));

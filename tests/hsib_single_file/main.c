@@ -2,7 +2,7 @@
  * declarations only in other.c, nothing linked but libm. Opens a .hsib in caller
  * memory (a static arena, no allocator calls: the hooks count them), binds the stored
  * mesh (version 2) or one vertex (version 1), plays every frame and the blends between
- * them, and checks what it gets. Prints "hsib.h ok: ..." on success. */
+ * them, its distortion (derivative rows), and checks what it gets. Prints "hsib.h ok: ..." on success. */
 #define HSIB_IMPLEMENTATION
 #include "hsib.h"
 
@@ -95,6 +95,32 @@ int main(int argc, char** argv) {
       const double want = (1.0 - bl.s) * a[k] + bl.s * c[k];
       CHECK(fabs(out[k] - want) <= 1e-4 * (1.0 + fabs(want)));
     }
+  }
+  /* Distortion: the same vertices bound with derivative rows, in the arena after the
+   * first binding; sigma1 >= |sigma2| everywhere, and sigma2 > 0 (no fold) for every
+   * certified frame at the mesh's vertices (in the shape or on its outline). */
+  {
+    const size_t first = (hsib_binding_bytes(b) + 15u) & ~(size_t)15u;
+    const size_t used = ((need + 15u) & ~(size_t)15u) + first;
+    hsib_bind_options od = {HSIB_OUTSIDE_REFUSE, NULL, bind_memory + first, arena_size - used};
+    hsib_binding* bd = NULL;
+    CHECK(hsib_binding_memory_size_flags(s, count, HSIB_BIND_DERIVATIVES) <= arena_size - used);
+    if (hsib_bind_flags(s, rest, count, 0, &od, HSIB_BIND_DERIVATIVES, &bd, error, sizeof error) != HSIB_OK) {
+      fprintf(stderr, "hsib.h test: %s\n", error);
+      return 1;
+    }
+    CHECK(hsib_evaluate_distortion(b, 0, out, 0) == HSIB_ERROR_ARGUMENT); /* no derivative rows */
+    for (uint32_t fr = 0; fr < info.frame_count; ++fr) {
+      uint32_t flags = 0;
+      CHECK(hsib_frame_info(s, fr, NULL, &flags) == HSIB_OK);
+      CHECK(hsib_evaluate_distortion(bd, fr, out, 0) == HSIB_OK);
+      for (size_t k = 0; k < count; ++k) {
+        CHECK(isfinite(out[2 * k]) && isfinite(out[2 * k + 1]));
+        CHECK(out[2 * k] >= fabsf(out[2 * k + 1]));
+        if ((flags & HSIB_FRAME_CERTIFIED) && ms == HSIB_OK) CHECK(out[2 * k + 1] > 0.0f);
+      }
+    }
+    hsib_unbind(bd);
   }
   if (ms == HSIB_OK) { /* triangle centroids of the stored mesh lie in the shape */
     uint32_t in_shape = 0;

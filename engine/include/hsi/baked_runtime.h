@@ -3,8 +3,10 @@
  * render mesh (its own, or the shape's triangulation stored in the file). It
  * precomputes the mesh's basis rows once (Cauchy coordinates of the cage and one log
  * term per hole, written out below) and then makes each frame's vertices with one
- * small matrix product: vertex = rows(vertex) · W(frame) + translation. The same
- * product runs in a vertex shader: hsi/hsib_playback.glsl with its preambles
+ * small matrix product: vertex = rows(vertex) · W(frame) + translation; a binding
+ * that opts in keeps the rows' derivatives too and reports each vertex's singular
+ * values sigma1, sigma2 (its distortion, sampled) the same way. The same
+ * products run in a vertex shader: hsi/hsib_playback.glsl with its preambles
  * hsi/hsib_preamble_vulkan.glsl and hsi/hsib_preamble_gl.glsl (OpenGL, WebGL2),
  * installed beside this header (hsib_gpu_* below fill its data). An
  * stb-style single-file copy of this runtime, hsib.h (installed too), is
@@ -105,20 +107,47 @@
  * flags say so); HSIB_PLAY_NEAREST shows the nearest frame. Where an interval lacks
  * flag 16 (or k < 2, or a version 1 file) every mode shows the nearest frame.
  *
+ * Distortion (opt in: hsib_bind_flags with HSIB_BIND_DERIVATIVES). The Jacobian of
+ * the map shown is, as the position, a product with the same weights:
+ *   df/dx = r * sum_k (d row_k/dx)(w) * (w[2k] + i w[2k+1]),  df/dy likewise,
+ * from each vertex's derivative rows, computed at bind time in closed form: the C_j
+ * are holomorphic with C_j'(w) = 1/(2 pi i) [L_{j-1}/A_j - L_j/A_{j+1}],
+ * L_j = log(B_{j+1}/B_j), so d/dx Re C_j = Re C_j', d/dy Re C_j = -Im C_j',
+ * d/dx Im C_j = Im C_j', d/dy Im C_j = Re C_j'; and grad log|w - rho| = (w - rho)/|w - rho|^2.
+ * With J = [a b; c d] (df/dx = (a, c), df/dy = (b, d)), f_z = ((a + d) + i(c - b))/2
+ * and f_zbar = ((a - d) + i(c + b))/2, the runtime reports hsi's singular values
+ *   sigma1 = |f_z| + |f_zbar|,  sigma2 = |f_z| - |f_zbar|
+ * (sigma2 <= 0: the map folds or flips orientation at that vertex). hsi's distortion
+ * measures follow from them: conformal sigma1/sigma2 and isometric (symmetric
+ * Dirichlet) (sigma1^2 + sigma1^-2 + sigma2^2 + sigma2^-2)/2, both for sigma2 > 0.
+ * These are SAMPLED values, the map's own at the bound vertices (float arithmetic:
+ * about 1e-6 of sigma1 on hsi's tests, more near the cage, where the rows are large
+ * and cancel), not the certificate's bounds: between vertices, and for a
+ * blend between certified sub-steps, nothing is proved. A blend blends J linearly, as
+ * it blends positions, and its sigma is that of the blended J (not the blend of the
+ * two frames' sigma). A clamped vertex (HSIB_OUTSIDE_CLAMP) reports the Jacobian at
+ * the point it was clamped to.
+ *
  * Readers refuse, with a message naming the problem and the byte or frame: a wrong
  * magic, another version, a header or static-section checksum mismatch, impossible
  * sizes, a truncated file or trailing bytes, and a frame whose checksum fails.
  * ---------------------------------------------------------------------------------
  *
  * Thread safety: a sequence and a binding are immutable once made; any number of
- * threads may call hsib_evaluate / hsib_evaluate_range / the queries on them at
- * once. hsib_set_allocator must be called before anything else and is not
+ * threads may call hsib_evaluate / hsib_evaluate_range / hsib_evaluate_*distortion* /
+ * the queries on them at once. hsib_set_allocator must be called before anything else and is not
  * thread-safe. Memory: only what hsib_* allocates, through the allocator hooks; or
  * none at all for a sequence and a binding placed in the caller's memory
- * (hsib_open_in_place, hsib_bind_options.memory): then only evaluation with rows
- * longer than R = 256, binding with cages whose 2m + 4 (largest loop) exceeds 2048
- * (a single loop of 341 vertices), hsib_basis_row, hsib_blend_weights and
- * hsib_gpu_uniforms take scratch from the hooks.
+ * (hsib_open_in_place, hsib_bind_options.memory): then only evaluation (positions or
+ * distortion) with rows longer than R = 256, binding with cages whose 2m + 4 (largest
+ * loop) exceeds 2048 (a single loop of 341 vertices; with HSIB_BIND_DERIVATIVES
+ * 4m + 4 (largest loop), a single loop of 256), hsib_basis_row,
+ * hsib_basis_row_derivatives, hsib_blend_weights and hsib_gpu_uniforms take scratch
+ * from the hooks.
+ *
+ * ABI: the distortion calls (hsib_bind_flags and after) were added without changing
+ * any struct or existing function, so a program built against a header without them
+ * runs unchanged; one that calls them needs a library that has them.
  */
 #ifndef HSI_BAKED_RUNTIME_H
 #define HSI_BAKED_RUNTIME_H
@@ -273,12 +302,24 @@ HSIB_API hsib_status hsib_bind(const hsib_sequence* sequence, const float* rest_
                                size_t stride_bytes, hsib_binding** out, char* error, size_t error_size);
 HSIB_API hsib_status hsib_bind_ex(const hsib_sequence* sequence, const float* rest_xy, size_t vertex_count, size_t stride_bytes,
                                   const hsib_bind_options* options, hsib_binding** out, char* error, size_t error_size);
+/* Binding flags (hsib_bind_flags; hsib_bind and hsib_bind_ex pass 0). */
+#define HSIB_BIND_DERIVATIVES 1u /* also store each vertex's derivative rows (d row/dx, d row/dy): the
+                                    binding takes 3x the memory and can report distortion */
+/* hsib_bind_ex with flags; unknown bits are refused (HSIB_ERROR_ARGUMENT). Memory in
+ * the caller's block: hsib_binding_memory_size_flags bytes. */
+HSIB_API hsib_status hsib_bind_flags(const hsib_sequence* sequence, const float* rest_xy, size_t vertex_count, size_t stride_bytes,
+                                     const hsib_bind_options* options, uint32_t flags, hsib_binding** out, char* error,
+                                     size_t error_size);
 HSIB_API void hsib_unbind(hsib_binding* binding);
 HSIB_API size_t hsib_binding_vertex_count(const hsib_binding* binding);
 HSIB_API const hsib_sequence* hsib_binding_sequence(const hsib_binding* binding);
 HSIB_API size_t hsib_binding_bytes(const hsib_binding* binding);
 /* Bytes a binding of vertex_count vertices takes (0 if that overflows). */
 HSIB_API size_t hsib_binding_memory_size(const hsib_sequence* sequence, size_t vertex_count);
+/* The same for a binding made with `flags` (0 for unknown bits or an overflow). */
+HSIB_API size_t hsib_binding_memory_size_flags(const hsib_sequence* sequence, size_t vertex_count, uint32_t flags);
+/* The flags the binding was made with (HSIB_BIND_DERIVATIVES: it can report distortion). */
+HSIB_API uint32_t hsib_binding_flags(const hsib_binding* binding);
 
 /* Writes frame `frame`'s deformed vertices (x, y floats at out_stride bytes apart,
  * 0 = packed). hsib_evaluate_range does vertices [first, first + count) only, so a
@@ -291,6 +332,22 @@ HSIB_API hsib_status hsib_evaluate_blend(const hsib_binding* binding, const hsib
 HSIB_API hsib_status hsib_evaluate_blend_range(const hsib_binding* binding, const hsib_blend* blend, size_t first, size_t count,
                                                float* out_xy, size_t out_stride_bytes);
 
+/* Distortion (see "Distortion" above; the binding needs HSIB_BIND_DERIVATIVES, else
+ * HSIB_ERROR_ARGUMENT): per vertex sigma1, sigma2 (2 floats at out_stride bytes apart,
+ * 0 = packed) of frame `frame` or of a blend, sampled at the vertex, not a bound. */
+HSIB_API hsib_status hsib_evaluate_distortion(const hsib_binding* binding, uint32_t frame, float* out_sigma, size_t out_stride_bytes);
+HSIB_API hsib_status hsib_evaluate_blend_distortion(const hsib_binding* binding, const hsib_blend* blend, float* out_sigma,
+                                                    size_t out_stride_bytes);
+HSIB_API hsib_status hsib_evaluate_blend_distortion_range(const hsib_binding* binding, const hsib_blend* blend, size_t first, size_t count,
+                                                          float* out_sigma, size_t out_stride_bytes);
+/* The Jacobian itself: per vertex df/dx then df/dy (a, c, b, d: column-major, as GLSL's
+ * mat2; 4 floats at out_stride bytes apart, 0 = packed), of a blend (for a frame:
+ * frame0 == frame1, s = 0). */
+HSIB_API hsib_status hsib_evaluate_jacobian_range(const hsib_binding* binding, const hsib_blend* blend, size_t first, size_t count,
+                                                  float* out_jacobian, size_t out_stride_bytes);
+/* sigma1, sigma2 of a Jacobian given as hsib_evaluate_jacobian_range writes it. */
+HSIB_API void hsib_singular_values(const float jacobian[4], float sigma[2]);
+
 /* The frame's weights: 2R floats (w_x, w_y per row, rotation applied) and the
  * translation, for callers that run the product themselves (e.g. in a shader). */
 HSIB_API hsib_status hsib_frame_weights(const hsib_sequence* sequence, uint32_t frame, float* weights,
@@ -299,6 +356,9 @@ HSIB_API hsib_status hsib_blend_weights(const hsib_sequence* sequence, const hsi
                                         float translation[2]);
 /* One vertex's basis row (R floats), as a binding stores it. */
 HSIB_API hsib_status hsib_basis_row(const hsib_sequence* sequence, double x, double y, float* row);
+/* The same row and its derivatives d row/dx, d row/dy (R floats each), as a binding
+ * with HSIB_BIND_DERIVATIVES stores them. */
+HSIB_API hsib_status hsib_basis_row_derivatives(const hsib_sequence* sequence, double x, double y, float* row, float* dx, float* dy);
 
 /* GPU playback (hsi/hsib_playback.glsl): the data its vertex shader reads.
  * Rows: each vertex's R basis rows as T = ceil(R/4) RGBA32F texels (4 rows a texel,
@@ -306,10 +366,17 @@ HSIB_API hsib_status hsib_basis_row(const hsib_sequence* sequence, double x, dou
  * a storage buffer of vec4 under Vulkan); hsib_gpu_rows_floats says how many floats
  * (4 * width * lines). Uniforms, per draw: 4 * (2 + R) floats, std140-compatible:
  * (c0.x, c0.y, c1.x, c1.y), (s, R, T, 0), then per row (w0.x, w0.y, w1.x, w1.y) of the
- * blend's two frames (hsib_blend_at_time), which the shader mixes with s. */
+ * blend's two frames (hsib_blend_at_time), which the shader mixes with s.
+ * Derivative rows (a binding with HSIB_BIND_DERIVATIVES; hsib_singular_values(vertex)
+ * in the shader): 2T texels per vertex, texel 2(v*T + q) holds d/dx of rows
+ * 4q..4q+3 and texel 2(v*T + q) + 1 their d/dy, in a second image or buffer laid out
+ * as the rows are; the uniforms are the same. hsib_gpu_derivative_rows_floats is 0
+ * (and hsib_gpu_derivative_rows HSIB_ERROR_ARGUMENT) for a binding without them. */
 HSIB_API uint32_t hsib_gpu_texels_per_vertex(const hsib_sequence* sequence);
 HSIB_API size_t hsib_gpu_rows_floats(const hsib_binding* binding, uint32_t width);
 HSIB_API hsib_status hsib_gpu_rows(const hsib_binding* binding, uint32_t width, float* texels);
+HSIB_API size_t hsib_gpu_derivative_rows_floats(const hsib_binding* binding, uint32_t width);
+HSIB_API hsib_status hsib_gpu_derivative_rows(const hsib_binding* binding, uint32_t width, float* texels);
 HSIB_API hsib_status hsib_gpu_uniforms(const hsib_sequence* sequence, const hsib_blend* blend, float* uniforms);
 
 /* CRC-32 (IEEE) of bytes, as the format uses it. */
