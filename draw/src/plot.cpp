@@ -9,6 +9,7 @@
 #include <memory>
 
 #include "hsi/triangulate.h"
+#include "rgba_surface.h"
 
 namespace hsi::draw {
 namespace {
@@ -44,19 +45,7 @@ class Canvas {
 std::unique_ptr<cairo_surface_t, decltype(&cairo_surface_destroy)> texture_surface(const RgbaImage& img) {
   std::unique_ptr<cairo_surface_t, decltype(&cairo_surface_destroy)> s(
       cairo_image_surface_create(CAIRO_FORMAT_ARGB32, img.width, img.height), cairo_surface_destroy);
-  cairo_surface_flush(s.get());
-  unsigned char* data = cairo_image_surface_get_data(s.get());
-  const int stride = cairo_image_surface_get_stride(s.get());
-  for (int y = 0; y < img.height; ++y) {
-    auto* row = reinterpret_cast<uint32_t*>(data + static_cast<ptrdiff_t>(y) * stride);
-    for (int x = 0; x < img.width; ++x) {
-      const uint8_t* p = img.at(x, y);
-      const uint32_t a = p[3];
-      auto pre = [a](uint32_t c) { return (c * a + 127) / 255; };
-      row[x] = (a << 24) | (pre(p[0]) << 16) | (pre(p[1]) << 8) | pre(p[2]);
-    }
-  }
-  cairo_surface_mark_dirty(s.get());
+  detail::write_premultiplied(img, s.get());
   return s;
 }
 

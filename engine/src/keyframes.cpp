@@ -158,16 +158,11 @@ std::string off_shape_reason(const Shape& shape, cd p) {
   std::string where = "beyond the outer loop";
   for (int l = 1; l < shape.loop_count(); ++l)
     if (point_in_loop(shape.loop(l), p)) where = "in " + loop_name(l);
-  auto pt = [](cd q) {
-    std::ostringstream s;
-    s.precision(6);
-    s << "(" << q.real() << ", " << q.imag() << ")";
-    return s.str();
-  };
   std::ostringstream s;
   s.precision(4);
   s << "lies outside the shape, " << where << ", " << d << " from the shape (" << 100 * d / size
-    << "% of its size); a handle must be on the shape (its bounding box is " << pt(bb.lo) << " to " << pt(bb.hi) << ")";
+    << "% of its size); a handle must be on the shape (its bounding box is " << fmt_point(bb.lo) << " to " << fmt_point(bb.hi)
+    << ")";
   return s.str();
 }
 

@@ -108,6 +108,9 @@ void App::load() {
     texture_ = std::move(st.image);
     texture_rect_ = st.rect;
     texture_filter_ = st.filter;
+    if (!st.checker)
+      std::printf("hsi-viewer: texture %s, %s filtering\n", scene.texture_path().string().c_str(),
+                  texture_filter_name(st.filter));
   }
   TriangulateOptions to;
   to.max_edge = edge_for_vertex_count(scene.shape, o_.mesh_vertices);
