@@ -47,7 +47,7 @@ SceneSequence interpolate_with_progress(Scene& scene, const SceneSequenceOptions
 void register_bake(CLI::App& app) {
   struct Opts {
     std::string scene, out = "sequence.hsib", from;
-    int frames = 120, samples = 0;
+    int frames = 120, samples = 0, per_interval = 0;
     double ratio = 0;
     bool f64 = false, allow_unconverged = false;
     int max_iterations = 100;
@@ -63,7 +63,7 @@ void register_bake(CLI::App& app) {
           std::string(kFlaggedFramesHelp));
   cmd->add_option("scene", o->scene, "Scene file (.json) with two or more keyframes")->required()->check(CLI::ExistingFile);
   cmd->add_option("-o,--output", o->out, "Baked file to write")->capture_default_str();
-  cmd->add_option("--frames", o->frames, "Frames over the keyframes' time range")->capture_default_str()->check(CLI::Range(2, 1000000));
+  add_frame_options(cmd, o->frames, o->per_interval);
   cmd->add_option("--samples", o->samples, "Boundary samples |G| (default: the scene's)")->check(CLI::Range(kMinSamples, kMaxSamples));
   cmd->add_option("--ratio", o->ratio, "Hessian sample ratio r (default: the scene's)")->check(CLI::Range(1e-6, 1.0));
   cmd->add_option("--from", o->from, "Bake the frames of an earlier hsi interpolate (its folder or frames.hsif) instead");
@@ -86,6 +86,7 @@ void register_bake(CLI::App& app) {
     } else {
       SceneSequenceOptions so;
       so.frames = o->frames;
+      so.frames_per_interval = o->per_interval;
       so.samples = o->samples;
       so.hessian_ratio = o->ratio;
       so.interpolation.max_iterations = o->max_iterations;

@@ -15,7 +15,7 @@ namespace hsi::cli {
 void register_export(CLI::App& app) {
   struct Opts {
     std::string scene, from, gltf, png, json, csv;
-    int frames = 120, samples = 0;
+    int frames = 120, samples = 0, per_interval = 0;
     double ratio = 0;
     int gltf_frames = 61, gltf_vertices = 2000;
     double seconds = 1;
@@ -38,7 +38,7 @@ void register_export(CLI::App& app) {
   cmd->add_option("--json", o->json, "Write the report as JSON");
   cmd->add_option("--csv", o->csv, "Write the report as CSV (one line per frame)");
   cmd->add_option("--from", o->from, "Use the frames of an earlier hsi interpolate (its folder or frames.hsif); glTF and PNG only");
-  cmd->add_option("--frames", o->frames, "Frames over the keyframes' time range")->capture_default_str()->check(CLI::Range(2, 1000000));
+  add_frame_options(cmd, o->frames, o->per_interval);
   cmd->add_option("--samples", o->samples, "Boundary samples |G| (default: the scene's)")->check(CLI::Range(kMinSamples, kMaxSamples));
   cmd->add_option("--ratio", o->ratio, "Hessian sample ratio r (default: the scene's)")->check(CLI::Range(1e-6, 1.0));
   cmd->add_option("--max-iterations", o->max_iterations, "Newton iterations per frame at most")->capture_default_str()->check(CLI::Range(1, 1000000));
@@ -63,6 +63,7 @@ void register_export(CLI::App& app) {
     } else {
       SceneSequenceOptions so;
       so.frames = o->frames;
+      so.frames_per_interval = o->per_interval;
       so.samples = o->samples;
       so.hessian_ratio = o->ratio;
       so.interpolation.max_iterations = o->max_iterations;
@@ -92,7 +93,10 @@ void register_export(CLI::App& app) {
       GltfStats st;
       write_glb(o->gltf, scene, ff, go, &st);
       std::printf("wrote %s: %d vertices, %d triangles, %d morph targets, %s, %zu bytes\n", o->gltf.c_str(), st.vertices, st.triangles,
-                  st.targets, st.textured ? "textured" : "untextured", st.bytes);
+                  st.targets,
+                  st.textured ? (std::string("textured, ") + texture_filter_name(scene.texture_filter) + " texture filtering").c_str()
+                              : "untextured",
+                  st.bytes);
     }
     if (!o->png.empty()) {
       // The frames go next to the images, then hsi render draws them (same code path).

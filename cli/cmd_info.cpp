@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cstdio>
 #include <memory>
+#include <optional>
 #include <nlohmann/json.hpp>
 
 #include "commands.h"
@@ -11,6 +12,7 @@
 #include "hsi/map_space.h"
 #include "hsi/scene_io.h"
 #include "hsi/draw/plot.h"
+#include "hsi/scene_texture.h"
 #include "hsi/shape_setup.h"
 
 namespace hsi::cli {
@@ -73,7 +75,10 @@ void register_info(CLI::App& app) {
     std::printf("           singular values on %zu boundary points: f: [%.3g, %.3g], (f_z, conj f_zbar): [%.3g, %.3g]\n",
                 dense.size(), cf.sigma_min, cf.sigma_max, cm.sigma_min, cm.sigma_max);
     std::printf("samples    |G| = %zu, |H| = %zu (r = %.0f%%)\n", G.size(), H.size(), 100 * scene.hessian_ratio);
-    std::printf("texture    %s\n", scene.texture.empty() ? "(none)" : scene.texture_path().string().c_str());
+    if (scene.texture.empty())
+      std::printf("texture    (none)\n");
+    else
+      std::printf("texture    %s (%s filtering)\n", scene.texture_path().string().c_str(), texture_filter_name(scene.texture_filter));
     r["cage"] = {{"vertices", cage.vertex_count()}, {"user_given", scene.cage.has_value()},
                  {"clearance", cage_clearance(scene.shape, cage)}};
     r["map_space"] = {{"n", map_space.n()},
@@ -85,6 +90,7 @@ void register_info(CLI::App& app) {
                       {"sigma_min_metric", cm.sigma_min},
                       {"sigma_max_metric", cm.sigma_max}};
     r["samples"] = {{"G", G.size()}, {"H", H.size()}};
+    if (!scene.texture.empty()) r["texture_filter"] = texture_filter_name(scene.texture_filter);
 
     // Keyframes: how each is given and, for those with coefficients, their certificate.
     // The verdict says plainly whether hsi interpolate can run, and why not.
@@ -148,8 +154,15 @@ void register_info(CLI::App& app) {
       write_file_atomic(o->json, r.dump(2) + "\n");
     }
     if (!o->png.empty()) {
-      plot_cage(o->png, scene.shape, cage, &G);
-      std::printf("drawing    %s\n", o->png.c_str());
+      draw::CagePlot extras;
+      extras.handles = scene.handles;
+      std::optional<SceneTexture> tex;
+      if (!scene.texture.empty()) tex = scene_texture(scene, o->scene);
+      extras.texture = tex ? &*tex : nullptr;
+      plot_cage(o->png, scene.shape, cage, &G, 800, extras);
+      std::printf("drawing    %s (%s)\n", o->png.c_str(),
+                  tex ? (std::string("over the texture, ") + texture_filter_name(tex->filter) + " filtering").c_str()
+                      : "no texture");
     }
   });
 }

@@ -45,11 +45,7 @@ void register_interpolate(CLI::App& app) {
           std::string(kFlaggedFramesHelp));
   cmd->add_option("scene", o->scene, "Scene file (.json) with two or more keyframes")->required()->check(CLI::ExistingFile);
   cmd->add_option("-o,--output", o->out, "Output folder")->capture_default_str();
-  auto* frames_opt = cmd->add_option("--frames", o->frames, "Number of frames over the keyframes' time range")->capture_default_str()->check(CLI::Range(2, 1000000));
-  cmd->add_option("--frames-per-interval", o->per_interval,
-                  "Instead of --frames: this many equal steps between neighbouring keyframes, so every keyframe time is a frame")
-      ->check(CLI::Range(1, 1000000))
-      ->excludes(frames_opt);
+  add_frame_options(cmd, o->frames, o->per_interval);
   cmd->add_option("--samples", o->samples, "Boundary samples |G| (default: the scene's, 10000)")->check(CLI::Range(kMinSamples, kMaxSamples));
   cmd->add_option("--ratio", o->ratio, "Hessian sample ratio r (default: the scene's, 0.2)")->check(CLI::Range(1e-6, 1.0));
   cmd->add_option("--tolerance", o->tolerance, "Stop a frame when its energy decreases by less than this fraction of itself (and not in a slow linear crawl)")->capture_default_str();
@@ -125,8 +121,7 @@ void register_interpolate(CLI::App& app) {
       if (tty && i + 1 == n) std::fprintf(stderr, "\n");
     };
 
-    SceneSequence seq{setup, o->per_interval > 0 ? interp.sequence(frame_times(times, o->per_interval), progress)
-                                                 : interp.sequence(o->frames, progress), 0.0, io};
+    SceneSequence seq{setup, interp.sequence(sequence_times(times, o->frames, o->per_interval), progress), 0.0, io};
     const int key_frames = static_cast<int>(std::count_if(seq.frames.begin(), seq.frames.end(), [](const FrameResult& f) { return f.keyframe; }));
     if (key_frames < static_cast<int>(times.size()))
       std::printf("note: %d of %zu keyframe times are frames (--frames-per-interval K makes every keyframe time a frame)\n",

@@ -7,12 +7,14 @@
 #include <fstream>
 #include <functional>
 #include <iterator>
+#include <optional>
 #include <sstream>
 
 #include "commands.h"
 #include "hsi/keyframes.h"
 #include "hsi/png_import.h"
 #include "hsi/scene_sequence.h"
+#include "hsi/scene_texture.h"
 #include "hsi/draw/plot.h"
 
 namespace hsi::cli {
@@ -114,7 +116,14 @@ void register_keyframes(CLI::App& app) {
     Scene scene = load_scene(o->scene);
     try {
       const auto to_scene = pixel_mapping(scene, o->pixels);
-      for (const std::string& h : o->handles) add_handle(scene, to_scene(parse_point(h, "--handle")));
+      for (const std::string& h : o->handles) {
+        try {
+          add_handle(scene, to_scene(parse_point(h, "--handle")));
+        } catch (const InputError& e) {  // its place is checked before solving; name the pixel the user typed
+          if (!o->pixels) throw;
+          throw InputError("--handle " + h.substr(0, 60) + " (pixels of the texture): " + e.what());
+        }
+      }
       for (const std::string& k : o->keyframes) {
         auto [time, targets] = parse_keyframe(k);
         for (cd& q : targets) q = to_scene(q);
@@ -131,7 +140,11 @@ void register_keyframes(CLI::App& app) {
     ko.lambda = o->lambda;
     ko.stages = o->stages;
     ko.newton.max_iterations = o->max_iterations;
-    if (!o->png_dir.empty()) std::filesystem::create_directories(o->png_dir);
+    std::optional<SceneTexture> tex;  // the keyframe pictures draw the sprite through each map
+    if (!o->png_dir.empty()) {
+      std::filesystem::create_directories(o->png_dir);
+      if (!scene.texture.empty()) tex = scene_texture(scene, o->scene);
+    }
     bool all_ok = true;
     int unreached = 0;  // keyframes whose targets could not be reached without folding
     int overlapping = 0;  // keyframes that are locally but not globally injective
@@ -163,6 +176,7 @@ void register_keyframes(CLI::App& app) {
         extras.handles_image = map_points(setup->cage, *key.coefficients, scene.handles);
         extras.targets = key.targets;
         extras.title = scene.name + " " + label;
+        extras.texture = tex ? &*tex : nullptr;
         plot_map(std::filesystem::path(o->png_dir) / ("keyframe_" + std::to_string(k.index) + ".png"), scene.shape,
                  setup->cage, *key.coefficients, extras);
       }

@@ -51,6 +51,7 @@ struct Opts {
   int mesh_vertices = 20000, sheet_max = 24, sheet_columns = 0;
   std::string device;
   std::string rasterizer = "auto";
+  std::string filter = "scene";  // the scene's texture_filter, or linear / nearest
 };
 
 // "all", or comma-separated indices and inclusive ranges a-b ("0,10,20-30").
@@ -252,13 +253,14 @@ void run_render(const Opts& o) {
                                               : compute::Rasterizer::kAuto;
   compute::Renderer renderer(*ctx, W, H, ro);
   renderer.set_mesh(mesh, scene.handles);
-  renderer.set_texture(texture, rect);
-  std::printf("rendering %zu of %zu frames at %d x %d on %s (%s, %s precision, %dx MSAA, %s rasterizer); mesh %d "
-              "vertices, %d triangles\n",
+  const TextureFilter filter = o.filter == "scene" ? st.filter : *parse_texture_filter(o.filter);
+  renderer.set_texture(texture, rect, filter);
+  std::printf("rendering %zu of %zu frames at %d x %d on %s (%s, %s precision, %dx MSAA, %s rasterizer, %s texture "
+              "filtering); mesh %d vertices, %d triangles\n",
               selected.size(), ff.frames.size(), W, H, ctx->info().name.c_str(), ctx->info().type_name().c_str(),
               renderer.double_precision() ? "double" : "float", renderer.msaa_samples(),
-              renderer.rasterizer() == compute::Rasterizer::kCompute ? "compute" : "graphics", mesh.vertex_count(),
-              mesh.triangle_count());
+              renderer.rasterizer() == compute::Rasterizer::kCompute ? "compute" : "graphics", texture_filter_name(filter),
+              mesh.vertex_count(), mesh.triangle_count());
   if (legend) std::printf("distortion colour map over [%.3f, %.3f] (largest in these frames: %.4f)\n", lo, hi, kappa_max);
   std::fflush(stdout);
 
@@ -450,6 +452,11 @@ void register_render(CLI::App& app) {
                   "Triangles to pixels: auto (compute shaders on a GPU, the graphics pipeline on a CPU device), "
                   "graphics or compute")
       ->check(CLI::IsMember({"auto", "graphics", "compute"}))
+      ->capture_default_str();
+  cmd->add_option("--filter", o->filter,
+                  "Texture filtering: scene (the scene's \"texture_filter\", linear unless it says nearest), linear "
+                  "(bilinear) or nearest (crisp texels, for pixel art)")
+      ->check(CLI::IsMember({"scene", "linear", "nearest"}))
       ->capture_default_str();
   cmd->callback([o] { run_render(*o); });
 }

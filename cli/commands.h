@@ -45,6 +45,18 @@ inline constexpr const char* kFlaggedFramesHelp =
     "Exit status: 0 all frames certified and converged; 1 error; 2 bad input; 3 some frame not certified;\n"
     "4 some frame did not converge (certified, but Newton stopped at --max-iterations; --allow-unconverged: 0).";
 
+// --frames N and --frames-per-interval K (exclusive) for interpolate, bake and export;
+// the frame times are then sequence_times(keys, frames, per_interval) (interpolation.h).
+inline void add_frame_options(CLI::App* cmd, int& frames, int& per_interval) {
+  auto* frames_opt = cmd->add_option("--frames", frames, "Number of frames over the keyframes' time range")
+                         ->capture_default_str()
+                         ->check(CLI::Range(2, 1000000));
+  cmd->add_option("--frames-per-interval", per_interval,
+                  "Instead of --frames: this many equal steps between neighbouring keyframes, so every keyframe time is a frame")
+      ->check(CLI::Range(1, 1000000))
+      ->excludes(frames_opt);
+}
+
 // hsi render's description (cmd_render.cpp, or cmd_render_unavailable.cpp in a build without Vulkan).
 inline constexpr const char* kRenderHelp =
     "Render the frames of 'hsi interpolate' offscreen (Vulkan; lavapipe on a machine without a GPU):\n"

@@ -469,3 +469,20 @@ TEST_CASE("a short sequence solved on the GPU matches the CPU", "[cuda][small]")
   for (const auto& p : test::asset_scenes())
     if (p.filename() == "annulus.json") compare_sequences(p, 6, 4000);
 }
+
+// cuBLAS and cuSOLVER are not linked (cuda/src/lazy_libraries.cpp): every process with
+// the backend paid ~250 MB for them at start. Calls go through entry points that open
+// the libraries on first use; this one needs no GPU.
+#include <cublas_v2.h>
+#include <cusolverDn.h>
+
+TEST_CASE("cuda: cuBLAS and cuSOLVER entry points open their libraries on first use", "[cuda]") {
+  CHECK(std::string(cublasGetStatusName(CUBLAS_STATUS_SUCCESS)) == "CUBLAS_STATUS_SUCCESS");
+  CHECK(std::string(cublasGetStatusString(CUBLAS_STATUS_NOT_INITIALIZED)).size() > 5);
+  // Without a device the handle cannot be made, but the call reaches cuSOLVER and reports it.
+  cusolverDnHandle_t h = nullptr;
+  const cusolverStatus_t s = cusolverDnCreate(&h);
+  if (s == CUSOLVER_STATUS_SUCCESS) cusolverDnDestroy(h);
+  CHECK((s == CUSOLVER_STATUS_SUCCESS || s == CUSOLVER_STATUS_NOT_INITIALIZED || s == CUSOLVER_STATUS_ALLOC_FAILED ||
+         s == CUSOLVER_STATUS_INTERNAL_ERROR || s == CUSOLVER_STATUS_ARCH_MISMATCH));
+}

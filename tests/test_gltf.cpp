@@ -168,6 +168,20 @@ TEST_CASE("glTF export passes the Khronos validator: STEP, untextured, many fram
   CHECK((v2.empty() || v2 == "skip"));
 }
 
+TEST_CASE("glTF export: the texture's sampler is the scene's texture_filter", "[gltf]") {
+  Scene scene = load_scene(std::filesystem::path(HSI_ASSETS_DIR) / "two_holes.json");
+  const FrameFile ff = keyframe_frames(scene);
+  GltfOptions o;
+  o.mesh_vertices = 300;
+  const Glb linear = parse_glb(encode_glb(scene, ff, o));
+  CHECK(linear.json["samplers"][0]["magFilter"] == 9729);  // LINEAR
+  CHECK(linear.json["samplers"][0]["minFilter"] == 9987);  // LINEAR_MIPMAP_LINEAR
+  scene.texture_filter = TextureFilter::Nearest;
+  const Glb nearest = parse_glb(encode_glb(scene, ff, o));
+  CHECK(nearest.json["samplers"][0]["magFilter"] == 9728);  // NEAREST
+  CHECK(nearest.json["samplers"][0]["minFilter"] == 9984);  // NEAREST_MIPMAP_NEAREST
+}
+
 TEST_CASE("glTF export refuses uncertified frames and bad options", "[gltf]") {
   Scene scene;
   scene.shape = test::disc(1.0, 48);

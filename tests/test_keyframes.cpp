@@ -84,7 +84,7 @@ TEST_CASE("imported keyframes are certified; folding or malformed ones are refus
   CHECK_THROWS_AS(author_keyframe(*setup, std::vector<cd>{{0.7, 0}}, std::vector<cd>{}, identity_map(setup->cage)), InputError);
   // A handle in a hole (where the basis is singular at the hole point) is refused.
   CHECK_THROWS_WITH(author_keyframe(*setup, std::vector<cd>{{0.0, 0.0}}, std::vector<cd>{{1, 1}}, identity_map(setup->cage)),
-                    Contains("handle 0") && Contains("inside hole 1"));
+                    Contains("handle 0") && Contains("lies outside the shape, in hole 1, 0.399"));
 }
 
 TEST_CASE("every bundled scene has at least two keyframes, all certified", "[keyframes][assets]") {

@@ -496,7 +496,7 @@ TEST_CASE("png import: refusals name the file and the problem", "[png]") {
       o.alpha_threshold = t;
       CHECK_THAT(message_of([&] { import_png_alpha(good, o); }), Contains("threshold") && Contains(good.string()));
     }
-    for (double tol : {0.0, -1.0, std::nan("")}) {
+    for (double tol : {-1.0, std::nan("")}) {  // 0 is automatic (png_tolerance_for)
       PngImportOptions o;
       o.tolerance = tol;
       CHECK_THAT(message_of([&] { import_png_alpha(good, o); }), Contains("tolerance"));
@@ -548,4 +548,92 @@ TEST_CASE("png import: a shape below the minimum size is refused, naming its siz
              Contains("one_pixel.png: the sprite's shape is only") && Contains("at least 16 square pixels"));
   const auto small = write_rgba("five_pixels.png", 8, 8, [](double x, double y) { return x > 2 && x < 7 && y > 2 && y < 7; });
   CHECK_NOTHROW(import_png_alpha(small));
+}
+
+TEST_CASE("png import: a sprite sheet's pieces are listed, and any one can be picked or cropped", "[png][authoring]") {
+  // Four discs in a 2 x 2 sheet; the largest is bottom left.
+  const auto p = write_rgba("sheet.png", 120, 120, [](double x, double y) {
+    return disc(30, 30, 20)(x, y) || disc(90, 30, 15)(x, y) || disc(30, 90, 25)(x, y) || disc(90, 90, 10)(x, y);
+  });
+  const std::vector<PngPiece> pieces = list_png_pieces(p);
+  REQUIRE(pieces.size() == 4);
+  // Reading order (top, then left), with the pixels each covers and its area.
+  const double cx[4] = {30, 90, 30, 90}, cy[4] = {30, 30, 90, 90}, r[4] = {20, 15, 25, 10};
+  for (int i = 0; i < 4; ++i) {
+    CAPTURE(i);
+    CHECK(pieces[static_cast<size_t>(i)].index == i);
+    const PixelRect& b = pieces[static_cast<size_t>(i)].box;
+    CHECK(std::abs(b.x - (cx[i] - r[i])) <= 1);
+    CHECK(std::abs(b.y - (cy[i] - r[i])) <= 1);
+    CHECK(std::abs(b.width - 2 * r[i]) <= 2);
+    CHECK(pieces[static_cast<size_t>(i)].area == Approx(kPi * r[i] * r[i]).epsilon(0.03));
+  }
+  // Default: the largest (piece 2), with a warning naming it and how to pick another.
+  const PngShape largest = import_png_alpha(p);
+  CHECK(largest.piece == 2);
+  CHECK(largest.pieces == 4);
+  REQUIRE(!largest.warnings.empty());
+  CHECK_THAT(largest.warnings[0], Contains("dropped 3 smaller pieces (largest kept: piece 2") && Contains("--piece K"));
+  // --piece 1: the top right disc, no warning about dropped pieces.
+  PngImportOptions one;
+  one.piece = 1;
+  const PngShape s1 = import_png_alpha(p, one);
+  CHECK(s1.piece == 1);
+  CHECK(area(s1.shape) == Approx(kPi * 225).epsilon(0.03));
+  CHECK(centroid(s1.shape.outer).real() == Approx(90).margin(0.5));
+  CHECK(centroid(s1.shape.outer).imag() == Approx(120 - 30).margin(0.5));  // y up
+  CHECK(s1.warnings.empty());
+  // A crop rectangle (the bottom right cell): only that piece, at its place in the image.
+  PngImportOptions cell;
+  cell.crop = PixelRect{60, 60, 60, 60};
+  const PngShape sc = import_png_alpha(p, cell);
+  CHECK(sc.pieces == 1);
+  CHECK(area(sc.shape) == Approx(kPi * 100).epsilon(0.05));
+  CHECK(centroid(sc.shape.outer).real() == Approx(90).margin(0.5));
+  CHECK(sc.texture_rect == std::array<double, 4>{0, 0, 120, 120});  // the texture still maps unchanged
+  // Refusals name the problem.
+  PngImportOptions nine;
+  nine.piece = 9;
+  CHECK_THAT(message_of([&] { import_png_alpha(p, nine); }), Contains("piece 9 does not exist: the image has 4 pieces (0 to 3"));
+  PngImportOptions outside;
+  outside.crop = PixelRect{100, 100, 40, 40};
+  CHECK_THAT(message_of([&] { import_png_alpha(p, outside); }),
+             Contains("crop rectangle 100,100,40,40") && Contains("does not lie inside the 120x120 px image"));
+  PngImportOptions empty_cell;
+  empty_cell.crop = PixelRect{0, 55, 5, 5};
+  CHECK_THAT(message_of([&] { import_png_alpha(p, empty_cell); }), Contains("no opaque pixels") && Contains("crop rectangle"));
+}
+
+TEST_CASE("png import: small sprites get a tolerance that scales with them, and nearest filtering", "[png][authoring]") {
+  // A 30 x 38 sprite (a head on a body): at the old fixed 0.75 px its outline was visibly faceted.
+  const auto p = write_rgba("small.png", 30, 38, [](double x, double y) {
+    return std::pow((x - 15) / 11, 2) + std::pow((y - 24) / 12, 2) <= 1 || std::pow((x - 15) / 6, 2) + std::pow((y - 7) / 6, 2) <= 1;
+  });
+  const PngShape s = import_png_alpha(p);
+  CHECK(s.tolerance_auto);
+  CHECK(s.tolerance == Approx(png_tolerance_for(std::max(s.width, s.height) - 3)).margin(0.02));
+  CHECK(s.tolerance < 0.25);
+  CHECK(png_tolerance_for(30) == Approx(0.15));
+  CHECK(png_tolerance_for(400) == Approx(0.75));  // large sprites keep the old default
+  CHECK(png_tolerance_for(4) == Approx(0.1));
+  PngImportOptions fixed;
+  fixed.tolerance = 0.75;
+  const PngShape coarse = import_png_alpha(p, fixed);
+  CHECK_FALSE(coarse.tolerance_auto);
+  CHECK(vertex_count(s.shape) > vertex_count(coarse.shape) + 4);
+  // Every traced point stays within the tolerance of the outline.
+  PngImportOptions fine;
+  fine.tolerance = 1e-4;
+  const Loop raw = import_png_alpha(p, fine).shape.outer;
+  double out = 0;
+  for (const cd& q : raw) out = std::max(out, loop_distance(s.shape.outer, q));
+  CHECK(out <= s.tolerance + 1e-3);
+  // Pixel-art sizes are drawn with nearest filtering unless asked otherwise; large sprites linear.
+  CHECK(s.filter == TextureFilter::Nearest);
+  CHECK(s.filter_auto);
+  PngImportOptions smooth;
+  smooth.filter = TextureFilter::Linear;
+  CHECK(import_png_alpha(p, smooth).filter == TextureFilter::Linear);
+  const auto big = write_rgba("big.png", 300, 300, disc(150, 150, 100));
+  CHECK(import_png_alpha(big).filter == TextureFilter::Linear);
 }

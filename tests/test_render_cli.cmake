@@ -34,6 +34,17 @@ run(0 ${HSI_CLI} render ${HSI_SCENE} ${frames} -o ${HSI_WORK_DIR}/compute --fram
 if(NOT RUN_OUTPUT MATCHES "compute rasterizer" OR NOT EXISTS ${HSI_WORK_DIR}/compute/frame_0001.png)
   message(FATAL_ERROR "--rasterizer compute did not render with the compute rasterizer")
 endif()
+# The texture filter: the scene's (linear here) unless --filter says otherwise, named in the output.
+if(NOT RUN_OUTPUT MATCHES "compute rasterizer, linear texture filtering")
+  message(FATAL_ERROR "hsi render does not say which texture filter it uses")
+endif()
+foreach(ras compute graphics)
+  run(0 ${HSI_CLI} render ${HSI_SCENE} ${frames} -o ${HSI_WORK_DIR}/nearest_${ras} --frames 1 --no-contact-sheet --size 96
+      --rasterizer ${ras} --filter nearest --validation)
+  if(NOT RUN_OUTPUT MATCHES "${ras} rasterizer, nearest texture filtering")
+    message(FATAL_ERROR "hsi render --filter nearest --rasterizer ${ras} did not render with nearest filtering")
+  endif()
+endforeach()
 run(105 ${HSI_CLI} render ${HSI_SCENE} ${frames} -o ${HSI_WORK_DIR}/bad --rasterizer fast)
 if(NOT RUN_OUTPUT MATCHES "--rasterizer: fast not in")
   message(FATAL_ERROR "an unknown rasterizer was not refused by name")

@@ -54,6 +54,18 @@ TEST_CASE("scenes round-trip through JSON, user cage and keyframes included", "[
   CHECK(r.keyframes[1].coefficients->phi == s.keyframes[1].coefficients->phi);
 }
 
+TEST_CASE("texture_filter: linear by default and not written; nearest round-trips; others refused", "[scene_io]") {
+  Scene s = parse(kMinimal);
+  CHECK(s.texture_filter == TextureFilter::Linear);
+  CHECK(scene_to_json(s).find("texture_filter") == std::string::npos);  // files without it stay as they were
+  s.texture_filter = TextureFilter::Nearest;
+  const std::string j = scene_to_json(s);
+  CHECK_THAT(j, Contains("\"texture_filter\": \"nearest\""));
+  CHECK(parse(j).texture_filter == TextureFilter::Nearest);
+  CHECK_THROWS_WITH(parse(R"({"hsi_scene": 1, "shape": {"outer": [[0,0],[1,0],[1,1]]}, "texture_filter": "cubic"})"),
+                    Contains("texture_filter: expected \"linear\" or \"nearest\""));
+}
+
 TEST_CASE("broken scene files give errors that say what and where", "[scene_io]") {
   CHECK_THROWS_WITH(parse("{\"hsi_scene\": 1,\n \"shape\": {\"outer\": [[0,0],[1,0]\n"), Contains("test.json") && Contains("invalid JSON at line 3"));
   CHECK_THROWS_WITH(parse("[1,2]"), Contains("expected a JSON object"));

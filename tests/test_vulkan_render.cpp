@@ -213,6 +213,46 @@ TEST_CASE("render: the identity map shows the texture unchanged, clipped at the 
   });
 }
 
+TEST_CASE("render: nearest filtering draws each texel of a small texture as a crisp block", "[vulkan][render]") {
+  FOR_EACH_RASTERIZER();
+  with_vulkan([&](compute::Context& ctx) {
+    const Setup s;
+    const int W = 256, H = 192;
+    // An 8 x 6 checkerboard of black and white texels over the whole image: 32 px per texel.
+    RgbaImage tex(8, 6);
+    for (int y = 0; y < 6; ++y)
+      for (int x = 0; x < 8; ++x) {
+        const uint8_t v = (x + y) % 2 ? 255 : 0;
+        const uint8_t px[4] = {v, v, v, 255};
+        std::copy(px, px + 4, tex.at(x, y));
+      }
+    const compute::View view = compute::View::fit({{-1, -0.75}, {1, 0.75}}, W, H);
+    compute::RenderStyle style;
+    // Pixels inside the shape whose value is neither black nor white: blended texels.
+    auto blended = [&](TextureFilter f) {
+      compute::Renderer r(ctx, W, H, with_rasterizer(rasterizer));
+      r.set_mesh(s.mesh);
+      r.set_texture(tex, kRect, f);
+      CHECK(r.texture_filter() == f);
+      const RgbaImage img = r.render(s.cage, identity_map(s.cage), view, style);
+      int grey = 0, wrong_texel = 0;
+      for (int y = 0; y < H; ++y)
+        for (int x = 0; x < W; ++x) {
+          if (signed_distance(s.shape, world_at(view, x, y)) * view.pixels_per_unit <= 1.5) continue;
+          const uint8_t v = img.at(x, y)[0];
+          grey += v > 8 && v < 247;
+          wrong_texel += (v > 128) != (((x / 32) + (y / 32)) % 2 == 1);  // the texel under the pixel's centre
+        }
+      return std::pair{grey, wrong_texel};
+    };
+    const auto [nearest_grey, nearest_wrong] = blended(TextureFilter::Nearest);
+    const auto [linear_grey, linear_wrong] = blended(TextureFilter::Linear);
+    CHECK(nearest_grey == 0);
+    CHECK(nearest_wrong == 0);
+    CHECK(linear_grey > 5000);  // bilinear blends across every texel edge (the default is unchanged)
+  });
+}
+
 TEST_CASE("render: an affine map moves the texture with the shape, holes stay empty", "[vulkan][render]") {
   FOR_EACH_RASTERIZER();
   with_vulkan([&](compute::Context& ctx) {

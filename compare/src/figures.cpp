@@ -108,16 +108,16 @@ SideBySide side_by_side(compute::Context& ctx, const Inputs& in, const Baselines
   const SceneTexture& tex = in.texture;
   compute::Renderer welded(ctx, pw, ph), flat(ctx, pw, ph);
   welded.set_mesh(b.mesh);
-  welded.set_texture(tex.image, tex.rect);
+  welded.set_texture(tex.image, tex.rect, tex.filter);
   const compute::UnweldedMesh unwelded = compute::unweld(b.mesh);
   flat.set_mesh(unwelded.mesh);
-  flat.set_texture(tex.image, tex.rect);
+  flat.set_texture(tex.image, tex.rect, tex.filter);
   // CCW16 (boundary metric) on its own, coarser mesh when the render mesh's rows were too large.
   std::unique_ptr<compute::Renderer> coarse;
   if (bm && b.bm.own_mesh) {
     coarse = std::make_unique<compute::Renderer>(ctx, pw, ph);
     coarse->set_mesh(b.bm.coarse);
-    coarse->set_texture(tex.image, tex.rect);
+    coarse->set_texture(tex.image, tex.rect, tex.filter);
   }
   compute::RenderStyle style;
   style.overlays = compute::kOverlayDistortion | compute::kOverlayBoundary;  // no handles: the baselines have none

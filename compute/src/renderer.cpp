@@ -178,8 +178,17 @@ void Renderer::set_mesh(const TriMesh& mesh, std::span<const cd> handles) {
   uv_dirty_ = true;
 }
 
-void Renderer::set_texture(const RgbaImage& texture, const std::array<double, 4>& rect) {
+void Renderer::set_texture(const RgbaImage& texture, const std::array<double, 4>& rect, TextureFilter filter) {
   Impl& r = *impl_;
+  if (filter != filter_) {  // frames bind the sampler when recorded; none is pending here
+    SamplerInfo si;
+    if (filter == TextureFilter::Nearest) {
+      si.filter = VK_FILTER_NEAREST;
+      si.mipmap = VK_SAMPLER_MIPMAP_MODE_NEAREST;
+    }
+    r.sampler = Sampler(*context_, si);
+    filter_ = filter;
+  }
   if (texture.empty()) {
     r.texture = Image();
     has_texture_ = false;

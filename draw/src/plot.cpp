@@ -8,6 +8,9 @@
 #include <limits>
 #include <memory>
 
+#include "hsi/triangulate.h"
+#include "rgba_surface.h"
+
 namespace hsi::draw {
 namespace {
 struct Frame {
@@ -38,6 +41,27 @@ class Canvas {
   std::unique_ptr<cairo_t, decltype(&cairo_destroy)> ctx_;
 };
 
+// A cairo surface (premultiplied ARGB32) of a straight-alpha RGBA image.
+std::unique_ptr<cairo_surface_t, decltype(&cairo_surface_destroy)> texture_surface(const RgbaImage& img) {
+  std::unique_ptr<cairo_surface_t, decltype(&cairo_surface_destroy)> s(
+      cairo_image_surface_create(CAIRO_FORMAT_ARGB32, img.width, img.height), cairo_surface_destroy);
+  detail::write_premultiplied(img, s.get());
+  return s;
+}
+
+// The current source: the texture surface, sampled with the scene's filter, edges padded.
+void set_texture_source(cairo_t* cr, cairo_surface_t* tex, TextureFilter filter) {
+  cairo_set_source_surface(cr, tex, 0, 0);
+  cairo_pattern_set_filter(cairo_get_source(cr), filter == TextureFilter::Nearest ? CAIRO_FILTER_NEAREST : CAIRO_FILTER_BILINEAR);
+  cairo_pattern_set_extend(cairo_get_source(cr), CAIRO_EXTEND_PAD);
+}
+
+// Texel coordinates (x right, y down, in texels) of a world point under texture rect r.
+cd texel_of(const SceneTexture& t, cd p) {
+  const auto& r = t.rect;
+  return {(p.real() - r[0]) / (r[2] - r[0]) * t.image.width, (r[3] - p.imag()) / (r[3] - r[1]) * t.image.height};
+}
+
 void path(cairo_t* cr, const Frame& f, const Loop& loop) {
   for (size_t i = 0; i < loop.size(); ++i) {
     const cd q = f.px(loop[i]);
@@ -51,7 +75,8 @@ void path(cairo_t* cr, const Frame& f, const Loop& loop) {
 }  // namespace
 
 void plot_cage(const std::filesystem::path& png, const Shape& shape, const Cage& cage, const BoundarySamples* samples,
-               int width_px) {
+               int width_px, const CagePlot& extras) {
+  const SceneTexture* texture = extras.texture;
   BoundingBox bb = bounding_box(cage.loops.front());
   const double pad = 20;
   const double sx = bb.hi.real() - bb.lo.real(), sy = bb.hi.imag() - bb.lo.imag();
@@ -60,10 +85,23 @@ void plot_cage(const std::filesystem::path& png, const Shape& shape, const Cage&
   const Frame f{bb.lo, scale, width_px, height_px, pad};
   const Canvas canvas(width_px, height_px);
   cairo_t* cr = canvas.cr();
-  // Shape, filled with holes cut out (even-odd).
+  const bool textured = texture && !texture->checker && !texture->image.empty();
+  if (textured) {  // the sprite under everything: texel (0, 0) at the rectangle's top-left corner
+    const auto tex = texture_surface(texture->image);
+    const auto& r = texture->rect;
+    const cd top_left = f.px({r[0], r[3]});
+    cairo_save(cr);
+    cairo_translate(cr, top_left.real(), top_left.imag());
+    cairo_scale(cr, (r[2] - r[0]) * scale / texture->image.width, (r[3] - r[1]) * scale / texture->image.height);
+    set_texture_source(cr, tex.get(), texture->filter);
+    cairo_pattern_set_extend(cairo_get_source(cr), CAIRO_EXTEND_NONE);
+    cairo_paint(cr);
+    cairo_restore(cr);
+  }
+  // Shape, filled with holes cut out (even-odd); over a texture only tinted.
   cairo_set_fill_rule(cr, CAIRO_FILL_RULE_EVEN_ODD);
   for (int k = 0; k < shape.loop_count(); ++k) path(cr, f, shape.loop(k));
-  cairo_set_source_rgb(cr, 0.78, 0.86, 0.95);
+  cairo_set_source_rgba(cr, 0.78, 0.86, 0.95, textured ? 0.25 : 1.0);
   cairo_fill_preserve(cr);
   cairo_set_source_rgb(cr, 0.15, 0.3, 0.55);
   cairo_set_line_width(cr, 1.5);
@@ -93,6 +131,16 @@ void plot_cage(const std::filesystem::path& png, const Shape& shape, const Cage&
     cairo_move_to(cr, q.real() - 5, q.imag() + 5);
     cairo_line_to(cr, q.real() + 5, q.imag() - 5);
     cairo_stroke(cr);
+  }
+  for (size_t k = 0; k < extras.handles.size(); ++k) {  // handles: red dots with their index
+    const cd q = f.px(extras.handles[k]);
+    cairo_set_source_rgb(cr, 0.8, 0.1, 0.1);
+    cairo_arc(cr, q.real(), q.imag(), 4, 0, 2 * M_PI);
+    cairo_fill(cr);
+    cairo_select_font_face(cr, "sans-serif", CAIRO_FONT_SLANT_NORMAL, CAIRO_FONT_WEIGHT_BOLD);
+    cairo_set_font_size(cr, 12);
+    cairo_move_to(cr, q.real() + 6, q.imag() - 6);
+    cairo_show_text(cr, std::to_string(k).c_str());
   }
   if (samples) {
     cairo_set_source_rgb(cr, 0.1, 0.1, 0.1);
@@ -155,6 +203,48 @@ void plot_map(const std::filesystem::path& png, const Shape& shape, const Cage& 
   const Frame fr{lo, scale, width_px, height_px, pad};
   const Canvas canvas(width_px, height_px);
   cairo_t* cr = canvas.cr();
+  const bool textured = extras.texture && !extras.texture->checker && !extras.texture->image.empty();
+  if (textured) {
+    // The sprite through the map: each triangle of the rest shape's triangulation is
+    // mapped affinely from its texels to the images of its corners (clipped without
+    // anti-aliasing, so neighbours meet without seams; the outline is stroked over it).
+    const SceneTexture& t = *extras.texture;
+    TriangulateOptions to;
+    to.max_edge = edge_for_vertex_count(shape, 1500);
+    const TriMesh mesh = triangulate(shape, to);
+    const VectorXcd fm = evaluate_map(evaluate_basis(cage, mesh.vertices, kBasisC), map).f;
+    const auto tex = texture_surface(t.image);
+    cairo_save(cr);
+    cairo_set_antialias(cr, CAIRO_ANTIALIAS_NONE);
+    for (const auto& tri : mesh.triangles) {
+      cd s[3], q[3];
+      for (int k = 0; k < 3; ++k) {
+        const size_t v = static_cast<size_t>(tri[static_cast<size_t>(k)]);
+        s[k] = texel_of(t, mesh.vertices[v]);
+        q[k] = fr.px(fm(static_cast<Eigen::Index>(v)));
+      }
+      // q = A s + b: A from the edge vectors.
+      const cd ds1 = s[1] - s[0], ds2 = s[2] - s[0], dq1 = q[1] - q[0], dq2 = q[2] - q[0];
+      const double det = ds1.real() * ds2.imag() - ds1.imag() * ds2.real();
+      if (std::abs(det) < 1e-12) continue;
+      const double i00 = ds2.imag() / det, i01 = -ds2.real() / det, i10 = -ds1.imag() / det, i11 = ds1.real() / det;
+      const double a = dq1.real() * i00 + dq2.real() * i10, c = dq1.real() * i01 + dq2.real() * i11;
+      const double b = dq1.imag() * i00 + dq2.imag() * i10, d = dq1.imag() * i01 + dq2.imag() * i11;
+      cairo_matrix_t m;
+      cairo_matrix_init(&m, a, b, c, d, q[0].real() - a * s[0].real() - c * s[0].imag(), q[0].imag() - b * s[0].real() - d * s[0].imag());
+      cairo_save(cr);
+      cairo_move_to(cr, q[0].real(), q[0].imag());
+      cairo_line_to(cr, q[1].real(), q[1].imag());
+      cairo_line_to(cr, q[2].real(), q[2].imag());
+      cairo_close_path(cr);
+      cairo_clip(cr);
+      cairo_transform(cr, &m);
+      set_texture_source(cr, tex.get(), t.filter);
+      cairo_paint(cr);
+      cairo_restore(cr);
+    }
+    cairo_restore(cr);
+  }
   // Overlapping layers fill by winding (even-odd would punch the overlap out as a hole).
   cairo_set_fill_rule(cr, extras.overlaps ? CAIRO_FILL_RULE_WINDING : CAIRO_FILL_RULE_EVEN_ODD);
   size_t off = 0;
@@ -166,9 +256,9 @@ void plot_map(const std::filesystem::path& png, const Shape& shape, const Cage& 
     path(cr, fr, img);
   }
   if (extras.uncertified)
-    cairo_set_source_rgb(cr, 0.98, 0.72, 0.72);
+    cairo_set_source_rgba(cr, 0.98, 0.72, 0.72, textured ? 0.45 : 1.0);
   else
-    cairo_set_source_rgb(cr, 0.85, 0.9, 0.97);
+    cairo_set_source_rgba(cr, 0.85, 0.9, 0.97, textured ? 0.0 : 1.0);
   cairo_fill_preserve(cr);
   cairo_set_source_rgb(cr, 0.12, 0.25, 0.5);
   cairo_set_line_width(cr, 1.6);

@@ -7,6 +7,7 @@
 #include <stdexcept>
 
 #include "hsi/compute/renderer.h"
+#include "rgba_surface.h"
 
 namespace hsi::draw {
 
@@ -21,19 +22,7 @@ Surface make_surface(int w, int h) {
 
 Surface surface_from(const RgbaImage& img) {
   Surface s = make_surface(img.width, img.height);
-  cairo_surface_flush(s.surf.get());
-  unsigned char* data = cairo_image_surface_get_data(s.surf.get());
-  const int stride = cairo_image_surface_get_stride(s.surf.get());
-  for (int y = 0; y < img.height; ++y) {
-    auto* row = reinterpret_cast<uint32_t*>(data + static_cast<ptrdiff_t>(y) * stride);
-    for (int x = 0; x < img.width; ++x) {
-      const uint8_t* p = img.at(x, y);
-      const uint32_t a = p[3];
-      auto pre = [a](uint32_t c) { return (c * a + 127) / 255; };
-      row[x] = (a << 24) | (pre(p[0]) << 16) | (pre(p[1]) << 8) | pre(p[2]);
-    }
-  }
-  cairo_surface_mark_dirty(s.surf.get());
+  detail::write_premultiplied(img, s.surf.get());
   return s;
 }
 

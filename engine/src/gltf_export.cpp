@@ -162,8 +162,9 @@ std::string encode_glb(const Scene& scene, const FrameFile& frames, const GltfOp
     b.model.bufferViews.back().target = 0;
     b.model.images.push_back(img);
     tinygltf::Sampler s;
-    s.magFilter = TINYGLTF_TEXTURE_FILTER_LINEAR;
-    s.minFilter = TINYGLTF_TEXTURE_FILTER_LINEAR_MIPMAP_LINEAR;
+    const bool nearest = scene.texture_filter == TextureFilter::Nearest;  // as the renderers sample it
+    s.magFilter = nearest ? TINYGLTF_TEXTURE_FILTER_NEAREST : TINYGLTF_TEXTURE_FILTER_LINEAR;
+    s.minFilter = nearest ? TINYGLTF_TEXTURE_FILTER_NEAREST_MIPMAP_NEAREST : TINYGLTF_TEXTURE_FILTER_LINEAR_MIPMAP_LINEAR;
     s.wrapS = s.wrapT = TINYGLTF_TEXTURE_WRAP_CLAMP_TO_EDGE;
     b.model.samplers.push_back(s);
     tinygltf::Texture tex;

@@ -208,11 +208,7 @@ FrameResult Interpolator::frame(double t, const Eigen::VectorXd& warm_start, con
 }
 
 std::vector<FrameResult> Interpolator::sequence(int frames, const std::function<void(const FrameResult&, int, int)>& progress) {
-  if (frames < 2) throw InputError("a sequence needs at least 2 frames (got " + std::to_string(frames) + ")");
-  std::vector<double> times;
-  for (int i = 0; i < frames; ++i)
-    times.push_back(i == frames - 1 ? t_end() : t_begin() + (t_end() - t_begin()) * i / (frames - 1));
-  return sequence(times, progress);
+  return sequence(sequence_times({t_begin(), t_end()}, frames), progress);
 }
 
 std::vector<FrameResult> Interpolator::sequence(const std::vector<double>& times,
@@ -251,6 +247,16 @@ std::vector<double> frame_times(const std::vector<double>& key_times, int per_in
       out.push_back(i == 0 ? key_times[k] : key_times[k] + (key_times[k + 1] - key_times[k]) * i / per_interval);
   out.push_back(key_times.back());
   return out;
+}
+
+std::vector<double> sequence_times(const std::vector<double>& key_times, int frames, int per_interval) {
+  if (per_interval > 0) return frame_times(key_times, per_interval);
+  if (frames < 2) throw InputError("a sequence needs at least 2 frames (got " + std::to_string(frames) + ")");
+  if (key_times.empty()) throw InputError("frame times need keyframes");
+  const double t0 = key_times.front(), t1 = key_times.back();
+  std::vector<double> times;
+  for (int i = 0; i < frames; ++i) times.push_back(i == frames - 1 ? t1 : t0 + (t1 - t0) * i / (frames - 1));
+  return times;
 }
 
 }  // namespace hsi

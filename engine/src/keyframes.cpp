@@ -7,6 +7,15 @@
 
 namespace hsi {
 
+namespace {
+std::string fmt_point(cd p) {
+  std::ostringstream s;
+  s.precision(6);
+  s << "(" << p.real() << ", " << p.imag() << ")";
+  return s.str();
+}
+}  // namespace
+
 std::vector<cd> map_points(const Cage& cage, const HarmonicMap& map, std::span<const cd> points) {
   const VectorXcd f = evaluate_map(evaluate_basis(cage, points, kBasisC), map).f;
   return std::vector<cd>(f.data(), f.data() + f.size());
@@ -23,15 +32,9 @@ KeyframeResult author_keyframe(const ShapeSetup& setup, std::span<const cd> hand
       throw InputError("keyframe: target " + std::to_string(k) + " is not finite");
   // A handle must lie on the shape: inside a hole the basis is not the map (and is
   // singular at the hole point).
-  for (size_t k = 0; k < handles.size(); ++k) {
-    const cd h = handles[k];
-    if (point_in_shape(setup.shape, h) || boundary_distance(setup.shape, h) <= 1e-9 * setup.size) continue;
-    std::string where = "outside the outer loop";
-    for (int l = 1; l < setup.shape.loop_count(); ++l)
-      if (point_in_loop(setup.shape.loop(l), h)) where = "inside " + loop_name(l);
-    throw InputError("keyframe: handle " + std::to_string(k) + " at (" + std::to_string(h.real()) + ", " +
-                     std::to_string(h.imag()) + ") lies " + where + "; handles must be on the shape");
-  }
+  for (size_t k = 0; k < handles.size(); ++k)
+    if (const std::string why = off_shape_reason(setup.shape, handles[k]); !why.empty())
+      throw InputError("keyframe: handle " + std::to_string(k) + " at " + fmt_point(handles[k]) + " " + why);
   const MapSpace& space = setup.map_space;
   Eigen::VectorXd x = space.reduce(import_keyframe(setup, start, "the start map")).x;
 
@@ -145,26 +148,28 @@ std::vector<SceneKeyframe> solve_scene_keyframes(Scene& scene, const ShapeSetup&
 
 namespace hsi {
 
-namespace {
-std::string fmt_point(cd p) {
+
+std::string off_shape_reason(const Shape& shape, cd p) {
+  const BoundingBox bb = bounding_box(shape);
+  const double size = bb.diagonal();
+  if (point_in_shape(shape, p)) return "";
+  const double d = boundary_distance(shape, p);
+  if (d <= 1e-9 * size) return "";
+  std::string where = "beyond the outer loop";
+  for (int l = 1; l < shape.loop_count(); ++l)
+    if (point_in_loop(shape.loop(l), p)) where = "in " + loop_name(l);
   std::ostringstream s;
-  s.precision(6);
-  s << "(" << p.real() << ", " << p.imag() << ")";
+  s.precision(4);
+  s << "lies outside the shape, " << where << ", " << d << " from the shape (" << 100 * d / size
+    << "% of its size); a handle must be on the shape (its bounding box is " << fmt_point(bb.lo) << " to " << fmt_point(bb.hi)
+    << ")";
   return s.str();
 }
-}  // namespace
 
 void add_handle(Scene& scene, cd rest) {
   const std::string what = "handle " + std::to_string(scene.handles.size()) + " at " + fmt_point(rest);
   if (!std::isfinite(rest.real()) || !std::isfinite(rest.imag())) throw InputError(what + ": is not finite");
-  if (!point_in_shape(scene.shape, rest) && boundary_distance(scene.shape, rest) > 1e-9 * bounding_box(scene.shape).diagonal()) {
-    std::string where = "outside the outer loop";
-    for (int l = 1; l < scene.shape.loop_count(); ++l)
-      if (point_in_loop(scene.shape.loop(l), rest)) where = "inside " + loop_name(l);
-    const BoundingBox bb = bounding_box(scene.shape);
-    throw InputError(what + ": lies " + where + "; a handle must be on the shape (its bounding box is " + fmt_point(bb.lo) + " to " +
-                     fmt_point(bb.hi) + ")");
-  }
+  if (const std::string why = off_shape_reason(scene.shape, rest); !why.empty()) throw InputError(what + ": " + why);
   for (size_t k = 0; k < scene.keyframes.size(); ++k)
     if (!scene.keyframes[k].coefficients)
       throw InputError(what + ": keyframe " + std::to_string(k) +

@@ -8,6 +8,7 @@
 #include <cstdio>
 #include <cstring>
 #include <sstream>
+#include <tuple>
 #include <unordered_map>
 #include <utility>
 
@@ -225,9 +226,11 @@ void check_options(const PngImportOptions& options, const std::string& name) {
   const double t = options.alpha_threshold;
   if (!(t > 0 && t < 1))
     throw InputError(name + ": bad option: the alpha threshold must be in (0, 1), got " + fmt(t));
-  if (!(options.tolerance > 0) || !std::isfinite(options.tolerance))
-    throw InputError(name + ": bad option: the simplification tolerance must be > 0 pixels, got " +
+  if (!(options.tolerance >= 0) || !std::isfinite(options.tolerance))
+    throw InputError(name + ": bad option: the simplification tolerance must be > 0 pixels (0: automatic), got " +
                      fmt(options.tolerance));
+  if (options.piece < -1)
+    throw InputError(name + ": bad option: the piece index must be >= 0 (-1: the largest), got " + std::to_string(options.piece));
   if (!(options.pixel_size > 0) || !std::isfinite(options.pixel_size))
     throw InputError(name + ": bad option: the pixel size must be > 0, got " + fmt(options.pixel_size));
   if (!(options.min_hole_area >= 0) || !std::isfinite(options.min_hole_area))
@@ -277,6 +280,112 @@ void fit_cage(Shape& shape, const std::string& name, const PngImportOptions& opt
 
 }  // namespace
 
+double png_tolerance_for(double side_px) { return std::clamp(0.005 * side_px, 0.1, 0.75); }
+
+namespace {
+
+// The image with every pixel outside options.crop made transparent (the texture
+// rectangle still covers the whole image, so the sprite maps onto the piece unchanged).
+PngAlpha cropped(PngAlpha img, const PngImportOptions& options, const std::string& name) {
+  if (!options.crop) return img;
+  const PixelRect& c = *options.crop;
+  if (c.width <= 0 || c.height <= 0 || c.x < 0 || c.y < 0 || c.x + c.width > img.width || c.y + c.height > img.height)
+    throw InputError(name + ": the crop rectangle " + std::to_string(c.x) + "," + std::to_string(c.y) + "," + std::to_string(c.width) +
+                     "," + std::to_string(c.height) + " (x, y, width, height in pixels) does not lie inside the " +
+                     std::to_string(img.width) + "x" + std::to_string(img.height) + " px image");
+  for (int y = 0; y < img.height; ++y)
+    for (int x = 0; x < img.width; ++x)
+      if (x < c.x || y < c.y || x >= c.x + c.width || y >= c.y + c.height)
+        img.alpha[static_cast<size_t>(y) * static_cast<size_t>(img.width) + static_cast<size_t>(x)] = 0;
+  return img;
+}
+
+// Traced loops (pixel coordinates, y down) grouped into pieces, in list_png_pieces's order.
+struct Traced {
+  std::vector<Loop> loops;
+  std::vector<double> areas;  // signed: > 0 boundaries, < 0 holes
+  struct Piece {
+    size_t boundary = 0;
+    std::vector<size_t> holes;
+    double area = 0;  // holes subtracted
+    BoxD box{};
+  };
+  std::vector<Piece> pieces;
+};
+
+Traced trace_pieces(const PngAlpha& img, const PngImportOptions& options, const std::string& name) {
+  const double t = options.alpha_threshold;
+  const PaddedGrid grid(img, t);
+  if (std::none_of(img.alpha.begin(), img.alpha.end(), [&](uint16_t a) { return grid.inside(a); }))
+    throw InputError(name + ": no opaque pixels above alpha threshold " + fmt(t) + " (" + std::to_string(img.width) + "x" +
+                     std::to_string(img.height) + " px image" + (options.crop ? ", in the crop rectangle" : "") + ")");
+  // Trace, then sort loops into boundaries and holes by orientation (the tracing
+  // keeps the opaque side on the left, so this is the parity of containment depth).
+  Traced tr;
+  tr.loops = trace_contours(grid);
+  std::vector<size_t> bounds, holes;
+  tr.areas.resize(tr.loops.size());
+  std::vector<BoxD> boxes(tr.loops.size());
+  for (size_t i = 0; i < tr.loops.size(); ++i) {
+    tr.areas[i] = signed_area(tr.loops[i]);
+    boxes[i] = box_of(tr.loops[i]);
+    (tr.areas[i] > 0 ? bounds : holes).push_back(i);
+  }
+  // Nesting: each hole belongs to the smallest boundary containing it (loops are
+  // disjoint, so one vertex decides containment).
+  std::sort(bounds.begin(), bounds.end(), [&](size_t x, size_t y) { return tr.areas[x] < tr.areas[y]; });
+  std::unordered_map<size_t, std::vector<size_t>> holes_of;
+  for (size_t h : holes) {
+    const double ha = -tr.areas[h];
+    for (size_t bi : bounds) {
+      if (tr.areas[bi] <= ha || !boxes[bi].contains(boxes[h])) continue;
+      if (point_in_loop(tr.loops[bi], tr.loops[h][0])) {
+        holes_of[bi].push_back(h);
+        break;
+      }
+    }
+  }
+  for (size_t bi : bounds) {
+    Traced::Piece p;
+    p.boundary = bi;
+    p.holes = holes_of[bi];
+    p.area = tr.areas[bi];
+    for (size_t h : p.holes) p.area += tr.areas[h];
+    p.box = boxes[bi];
+    tr.pieces.push_back(std::move(p));
+  }
+  // Reading order: by the top, then the left, of the bounding box (ties: the larger first).
+  std::sort(tr.pieces.begin(), tr.pieces.end(), [](const Traced::Piece& a, const Traced::Piece& b) {
+    return std::make_tuple(a.box.y0, a.box.x0, -a.area) < std::make_tuple(b.box.y0, b.box.x0, -b.area);
+  });
+  return tr;
+}
+
+// The pixels a traced box covers (vertices lie between pixel centres, x right, y down).
+PixelRect pixel_box(const BoxD& b) {
+  const int x0 = static_cast<int>(std::floor(b.x0)), y0 = static_cast<int>(std::floor(b.y0));
+  return {x0, y0, static_cast<int>(std::ceil(b.x1)) - x0, static_cast<int>(std::ceil(b.y1)) - y0};
+}
+
+}  // namespace
+
+std::vector<PngPiece> list_png_pieces(const std::filesystem::path& png, const PngImportOptions& options) {
+  const std::string name = png.string();
+  check_options(options, name);
+  return list_png_pieces(read_png_bytes(png, name), name, options);
+}
+
+std::vector<PngPiece> list_png_pieces(std::span<const unsigned char> png_bytes, const std::string& name,
+                                      const PngImportOptions& options) {
+  check_options(options, name);
+  const PngAlpha img = cropped(decode_png_alpha(png_bytes, name), options, name);
+  const Traced tr = trace_pieces(img, options, name);
+  std::vector<PngPiece> out;
+  for (size_t i = 0; i < tr.pieces.size(); ++i)
+    out.push_back({static_cast<int>(i), pixel_box(tr.pieces[i].box), tr.pieces[i].area, static_cast<int>(tr.pieces[i].holes.size())});
+  return out;
+}
+
 PngShape import_png_alpha(const std::filesystem::path& png, const PngImportOptions& options) {
   const std::string name = png.string();
   check_options(options, name);
@@ -286,59 +395,46 @@ PngShape import_png_alpha(const std::filesystem::path& png, const PngImportOptio
 PngShape import_png_alpha(std::span<const unsigned char> png_bytes, const std::string& name, const PngImportOptions& options) {
   check_options(options, name);
   const double t = options.alpha_threshold;
-  const PngAlpha img = decode_png_alpha(png_bytes, name);
+  const PngAlpha img = cropped(decode_png_alpha(png_bytes, name), options, name);
   PngShape result;
   result.width = img.width;
   result.height = img.height;
   result.texture_rect = {0.0, 0.0, img.width * options.pixel_size, img.height * options.pixel_size};
   result.warnings = img.warnings;
 
-  const PaddedGrid grid(img, t);
-  if (std::none_of(img.alpha.begin(), img.alpha.end(), [&](uint16_t a) { return grid.inside(a); }))
-    throw InputError(name + ": no opaque pixels above alpha threshold " + fmt(t) + " (" +
-                     std::to_string(img.width) + "x" + std::to_string(img.height) + " px image)");
-
-  // Trace, then sort loops into boundaries and holes by orientation (the tracing
-  // keeps the opaque side on the left, so this is the parity of containment depth).
-  std::vector<Loop> loops = trace_contours(grid);
-  std::vector<size_t> bounds, holes;
-  std::vector<double> areas(loops.size());
-  std::vector<BoxD> boxes(loops.size());
-  for (size_t i = 0; i < loops.size(); ++i) {
-    areas[i] = signed_area(loops[i]);
-    boxes[i] = box_of(loops[i]);
-    (areas[i] > 0 ? bounds : holes).push_back(i);
+  const Traced tr = trace_pieces(img, options, name);
+  const std::vector<Loop>& loops = tr.loops;
+  const std::vector<double>& areas = tr.areas;
+  const size_t n_pieces = tr.pieces.size();
+  size_t chosen = 0;
+  double total_area = 0;
+  for (size_t i = 0; i < n_pieces; ++i) {
+    total_area += tr.pieces[i].area;
+    if (tr.pieces[i].area > tr.pieces[chosen].area) chosen = i;
   }
-  // Nesting: each hole belongs to the smallest boundary containing it (loops are
-  // disjoint, so one vertex decides containment).
-  std::sort(bounds.begin(), bounds.end(), [&](size_t x, size_t y) { return areas[x] < areas[y]; });
-  std::unordered_map<size_t, std::vector<size_t>> holes_of;
-  for (size_t h : holes) {
-    const double ha = -areas[h];
-    for (size_t bi : bounds) {
-      if (areas[bi] <= ha || !boxes[bi].contains(boxes[h])) continue;
-      if (point_in_loop(loops[bi], loops[h][0])) {
-        holes_of[bi].push_back(h);
-        break;
-      }
-    }
-  }
-  // The largest piece: boundary area minus its holes' areas.
-  size_t best = bounds.front();
-  double best_area = -1, total_area = 0;
-  for (size_t bi : bounds) {
-    double a = areas[bi];
-    for (size_t h : holes_of[bi]) a += areas[h];
-    total_area += a;
-    if (a > best_area) best_area = a, best = bi;
-  }
-  if (bounds.size() > 1) {
-    const double pct = 100.0 * best_area / total_area;
+  if (options.piece >= 0) {
+    if (static_cast<size_t>(options.piece) >= n_pieces)
+      throw InputError(name + ": piece " + std::to_string(options.piece) + " does not exist: the image has " + plural(n_pieces, "piece") +
+                       " (0 to " + std::to_string(n_pieces - 1) + "; hsi import-png --list-pieces lists them)");
+    chosen = static_cast<size_t>(options.piece);
+  } else if (n_pieces > 1) {
+    const double pct = 100.0 * tr.pieces[chosen].area / total_area;
     char buf[32];
     std::snprintf(buf, sizeof buf, pct >= 99.5 ? "%.2f%%" : pct >= 10 ? "%.0f%%" : "%.2g%%", pct);
-    result.warnings.push_back("dropped " + plural(bounds.size() - 1, "smaller piece") + " (largest kept: " + buf +
-                              " of the opaque area)");
+    result.warnings.push_back("dropped " + plural(n_pieces - 1, "smaller piece") + " (largest kept: piece " + std::to_string(chosen) +
+                              ", " + buf + " of the opaque area; --list-pieces lists them, --piece K, --crop or --all-pieces picks)");
   }
+  const Traced::Piece& piece = tr.pieces[chosen];
+  result.piece = static_cast<int>(chosen);
+  result.pieces = static_cast<int>(n_pieces);
+  const size_t best = piece.boundary;
+  const double best_area = piece.area;
+  const PixelRect pbox = pixel_box(piece.box);
+  const double side = std::max(pbox.width, pbox.height);
+  result.tolerance_auto = !(options.tolerance > 0);
+  result.tolerance = result.tolerance_auto ? png_tolerance_for(side) : options.tolerance;
+  result.filter_auto = !options.filter;
+  result.filter = options.filter ? *options.filter : side <= kPngPixelArtSide ? TextureFilter::Nearest : TextureFilter::Linear;
   if (best_area < kPngMinShapeArea) {
     char buf[32];
     std::snprintf(buf, sizeof buf, "%.3g", best_area);
@@ -349,7 +445,7 @@ PngShape import_png_alpha(std::span<const unsigned char> png_bytes, const std::s
   std::vector<Loop> kept{loops[best]};
   size_t tiny = 0;
   double tiny_max = 0;
-  for (size_t h : holes_of[best]) {
+  for (size_t h : piece.holes) {
     if (-areas[h] < options.min_hole_area) {
       ++tiny;
       tiny_max = std::max(tiny_max, -areas[h]);
@@ -371,7 +467,7 @@ PngShape import_png_alpha(std::span<const unsigned char> png_bytes, const std::s
   });
 
   // Simplify; where a loop would cross itself or another, retry it at a smaller tolerance.
-  std::vector<double> tol(kept.size(), options.tolerance);
+  std::vector<double> tol(kept.size(), result.tolerance);
   std::vector<Loop> simple(kept.size());
   for (size_t i = 0; i < kept.size(); ++i) simple[i] = simplify_closed(kept[i], tol[i]);
   size_t reduced = 0;

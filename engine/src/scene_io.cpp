@@ -10,6 +10,7 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 
+#include "hsi/keyframes.h"  // off_shape_reason: the one check of a handle's place
 #include "hsi/map_space.h"
 
 namespace hsi {
@@ -229,7 +230,7 @@ Scene parse_scene(const std::string& text, const std::filesystem::path& base_dir
   if (version->dump() != "1" && version->dump() != std::to_string(kSceneVersion))
     c.fail("hsi_scene", "unsupported version " + version->dump() + " (this hsi reads versions 1 to " + std::to_string(kSceneVersion) + ")");
   const int file_version = version->dump() == "1" ? 1 : kSceneVersion;
-  check_keys(c, j, "", {"hsi_scene", "name", "shape", "texture", "texture_rect", "cage", "samples", "hessian_ratio", "handles", "keyframes"});
+  check_keys(c, j, "", {"hsi_scene", "name", "shape", "texture", "texture_rect", "texture_filter", "cage", "samples", "hessian_ratio", "handles", "keyframes"});
   Scene s;
   s.base_dir = base_dir;
   s.source = source;
@@ -259,6 +260,11 @@ Scene parse_scene(const std::string& text, const std::filesystem::path& base_dir
   if (const json* t = field(j, "texture")) {
     if (!t->is_string()) c.fail("texture", "expected a file path string");
     s.texture = t->get<std::string>();
+  }
+  if (const json* f = field(j, "texture_filter")) {
+    const std::optional<TextureFilter> tf = f->is_string() ? parse_texture_filter(f->get<std::string>()) : std::nullopt;
+    if (!tf) c.fail("texture_filter", "expected \"linear\" or \"nearest\"");
+    s.texture_filter = *tf;
   }
   if (const json* r = field(j, "texture_rect")) {
     if (!r->is_array() || r->size() != 4) c.fail("texture_rect", "expected [x0, y0, x1, y1]");
@@ -321,12 +327,7 @@ Scene parse_scene(const std::string& text, const std::filesystem::path& base_dir
   }
   if (const json* v = field(j, "handles")) s.handles = points(c, *v, "handles");
   for (size_t i = 0; i < s.handles.size(); ++i)
-    if (!point_in_shape(s.shape, s.handles[i]) && boundary_distance(s.shape, s.handles[i]) > 1e-9 * bounding_box(s.shape).diagonal()) {
-      std::string where = "lies outside the shape";
-      for (size_t h = 0; h < s.shape.holes.size(); ++h)
-        if (point_in_loop(s.shape.holes[h], s.handles[i])) where = "lies outside the shape, in " + loop_name(static_cast<int>(h) + 1);
-      c.fail("handles[" + std::to_string(i) + "]", where);
-    }
+    if (const std::string why = off_shape_reason(s.shape, s.handles[i]); !why.empty()) c.fail("handles[" + std::to_string(i) + "]", why);
   if (const json* kfs = field(j, "keyframes")) {
     if (!kfs->is_array()) c.fail("keyframes", "expected an array");
     const int full = s.cage ? basis_size(*s.cage) : -1;
@@ -417,6 +418,7 @@ std::string scene_to_json(const Scene& s) {
   for (const Loop& h : s.shape.holes) j["shape"]["holes"].push_back(to_json(h));
   if (!s.texture.empty()) j["texture"] = s.texture.generic_string();
   if (s.texture_rect) j["texture_rect"] = *s.texture_rect;
+  if (s.texture_filter != TextureFilter::Linear) j["texture_filter"] = texture_filter_name(s.texture_filter);
   j["cage"]["clearance"] = s.cage_options.clearance;
   j["cage"]["max_vertices_per_loop"] = s.cage_options.max_vertices_per_loop;
   if (s.cage) {

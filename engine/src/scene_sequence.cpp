@@ -49,7 +49,8 @@ SceneSequence interpolate_scene(Scene& scene, const SceneSequenceOptions& option
   if (scene.keyframes.size() < 2)
     throw InputError((scene.source.empty() ? "scene '" + scene.name + "'" : scene.source) + ": interpolation needs at least two keyframes (it has " +
                      std::to_string(scene.keyframes.size()) + "); " + kHowToAddKeyframes);
-  if (options.frames < 2) throw InputError("a sequence needs at least 2 frames (got " + std::to_string(options.frames) + ")");
+  if (options.frames_per_interval <= 0 && options.frames < 2)
+    throw InputError("a sequence needs at least 2 frames (got " + std::to_string(options.frames) + ")");
   if (!setup) setup = scene_setup(scene, options.samples, options.hessian_ratio);
   solve_scene_keyframes(scene, *setup);
   std::vector<double> times;
@@ -66,7 +67,7 @@ SceneSequence interpolate_scene(Scene& scene, const SceneSequenceOptions& option
   seq.setup = setup;
   const auto t0 = std::chrono::steady_clock::now();
   seq.options = io;
-  seq.frames = interp.sequence(options.frames, progress);
+  seq.frames = interp.sequence(sequence_times(times, options.frames, options.frames_per_interval), progress);
   seq.total_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return seq;
 }

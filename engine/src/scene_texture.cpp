@@ -42,6 +42,7 @@ SceneTexture scene_texture(const Scene& scene, const std::string& scene_file, bo
                      (alternative.empty() ? "" : ", or " + alternative) + ")");
   t.image = read_png(path);
   t.rect = scene.texture_rect_or_bounds();
+  t.filter = scene.texture_filter;
   return t;
 }
 

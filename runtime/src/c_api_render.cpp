@@ -76,7 +76,7 @@ void render_frame(hsi_sequence& s, uint32_t frame, const hsi_render_options& o, 
       const TriMesh mesh = triangulate(scene.shape, to);
       cache->renderer->set_mesh(mesh, scene.handles);
       if (!scene.texture.empty()) {
-        cache->renderer->set_texture(read_png(scene.texture_path()), scene.texture_rect_or_bounds());
+        cache->renderer->set_texture(read_png(scene.texture_path()), scene.texture_rect_or_bounds(), scene.texture_filter);
       }
       cache->frames_box = frames_box(s.seq, mesh);
       cache->width = w;

@@ -107,6 +107,10 @@ void App::load() {
     SceneTexture st = scene_texture(scene, o_.scene, false, false);
     texture_ = std::move(st.image);
     texture_rect_ = st.rect;
+    texture_filter_ = st.filter;
+    if (!st.checker)
+      std::printf("hsi-viewer: texture %s, %s filtering\n", scene.texture_path().string().c_str(),
+                  texture_filter_name(st.filter));
   }
   TriangulateOptions to;
   to.max_edge = edge_for_vertex_count(scene.shape, o_.mesh_vertices);
@@ -342,7 +346,7 @@ void App::render() {
     renderer_.reset();
     renderer_ = std::make_unique<compute::Renderer>(ctx_, w, h);
     renderer_->set_mesh(mesh_, editor_->scene().handles);
-    renderer_->set_texture(texture_, texture_rect_);
+    renderer_->set_texture(texture_, texture_rect_, texture_filter_);
     rendered_map_ = nullptr;
   }
   const compute::View& camera = view_.update_camera(w, h);

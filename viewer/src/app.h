@@ -120,6 +120,7 @@ class App final : public ScriptHost {
   BasisRows probe_rows_;
   RgbaImage texture_;
   std::array<double, 4> texture_rect_{};
+  TextureFilter texture_filter_ = TextureFilter::Linear;  // the scene's texture_filter
   bool title_dirty_ = false, quit_ = false;
   double dist_hi_ = 2;
   std::chrono::steady_clock::time_point last_time_ = std::chrono::steady_clock::now();

@@ -90,6 +90,10 @@ Distortion certified_distortion(const CertificateResult& c);
 // keyframe itself): (keys − 1)·per_interval + 1 times. Throws InputError for
 // per_interval < 1 or fewer than two keyframe times.
 std::vector<double> frame_times(const std::vector<double>& key_times, int per_interval);
+// The frame times a front-end asks for, one rule for hsi interpolate, bake, export and
+// interpolate_scene: per_interval > 0: frame_times(key_times, per_interval); else
+// `frames` (≥ 2) uniform over [first, last] key time, both ends exact. Throws InputError.
+std::vector<double> sequence_times(const std::vector<double>& key_times, int frames, int per_interval = 0);
 
 class Interpolator {
  public:

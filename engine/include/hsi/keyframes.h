@@ -65,6 +65,14 @@ inline constexpr const char* kHowToAddKeyframes =
     "add handles and keyframes in hsi-viewer SCENE (click the shape to add a handle, K adds a keyframe, drag a handle "
     "to pose it, Ctrl+S saves), or with hsi keyframes SCENE --handle X,Y ... --keyframe 0 --keyframe '1: X,Y ...' -o OUT.json";
 
+// Why a point that must lie on the shape (a handle) does not: "" when p lies in the
+// shape's closure (up to 1e-9 of its size), else where it lies, how far from the shape
+// and the shape's bounding box, e.g. "lies outside the shape, in hole 1, 0.31 from the
+// shape (1.2% of its size); a handle must be on the shape (its bounding box is (0, 0) to
+// (4, 1))". The one check of a handle's place: scene files (scene_io), add_handle,
+// author_keyframe.
+std::string off_shape_reason(const Shape& shape, cd p);
+
 // Adds a handle at rest point `rest`, which must lie on the shape (its closure). Every
 // keyframe keeps its pose: one with coefficients gets the handle's image as its target;
 // a keyframe given by targets only cannot (its map is not known yet) and is refused,

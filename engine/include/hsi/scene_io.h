@@ -10,6 +10,9 @@
 //   "texture": "annulus.png",                    // optional, relative to the scene file
 //   "texture_rect": [x0, y0, x1, y1],            // optional: the source rectangle the texture
 //                                                //   covers (default: the shape's bounding box)
+//   "texture_filter": "nearest",                 // optional: "linear" (default, bilinear) or
+//                                                //   "nearest" (crisp texels: pixel art); written
+//                                                //   only when "nearest"
 //   "cage": { "clearance": 0.06,                 // optional: automatic cage options, or
 //             "max_vertices_per_loop": 32,
 //             "loops": [[[x, y], ...], ...],     //   a user cage: one loop per shape loop, any
@@ -58,6 +61,7 @@
 
 #include "hsi/cage.h"
 #include "hsi/harmonic_map.h"
+#include "hsi/texture_filter.h"
 #include "hsi/timing.h"
 
 namespace hsi {
@@ -78,6 +82,7 @@ struct Scene {
   Shape shape;                          // normalized orientation after loading
   std::filesystem::path texture;        // absolute or relative to base_dir; empty if none
   std::optional<std::array<double, 4>> texture_rect;
+  TextureFilter texture_filter = TextureFilter::Linear;  // how the texture is sampled where drawn
   CageOptions cage_options;
   std::optional<Cage> cage;             // user-given cage
   int samples = 10000;

@@ -15,6 +15,8 @@ namespace hsi {
 
 struct SceneSequenceOptions {
   int frames = 500;            // uniform over the keyframes' time range (≥ 2)
+  int frames_per_interval = 0; // > 0: instead of `frames`, this many steps between neighbouring
+                               // keyframes, every keyframe time a frame (sequence_times)
   int samples = 0;             // |G|; 0: the scene's
   double hessian_ratio = 0;    // r; 0: the scene's
   InterpolationOptions interpolation;

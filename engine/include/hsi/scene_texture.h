@@ -25,6 +25,7 @@ struct SceneTexture {
   RgbaImage image;
   std::array<double, 4> rect{};
   bool checker = false;  // the checkerboard
+  TextureFilter filter = TextureFilter::Linear;  // the scene's texture_filter (linear for the checkerboard)
 };
 // Throws InputError naming `scene_file` and the texture file when that file is
 // missing (read_png's errors when it is broken); `alternative` ("render with

@@ -23,6 +23,7 @@
 
 #include "hsi/compute/dense_eval.h"
 #include "hsi/png.h"
+#include "hsi/texture_filter.h"
 #include "hsi/triangulate.h"
 
 namespace hsi::compute {
@@ -145,10 +146,14 @@ class Renderer {
   // InputError for an empty mesh or an index out of range.
   void set_mesh(const TriMesh& mesh, std::span<const cd> handles = {});
   // The texture (straight alpha) and the world rectangle [x0, y0, x1, y1] it covers:
-  // (x0, y1) is its top-left pixel corner. Mipmapped, sampled bilinearly. An empty
-  // image removes the texture (the shape is then filled with RenderStyle::fill).
-  void set_texture(const RgbaImage& texture, const std::array<double, 4>& rect);
+  // (x0, y1) is its top-left pixel corner. Mipmapped, sampled bilinearly (trilinear
+  // across levels) or, with TextureFilter::Nearest, the nearest texel of the nearest
+  // level (pixel art stays crisp), by both rasterizers. An empty image removes the
+  // texture (the shape is then filled with RenderStyle::fill).
+  void set_texture(const RgbaImage& texture, const std::array<double, 4>& rect,
+                   TextureFilter filter = TextureFilter::Linear);
   bool has_texture() const { return has_texture_; }
+  TextureFilter texture_filter() const { return filter_; }
 
   // One frame: f = map over `cage` (m + N coefficients each, else InputError).
   RgbaImage render(const Cage& cage, const HarmonicMap& map, const View& view, const RenderStyle& style);
@@ -203,6 +208,7 @@ class Renderer {
   size_t vertex_count_ = 0, handle_count_ = 0, index_count_ = 0, segment_count_ = 0;
   std::array<double, 4> texture_rect_{0, 0, 1, 1};
   bool has_texture_ = false, uv_dirty_ = true, drawn_ = false;
+  TextureFilter filter_ = TextureFilter::Linear;
   RenderStats stats_;
   std::unique_ptr<Impl> impl_;
 };

@@ -5,11 +5,20 @@
 
 #include "hsi/cage.h"
 #include "hsi/samples.h"
+#include "hsi/scene_texture.h"
 
 namespace hsi::draw {
 
+// What plot_cage draws besides the shape, its cage, hole points and samples.
+struct CagePlot {
+  // A scene's sprite (not the checkerboard): drawn under the outline with the scene's
+  // filter, so that the outline and the handles can be checked against the art; the
+  // shape is then only tinted.
+  const SceneTexture* texture = nullptr;
+  std::vector<cd> handles;  // drawn as numbered dots
+};
 void plot_cage(const std::filesystem::path& png, const Shape& shape, const Cage& cage, const BoundarySamples* samples,
-               int width_px = 800);
+               int width_px = 800, const CagePlot& extras = {});
 
 }  // namespace hsi::draw
 
@@ -26,6 +35,9 @@ struct MapPlot {
   bool uncertified = false;       // draws the fill in red and says so
   bool overlaps = false;          // the boundary's image crosses itself (overlap.h): amber border and label
   bool not_converged = false;     // says "NOT CONVERGED" in orange (the Newton solve stopped early)
+  // The scene's texture, drawn through the map (piecewise affine on a triangulation of
+  // the rest shape, with the scene's filter) under the outline; null: a flat fill.
+  const SceneTexture* texture = nullptr;
 };
 void plot_map(const std::filesystem::path& png, const Shape& shape, const Cage& cage, const HarmonicMap& map,
               const MapPlot& extras = {}, int width_px = 800);
