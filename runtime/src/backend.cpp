@@ -5,6 +5,8 @@
 #include "built.h"
 #include "hsi/domain.h"
 #if HSI_RUNTIME_CUDA
+#include "hsi/cuda/clocks.h"
+#include "hsi/cuda/mesh_evaluator.h"
 #include "hsi/cuda/newton_core.h"
 #endif
 
@@ -97,6 +99,44 @@ NewtonCoreChoice make_newton_core(const ShapeSetup& setup, Backend requested, co
 #endif
   r.core = make_cpu_newton_core(setup.D_G, setup.H);
   return r;
+}
+
+MeshEvaluatorChoice make_mesh_evaluator(const Cage& cage, std::span<const cd> points, Backend requested,
+                                        const MeshEvaluatorOptions& options) {
+  return make_mesh_evaluator(cage, points, requested, requested == Backend::Cpu ? CudaStatus{} : cuda_status(), options);
+}
+
+MeshEvaluatorChoice make_mesh_evaluator(const Cage& cage, std::span<const cd> points, Backend requested, const CudaStatus& cuda,
+                                        const MeshEvaluatorOptions& options) {
+  MeshEvaluatorChoice r;
+  r.choice = choose_backend(requested, cuda);
+#if HSI_RUNTIME_CUDA
+  if (r.choice.used == Backend::Cuda) {
+    try {
+      r.evaluator = std::make_unique<hsi::cuda::MeshEvaluator>(cage, points, options);
+      return r;
+    } catch (const hsi::cuda::Error& e) {
+      if (requested == Backend::Cuda)
+        throw BackendUnavailable(std::string("--backend cuda: the CUDA mesh evaluator could not be made: ") + e.what());
+      r.choice.used = Backend::Cpu;
+      r.choice.fallback = std::string("the CUDA mesh evaluator could not be made on ") + r.choice.device + ": " + e.what();
+      r.choice.device.clear();
+    }
+  }
+#else
+  if (r.choice.used == Backend::Cuda) throw BackendUnavailable(std::string("--backend cuda: ") + built::kNoCuda);
+#endif
+  r.evaluator = make_cpu_mesh_evaluator(cage, points, options);
+  return r;
+}
+
+std::string gpu_clocks() {
+#if HSI_RUNTIME_CUDA
+  if (!cuda_status().available) return "";
+  return hsi::cuda::clocks().describe();
+#else
+  return "";
+#endif
 }
 
 std::string describe(const BackendChoice& c) {
