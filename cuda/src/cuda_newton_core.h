@@ -107,6 +107,7 @@ class CudaNewtonCore final : public NewtonCore {
       setup_ = setup;
       certifier_ = std::make_unique<DeviceCertifier>(setup->shape, setup->cage, setup->G, stream_, blas_);
     }
+    warm_up();
   }
 
   // Nothing may be in flight while the members free their memory.
@@ -232,6 +233,15 @@ class CudaNewtonCore final : public NewtonCore {
   Upload<double2> coef_up_;
   PinnedArray<double> scalar_down_;
   PinnedArray<double2> coef_down_;
+
+  // Set-up work that would otherwise fall on the first solve (issue #23: the first frame
+  // took 140–165 ms): every kernel and cuBLAS / cuSOLVER routine a solve uses runs once
+  // here, at the sizes of a solve, on this core's stream and handles (so the modules
+  // they load lazily are loaded, and the libraries' workspaces allocated), and with a
+  // setup the device spaces of both its map spaces are made and a stepper is driven
+  // through every call of an iteration from the identity map. Leaves the documented
+  // initial state (a = b = 0, zero direction, identity targets). device_newton.cpp.
+  void warm_up();
 
   // The device stepper (make_stepper()): what it needs beyond the per-call interface.
   DeviceSpace& device_space(const MapSpace& space);
