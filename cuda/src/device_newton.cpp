@@ -355,12 +355,14 @@ void CudaNewtonCore::warm_up() {
     (void)st.start(x0);
     HessianChoice exact;
     exact.exact = true;
-    const double scale = st.linearize(exact);
-    (void)st.solve(1e-12 * std::max(scale, 1.0));
+    // A ridge that keeps every system definite (the freed rotation is a null direction
+    // at the identity): the direction stays finite, so every later call sees numbers.
+    const double ridge = 1e-3 * std::max(st.linearize(exact), 1.0);
+    (void)st.solve(ridge);
     HessianChoice projected;
     projected.free_rotation = free_rotation;
     (void)st.linearize(projected);
-    (void)st.solve(1e-12 * std::max(scale, 1.0));
+    (void)st.solve(ridge);
     st.trial_energies(kSteps, energies);
     (void)st.certify(0, true);
     (void)st.certify(kSteps[3], false);
