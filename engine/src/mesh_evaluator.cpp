@@ -17,7 +17,7 @@ namespace hsi {
 
 namespace {
 
-constexpr Eigen::Index kBlock = 256;  // points per block: 256 × 2(m + N) doubles, L2-sized
+constexpr Eigen::Index kBlock = 128;  // points per block: 128 × 2(m + N) doubles (~170 KB at m + N = 84), L2-sized
 
 class CpuMeshEvaluator final : public MeshEvaluator {
  public:
