@@ -386,3 +386,24 @@ TEST_CASE("a compare run that fails removes what it wrote and refuses bad option
   CHECK_NOTHROW(check_options(o));
   CHECK_THROWS_AS(run(o), std::invalid_argument);  // no Vulkan context to render with
 }
+
+TEST_CASE("ours timed in one block: the captions say how, and the GPU's clocks where there is one", "[compare]") {
+  OurTiming t;
+  t.warmup = 10;
+  t.frames = 98;
+  t.evaluator = "cuda";
+  t.eval_setup_ms = 12;
+  std::string d = t.describe();
+  CHECK_THAT(d, Contains("timed in one block: 10 warm-up frames (not timed), then the sequence's 98 solved frames back to back"));
+  CHECK_THAT(d, Contains("from cached basis rows on the GPU (CUDA) (the rows evaluated once per mesh, 12 ms)"));
+  CHECK_THAT(d, !Contains("GPU clocks"));
+  t.clocks_before = "H100: SM 345 MHz";
+  t.clocks_after = "H100: SM 1980 MHz";
+  d = t.describe();
+  CHECK_THAT(d, Contains("GPU clocks before the warm-up: H100: SM 345 MHz; after the block: H100: SM 1980 MHz"));
+  t.evaluator = "cpu";
+  CHECK_THAT(t.describe(), Contains("on the CPU"));
+  t.solve_ms = 1.5;
+  t.eval_ms = 0.25;
+  CHECK(t.total_ms() == 1.75);
+}
