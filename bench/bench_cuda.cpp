@@ -1,8 +1,10 @@
 // Benchmark of the CUDA Newton core against the CPU one, in the same run: per bundled
 // scene and |G|, the time per call of each core method, the floor set by the library
 // calls alone (the Hessian's ZGEMM, a Cholesky factor-and-solve of its size), and a
-// warm-started interpolation sequence with each backend. Prints Markdown tables with
-// CUDA/CPU ratios. Not a test: timings only.
+// warm-started interpolation sequence with each backend (set-up, first frame and warm
+// frames apart); per scene, f at a mesh's vertices per frame: the basis evaluated
+// directly, and from cached rows on the CPU and on the GPU (hsi/mesh_evaluator.h). Prints
+// Markdown tables with CUDA/CPU ratios, and the GPU's clocks. Not a test: timings only.
 #include "hsi/stopwatch.h"
 #include <CLI/CLI.hpp>
 #include <Eigen/Cholesky>
@@ -15,9 +17,13 @@
 
 #include "bench_scenes.h"
 #include "device.h"
+#include "hsi/cuda/clocks.h"
+#include "hsi/cuda/mesh_evaluator.h"
 #include "hsi/cuda/newton_core.h"
 #include "hsi/interpolation.h"
 #include "hsi/keyframes.h"
+#include "hsi/mesh_evaluator.h"
+#include "hsi/triangulate.h"
 
 using namespace hsi;
 namespace hc = hsi::cuda;
@@ -138,6 +144,11 @@ Floors time_floors(int n, int h, const Eigen::MatrixXd& spd, int reps) {
 
 struct SequenceStats {
   bool ran = false;
+  double setup_ms = 0;        // the core made (for the CUDA core: its warm-up included)
+  double interpolator_ms = 0; // the Interpolator made (keyframe certificates and metrics, on the host)
+  double first_ms = 0;        // the first solved frame
+  int first_iterations = 0;
+  // Over the warm frames: every solved frame but the first.
   double mean_ms = 0, max_ms = 0, iterations = 0, ms_per_iteration = 0;
   int uncertified = 0;
   NewtonResult::Timing per_iteration;
@@ -145,17 +156,30 @@ struct SequenceStats {
   int scratch_iterations = 0;
 };
 
-SequenceStats run_sequence(const Loaded& L, std::unique_ptr<NewtonCore> core, int frames) {
-  Interpolator interp(*L.setup, L.times, L.maps, {}, std::move(core));
-  const auto seq = interp.sequence(frames);
+template <class MakeCore>
+SequenceStats run_sequence(const Loaded& L, MakeCore&& make_core, int frames) {
   SequenceStats s;
+  auto t0 = Clock::now();
+  std::unique_ptr<NewtonCore> core = make_core();
+  s.setup_ms = ms_since(t0);
+  t0 = Clock::now();
+  Interpolator interp(*L.setup, L.times, L.maps, {}, std::move(core));
+  s.interpolator_ms = ms_since(t0);
+  const auto seq = interp.sequence(frames);
   s.ran = true;
   int solved = 0;
   double its = 0;
   NewtonResult::Timing t;
+  bool first = true;
   for (const FrameResult& f : seq) {
     s.uncertified += !f.certified;
     if (f.keyframe) continue;
+    if (first) {  // reported apart: what set-up left to the first solve
+      first = false;
+      s.first_ms = f.ms;
+      s.first_iterations = f.iterations;
+      continue;
+    }
     ++solved;
     s.mean_ms += f.ms;
     s.max_ms = std::max(s.max_ms, f.ms);
@@ -180,6 +204,65 @@ SequenceStats run_sequence(const Loaded& L, std::unique_ptr<NewtonCore> core, in
   return s;
 }
 
+// f at a mesh's vertices per frame (issue #23): the direct path (the basis rows
+// evaluated at every vertex for every frame, as hsi compare did), and from cached rows
+// on the CPU and, where a device is there, on the GPU: values left on the device
+// (enqueue + synchronize) and copied to the host. Wall-clock per frame, the keyframes'
+// maps in turn, after two untimed frames.
+struct MeshEvalTimes {
+  int vertices = 0, columns = 0;
+  double direct_ms = 0, cpu_ms = 0, cpu_setup_ms = 0, cpu_gap = 0;
+  bool cuda = false;
+  double cuda_device_ms = 0, cuda_host_ms = 0, cuda_setup_ms = 0, cuda_gap = 0;
+};
+
+MeshEvalTimes time_mesh_eval(const Loaded& L, int vertices, int reps, bool cuda) {
+  MeshEvalTimes r;
+  TriangulateOptions to;
+  to.max_edge = edge_for_vertex_count(L.scene.shape, vertices);
+  const TriMesh mesh = triangulate(L.scene.shape, to);
+  const Cage& cage = L.setup->cage;
+  r.vertices = mesh.vertex_count();
+  r.columns = basis_size(cage);
+  size_t k = 0;
+  auto next_map = [&]() -> const HarmonicMap& { return L.maps[k++ % L.maps.size()]; };
+  auto gap = [](const VectorXcd& got, const VectorXcd& want) {
+    return (got - want).cwiseAbs().maxCoeff() / std::max(want.cwiseAbs().maxCoeff(), 1e-300);
+  };
+  const std::vector<cd> direct0 = map_points(cage, L.maps[0], mesh.vertices);
+  const VectorXcd want = Eigen::Map<const VectorXcd>(direct0.data(), static_cast<Eigen::Index>(direct0.size()));
+  double sink = 0;
+  r.direct_ms = time_calls(std::max(1, reps / 4), [&] { sink += map_points(cage, next_map(), mesh.vertices)[0].real(); });
+  auto t0 = Clock::now();
+  const auto cpu = make_cpu_mesh_evaluator(cage, mesh.vertices);
+  r.cpu_setup_ms = ms_since(t0);
+  MapValues v;
+  r.cpu_ms = time_calls(reps, [&] {
+    cpu->evaluate(next_map(), v);
+    sink += v.f(0).real();
+  });
+  cpu->evaluate(L.maps[0], v);
+  r.cpu_gap = gap(v.f, want);
+  if (cuda) {
+    r.cuda = true;
+    t0 = Clock::now();
+    hc::MeshEvaluator gpu(cage, mesh.vertices);
+    r.cuda_setup_ms = ms_since(t0);
+    r.cuda_device_ms = time_calls(reps, [&] {
+      gpu.enqueue(next_map());
+      gpu.synchronize();
+    });
+    r.cuda_host_ms = time_calls(reps, [&] {
+      gpu.evaluate(next_map(), v);
+      sink += v.f(0).real();
+    });
+    gpu.evaluate(L.maps[0], v);
+    r.cuda_gap = gap(v.f, want);
+  }
+  g_sink = sink;
+  return r;
+}
+
 std::string ratio(double cuda, double cpu) {
   char buf[32];
   std::snprintf(buf, sizeof buf, "%.3f", cuda / cpu);
@@ -194,7 +277,8 @@ int main(int argc, char** argv) {
   std::vector<int> sample_counts{10000, 100000};
   double ratio_r = 0.2;
   int frames = 500, reps = 20, cpu_sequence_max = 10000;
-  bool skip_sequence = false;
+  bool skip_sequence = false, mesh_only = false;
+  int mesh_vertices = 10000;
   app.add_option("scenes", scenes, "Scene files with two or more keyframes")->required();
   app.add_option("--samples", sample_counts, "|G| values")->capture_default_str();
   app.add_option("--ratio", ratio_r, "Hessian sample ratio r = |H|/|G|")->capture_default_str();
@@ -202,14 +286,54 @@ int main(int argc, char** argv) {
   app.add_option("--reps", reps, "Timed calls per core method")->capture_default_str();
   app.add_option("--cpu-sequence-max-samples", cpu_sequence_max, "Run the CPU and host-driven CUDA sequences only up to this |G| (at 100,000: minutes per scene)")->capture_default_str();
   app.add_flag("--skip-sequence", skip_sequence, "Skip the warm-started sequences");
+  app.add_option("--mesh-vertices", mesh_vertices, "Vertices (about) of the mesh f is evaluated at per frame")
+      ->capture_default_str()->check(CLI::Range(100, 5000000));
+  app.add_flag("--f-at-mesh-only", mesh_only,
+               "Only the table of f at the mesh's vertices (runs without a GPU: then the CPU columns only)");
   CLI11_PARSE(app, argc, argv);
 
   std::string why;
-  if (!hc::device_available(&why)) {
+  const bool device = hc::device_available(&why);
+  if (!device && !mesh_only) {
     std::fprintf(stderr, "no CUDA device: %s\n", why.c_str());
     return 1;
   }
-  std::printf("Device: %s; CPU threads: %d; r = %.0f%%; PartProj\n\n", why.c_str(), omp_get_max_threads(), 100 * ratio_r);
+  std::printf("Device: %s; CPU threads: %d; r = %.0f%%; PartProj\n", device ? why.c_str() : ("none (" + why + ")").c_str(),
+              omp_get_max_threads(), 100 * ratio_r);
+  if (device) std::printf("GPU clocks at the start: %s\n", hc::clocks().describe().c_str());
+  std::printf("\n");
+
+  std::ostringstream mesh_eval;
+  mesh_eval << "## f at the mesh's vertices per frame (ms, mean of " << reps
+            << " frames; direct: the basis evaluated at every vertex every frame; cached: rows evaluated once, then one "
+               "matrix-vector product per frame; CUDA on device: values left on the GPU; to host: copied back into MapValues)\n\n"
+            << "| scene | vertices | m + N | direct CPU | cached CPU | direct / cached | CPU rows set-up | CUDA on device | "
+               "CUDA to host | CUDA rows set-up | CUDA on device / cached CPU | max rel. gap to direct (CPU, CUDA) |\n"
+               "|---|---|---|---|---|---|---|---|---|---|---|---|\n";
+  auto mesh_row = [&](const Loaded& L) {
+    std::fprintf(stderr, "  f at the mesh's vertices\n");
+    const MeshEvalTimes m = time_mesh_eval(L, mesh_vertices, reps, device);
+    char row[512];
+    if (m.cuda)
+      std::snprintf(row, sizeof row, "| %s | %d | %d | %.3f | %.3f | %.1f | %.1f | %.4f | %.4f | %.1f | %s | %.1e, %.1e |\n",
+                    L.name.c_str(), m.vertices, m.columns, m.direct_ms, m.cpu_ms, m.direct_ms / m.cpu_ms, m.cpu_setup_ms,
+                    m.cuda_device_ms, m.cuda_host_ms, m.cuda_setup_ms, ratio(m.cuda_device_ms, m.cpu_ms).c_str(), m.cpu_gap,
+                    m.cuda_gap);
+    else
+      std::snprintf(row, sizeof row, "| %s | %d | %d | %.3f | %.3f | %.1f | %.1f | n/a | n/a | n/a | n/a | %.1e, n/a |\n",
+                    L.name.c_str(), m.vertices, m.columns, m.direct_ms, m.cpu_ms, m.direct_ms / m.cpu_ms, m.cpu_setup_ms,
+                    m.cpu_gap);
+    mesh_eval << row;
+    std::fprintf(stderr, "  %s", row);
+  };
+  if (mesh_only) {
+    for (const std::string& path : scenes) {
+      std::fprintf(stderr, "%s, |G| = %d: setting up\n", path.c_str(), sample_counts.front());
+      mesh_row(load(path, sample_counts.front(), ratio_r));
+    }
+    std::printf("\n---\n\n%s\n", mesh_eval.str().c_str());
+    return 0;
+  }
 
   std::ostringstream calls, floors, seqs;
   calls << "## Core calls (ms per call, mean of " << reps << "; CUDA/CPU < 1: CUDA faster)\n\n"
@@ -221,15 +345,20 @@ int main(int argc, char** argv) {
   seqs << "## Warm-started sequences (" << frames << " frames; per-iteration parts in ms)\n\n"
        << "cuda-host: the CUDA core driven call by call from the host (Cholesky and certificate on the CPU); "
           "cuda: the whole solve on the GPU (cuSOLVER, GPU line search and certificate). t = ½: the frame midway "
-          "between the first two keyframes solved from the first (no warm start).\n\n"
-       << "| scene | |G| | backend | mean ms/frame | max ms/frame | iters/frame | ms/iteration | uncertified | E+∇ | Hessian | "
-          "solve | line search | certificate | t = ½ ms (iters) | CPU/this per iteration |\n"
-          "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
+          "between the first two keyframes solved from the first (no warm start). Set-up: the core made (the CUDA "
+          "core runs every call of a solve once while it is made); interpolator: the Interpolator made (host); first "
+          "frame: the first solved frame after both; mean, max, iterations and the per-iteration parts are over the "
+          "warm frames (every solved frame but the first).\n\n"
+       << "| scene | |G| | backend | set-up ms | interpolator ms | first frame ms (iters) | mean ms/frame | max ms/frame | "
+          "iters/frame | ms/iteration | uncertified | E+∇ | Hessian | solve | line search | certificate | t = ½ ms (iters) | "
+          "CPU/this per iteration |\n"
+          "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
 
   for (const std::string& path : scenes) {
     for (int samples : sample_counts) {
       std::fprintf(stderr, "%s, |G| = %d: setting up\n", path.c_str(), samples);
       const Loaded L = load(path, samples, ratio_r);
+      if (samples == sample_counts.front()) mesh_row(L);  // f at the mesh does not depend on |G|
       const int n = L.setup->metric_space.n();
       const int h = static_cast<int>(L.setup->H.size());
       const int G = static_cast<int>(L.setup->G.size());
@@ -243,7 +372,7 @@ int main(int argc, char** argv) {
       std::fprintf(stderr, "  core calls\n");
       const CallTimes tc = time_core(*cpu, L, targets, std::max(1, reps / 4));
       const CallTimes tg = time_core(*gpu, L, targets, reps);
-      char row[512];
+      char row[1024];
       std::snprintf(row, sizeof row, "| %s | %d | %d | %d | %.3f | %.3f | %s | %.3f | %.3f | %s | %.3f | %.3f | %s |\n", L.name.c_str(), G, n,
                     h, tc.energy_gradient, tg.energy_gradient, ratio(tg.energy_gradient, tc.energy_gradient).c_str(), tc.hessian,
                     tg.hessian, ratio(tg.hessian, tc.hessian).c_str(), tc.line_search, tg.line_search,
@@ -267,23 +396,25 @@ int main(int argc, char** argv) {
       gpu.reset();
       SequenceStats sc, sh, sg;
       std::fprintf(stderr, "  sequence (CUDA, device loop)\n");
-      sg = run_sequence(L, hc::make_newton_core(*L.setup), frames);
+      sg = run_sequence(L, [&] { return hc::make_newton_core(*L.setup); }, frames);
       if (samples <= cpu_sequence_max) {
         std::fprintf(stderr, "  sequence (CUDA, host loop)\n");
-        sh = run_sequence(L, hc::make_newton_core(L.setup->D_G, L.setup->H), frames);
+        sh = run_sequence(L, [&] { return hc::make_newton_core(L.setup->D_G, L.setup->H); }, frames);
         std::fprintf(stderr, "  sequence (CPU)\n");
-        sc = run_sequence(L, make_cpu_newton_core(L.setup->D_G, L.setup->H), frames);
+        sc = run_sequence(L, [&] { return make_cpu_newton_core(L.setup->D_G, L.setup->H); }, frames);
       }
       const std::pair<const char*, const SequenceStats*> rows[] = {{"cpu", &sc}, {"cuda-host", &sh}, {"cuda", &sg}};
       for (const auto& [label, s] : rows) {
         if (!s->ran) {
-          std::snprintf(row, sizeof row, "| %s | %d | %s | skipped (--cpu-sequence-max-samples) | | | | | | | | | | | |\n",
+          std::snprintf(row, sizeof row, "| %s | %d | %s | skipped (--cpu-sequence-max-samples) | | | | | | | | | | | | | | |\n",
                         L.name.c_str(), G, label);
         } else {
           const auto& t = s->per_iteration;
           std::snprintf(row, sizeof row,
-                        "| %s | %d | %s | %.2f | %.2f | %.2f | %.3f | %d | %.3f | %.3f | %.3f | %.3f | %.3f | %.1f (%d) | %s |\n",
-                        L.name.c_str(), G, label, s->mean_ms, s->max_ms, s->iterations, s->ms_per_iteration, s->uncertified,
+                        "| %s | %d | %s | %.1f | %.1f | %.2f (%d) | %.2f | %.2f | %.2f | %.3f | %d | %.3f | %.3f | %.3f | %.3f | %.3f | "
+                        "%.1f (%d) | %s |\n",
+                        L.name.c_str(), G, label, s->setup_ms, s->interpolator_ms, s->first_ms, s->first_iterations, s->mean_ms,
+                        s->max_ms, s->iterations, s->ms_per_iteration, s->uncertified,
                         t.energy_gradient, t.hessian, t.solve, t.line_search, t.certificate, s->scratch_ms,
                         s->scratch_iterations, sc.ran ? ratio(sc.ms_per_iteration, s->ms_per_iteration).c_str() : "");
         }
@@ -292,7 +423,8 @@ int main(int argc, char** argv) {
       }
     }
   }
-  std::printf("\n---\n\n%s\n%s\n", calls.str().c_str(), floors.str().c_str());
+  std::printf("\n---\n\n%s\n%s\n%s\n", mesh_eval.str().c_str(), calls.str().c_str(), floors.str().c_str());
   if (!skip_sequence) std::printf("%s\n", seqs.str().c_str());
+  std::printf("GPU clocks at the end: %s\n", hc::clocks().describe().c_str());
   return 0;
 }

@@ -66,6 +66,14 @@ void run_compare(const Opts& o) {
   compute::DenseEvaluator dense(*ctx);
   r.backends.vulkan = ctx.get();
   r.backends.newton_core = [backend = o.backend](const ShapeSetup& setup) { return make_core(setup, backend); };
+  // f at the mesh's vertices (Tables 3–4) on the same backend, and the GPU's clocks where it may be used.
+  const runtime::Backend requested = runtime::parse_backend(o.backend);
+  r.backends.mesh_evaluator = [requested](const Cage& cage, std::span<const cd> points) {
+    runtime::MeshEvaluatorChoice c = runtime::make_mesh_evaluator(cage, points, requested);
+    if (!c.choice.fallback.empty()) std::printf("mesh evaluator: %s\n", runtime::describe(c.choice).c_str());
+    return std::move(c.evaluator);
+  };
+  if (requested != runtime::Backend::Cpu) r.backends.gpu_clocks = [] { return runtime::gpu_clocks(); };
   r.backends.dense_eval = [&dense](const Cage& cage, const HarmonicMap& map, std::span<const cd> points) {
     return dense.evaluate_points(cage, map, points).size();
   };

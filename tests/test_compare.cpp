@@ -132,18 +132,33 @@ TEST_CASE("table 3: ARAP against our solve per resolution, the GPU column or why
   CHECK_THAT(md, Contains("with the Vulkan dense evaluation on llvmpipe (CPU)."));
   CHECK_THAT(md, Contains("Times are means over 3 frames."));
   // ARAP / ours solve: 4 / 340 and 850 / 340; ours total = solve + f at the vertices.
-  CHECK_THAT(md, Contains("| 8000 | 15000 | 160 | 4.0 | 340.0 | 50.0 | 5.0 | 390.0 | 0.0118 |\n"));
-  CHECK_THAT(md, Contains("| 800000 | 1590000 | 44000 | 850.0 | 340.0 | 5200.0 | 90.0 | 5540.0 | 2.5 |\n"));
-  const nlohmann::json j = table3_json(rows, 340);
+  // f at the vertices from cached rows on the CPU; no CUDA evaluator: n/a, and the total uses the CPU.
+  CHECK_THAT(md, Contains("| 8000 | 15000 | 160 | 4.0 | 340.0 | 50.000 | n/a | 5.0 | 390.00 | 0.0118 | 0.0103 |\n"));
+  CHECK_THAT(md, Contains("| 800000 | 1590000 | 44000 | 850.0 | 340.0 | 5200.000 | n/a | 90.0 | 5540.00 | 2.5 | 0.153 |\n"));
+  CHECK_THAT(md, Contains("(mean of the sequence)"));
+  nlohmann::json j = table3_json(rows, 340);
   CHECK(j.size() == 2);
   CHECK(j[1]["ours_total_cpu_ms"].get<double>() == Approx(5540));
+  CHECK(j[1]["ours_total_ms"].get<double>() == Approx(5540));
+  CHECK(j[1]["ours_eval_cuda_ms"] == "nan");
   CHECK(j[1]["arap_factorisation_ms"].get<double>() == Approx(44000));
+  // Our solve on CUDA: f at the vertices on the GPU counts in the total; the block timing is named.
+  rows[1].ours_eval_cuda_ms = 2;
+  c.ours_timing = "timed in one block: 10 warm-up frames";
+  md = table3_markdown(rows, c);
+  CHECK_THAT(md, Contains("| 800000 | 1590000 | 44000 | 850.0 | 340.0 | 5200.000 | 2.000 | 90.0 | 342.00 | 2.5 | 2.49 |\n"));
+  CHECK_THAT(md, Contains("(timed in one block: 10 warm-up frames)"));
+  j = table3_json(rows, 340);
+  CHECK(j[1]["ours_total_cpu_ms"].get<double>() == Approx(5540));
+  CHECK(j[1]["ours_total_ms"].get<double>() == Approx(342));
+  rows[1].ours_eval_cuda_ms = kNaN;
+  c.ours_timing.clear();
 
   rows[0].ours_eval_gpu_ms = rows[1].ours_eval_gpu_ms = kNaN;
   c.gpu_unavailable = "this hsi was built without Vulkan";
   md = table3_markdown(rows, c);
   CHECK_THAT(md, Contains("the Vulkan dense evaluation is not available (this hsi was built without Vulkan)"));
-  CHECK_THAT(md, Contains("| 50.0 | n/a | 390.0 |"));
+  CHECK_THAT(md, Contains("| 50.000 | n/a | n/a | 390.00 |"));
   CHECK(table3_json(rows, 340)[0]["ours_eval_vulkan_ms"] == "nan");
   CHECK_THAT(table3_markdown({}, c), Contains("| (no resolutions requested) |"));
 }
@@ -165,6 +180,18 @@ TEST_CASE("table 4: time per frame against ARAP, ratios, the boundary-metric var
   nlohmann::json j = table4_json(t);
   CHECK(j["ccw16_boundary_metric_ms"].is_null());
   CHECK(j["arap_over_ours_total"].get<double>() == Approx(0.005));
+  // f at the vertices on CUDA (our solve's backend) counts in the total; the CPU's is named too.
+  t.ours_eval_cuda_ms = 0.5;
+  t.ours_timing = "timed in one block: 10 warm-up frames";
+  CHECK(t.ours_total_ms() == Approx(340.5));
+  md = table4_markdown(t, 100);
+  CHECK_THAT(md, Contains("Ours: timed in one block: 10 warm-up frames (f at the vertices on the CPU instead: 60.000 ms)."));
+  CHECK_THAT(md, Contains("| 340.00 | 5.75 | 340.50 |"));
+  j = table4_json(t);
+  CHECK(j["ours_total_ms"].get<double>() == Approx(340.5));
+  CHECK(j["ours_total_cpu_ms"].get<double>() == Approx(400));
+  t.ours_eval_cuda_ms = kNaN;
+  t.ours_timing.clear();
 
   t.boundary_metric = true;
   t.ccw16_bm_ms = 80;
@@ -358,4 +385,25 @@ TEST_CASE("a compare run that fails removes what it wrote and refuses bad option
   o.table3_vertices = {1000};
   CHECK_NOTHROW(check_options(o));
   CHECK_THROWS_AS(run(o), std::invalid_argument);  // no Vulkan context to render with
+}
+
+TEST_CASE("ours timed in one block: the captions say how, and the GPU's clocks where there is one", "[compare]") {
+  OurTiming t;
+  t.warmup = 10;
+  t.frames = 98;
+  t.evaluator = "cuda";
+  t.eval_setup_ms = 12;
+  std::string d = t.describe();
+  CHECK_THAT(d, Contains("timed in one block: 10 warm-up frames (not timed), then the sequence's 98 solved frames back to back"));
+  CHECK_THAT(d, Contains("from cached basis rows on the GPU (CUDA) (the rows evaluated once per mesh, 12 ms)"));
+  CHECK_THAT(d, !Contains("GPU clocks"));
+  t.clocks_before = "H100: SM 345 MHz";
+  t.clocks_after = "H100: SM 1980 MHz";
+  d = t.describe();
+  CHECK_THAT(d, Contains("GPU clocks before the warm-up: H100: SM 345 MHz; after the block: H100: SM 1980 MHz"));
+  t.evaluator = "cpu";
+  CHECK_THAT(t.describe(), Contains("on the CPU"));
+  t.solve_ms = 1.5;
+  t.eval_ms = 0.25;
+  CHECK(t.total_ms() == 1.75);
 }

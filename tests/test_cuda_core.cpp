@@ -11,7 +11,10 @@
 #include <numbers>
 #include <random>
 
+#include <cuda_runtime.h>
+
 #include "hsi/cuda/certifier.h"
+#include "hsi/cuda/mesh_evaluator.h"
 #include "hsi/cuda/newton_core.h"
 #include "sample_math.cuh"
 #include "hsi/interpolation.h"
@@ -485,4 +488,68 @@ TEST_CASE("cuda: cuBLAS and cuSOLVER entry points open their libraries on first 
   if (s == CUSOLVER_STATUS_SUCCESS) cusolverDnDestroy(h);
   CHECK((s == CUSOLVER_STATUS_SUCCESS || s == CUSOLVER_STATUS_NOT_INITIALIZED || s == CUSOLVER_STATUS_ALLOC_FAILED ||
          s == CUSOLVER_STATUS_INTERNAL_ERROR || s == CUSOLVER_STATUS_ARCH_MISMATCH));
+}
+
+// The setup core runs every call of a solve once while it is made (first frame fast,
+// issue #23) and must still start from the documented state.
+TEST_CASE("a setup core is warmed up when made and starts from the defined state", "[cuda][small]") {
+  HSI_REQUIRE_GPU();
+  const Scene scene = load_scene(test::asset_scenes().front());
+  const auto setup = make_shape_setup(scene, 2000, 0.2);
+  const auto gpu = hsi::cuda::make_newton_core(*setup);
+  CHECK(std::isinf(gpu->energy()));         // a = b = 0 until coefficients are set
+  CHECK(std::isinf(gpu->max_safe_step()));  // zero direction until set
+  const auto cpu = make_cpu_newton_core(setup->D_G, setup->H);
+  const Eigen::VectorXd v = setup->metric_space.T() * setup->metric_space.reduce(identity_map(setup->cage)).x;
+  gpu->set_coefficients(v);
+  cpu->set_coefficients(v);
+  CHECK(gpu->energy() == Approx(cpu->energy()).epsilon(1e-12));
+}
+
+// f at a mesh's vertices from rows cached on the GPU against the direct CPU evaluation.
+TEST_CASE("the CUDA mesh evaluator equals the direct evaluation on every asset", "[cuda][mesh_eval][small]") {
+  HSI_REQUIRE_GPU();
+  auto gap = [](const VectorXcd& got, const VectorXcd& want) {
+    REQUIRE(got.size() == want.size());
+    return (got - want).cwiseAbs().maxCoeff() / std::max(want.cwiseAbs().maxCoeff(), 1e-300);
+  };
+  for (const auto& path : test::asset_scenes()) {
+    const Scene scene = load_scene(path);
+    const Cage cage = scene.cage ? *scene.cage : build_cage(scene.shape, scene.cage_options);
+    const std::vector<cd> pts = test::interior_points(scene.shape, 1500 + 77);
+    INFO(path.filename().string());
+    const BasisRows rows = evaluate_basis(cage, pts, kBasisC | kBasisD);
+    for (bool derivatives : {false, true}) {
+      hsi::cuda::MeshEvaluator e(cage, pts, {.derivatives = derivatives});
+      CHECK(e.size() == pts.size());
+      MapValues got;
+      for (unsigned seed : {1u, 2u}) {
+        std::mt19937 rng(seed);
+        std::normal_distribution<double> g(0, 0.05);
+        HarmonicMap map = affine_map(cage, cd(0.9, 0.4), cd(0.2, 0.1), cd(-1, 3));
+        for (Eigen::Index j = 0; j < map.phi.size(); ++j) {
+          map.phi(j) += cd(g(rng), g(rng));
+          map.psi(j) += cd(g(rng), g(rng));
+        }
+        const MapValues want = evaluate_map(rows, map);
+        e.evaluate(map, got);
+        CHECK(gap(got.f, want.f) < 1e-12);
+        if (derivatives) {
+          CHECK(gap(got.f_z, want.f_z) < 1e-12);
+          CHECK(gap(got.fzbar_conj, want.fzbar_conj) < 1e-12);
+        } else {
+          CHECK(got.f_z.size() == 0);
+        }
+        // The values left on the device are the same ones.
+        e.enqueue(map);
+        e.synchronize();
+        VectorXcd on_device(static_cast<Eigen::Index>(pts.size()));
+        REQUIRE(cudaMemcpy(on_device.data(), e.device_values(), pts.size() * sizeof(cd), cudaMemcpyDeviceToHost) == cudaSuccess);
+        CHECK(on_device == got.f);
+      }
+      HarmonicMap wrong = identity_map(cage);
+      wrong.psi.conservativeResize(wrong.psi.size() + 1);
+      CHECK_THROWS_AS(e.evaluate(wrong, got), InputError);
+    }
+  }
 }

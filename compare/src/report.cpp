@@ -110,7 +110,8 @@ json report_json(const Comparison& c) {
   rep["name"] = c.name;
   rep["holes"] = c.holes;
   rep["date"] = c.date;
-  rep["machine"] = {{"cpu", c.machine.cpu}, {"logical_cores", c.machine.cores}, {"vulkan_device", c.vulkan_device}};
+  rep["machine"] = {{"cpu", c.machine.cpu}, {"logical_cores", c.machine.cores}, {"vulkan_device", c.vulkan_device},
+                    {"gpu_clocks", c.gpu_clocks}};
   rep["settings"] = {{"frames", c.frames},
                      {"table_frames", c.table_frames},
                      {"mesh_vertices", c.mesh_vertices},
@@ -175,7 +176,7 @@ json report_json(const Comparison& c) {
   for (const OurRun& r : c.table2) t2.push_back(run_json(r));
   rep["table1_projection"] = t1;
   rep["table2_ratio"] = t2;
-  rep["table3_resolution"] = table3_json(c.table3, c.ours.mean_ms);
+  rep["table3_resolution"] = table3_json(c.table3, c.table3_context.ours_solve_ms);
   rep["table4_per_frame"] = table4_json(c.table4);
   rep["total_s"] = c.total_s;
   return rep;

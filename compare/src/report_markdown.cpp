@@ -21,7 +21,8 @@ std::string report_markdown(const Comparison& c) {
        }() + ". Measured in one run on " + c.date + ".");
   line();
   line("**Machine:** " + c.machine.cpu + ", " + std::to_string(c.machine.cores) + " logical cores; Vulkan device " + c.vulkan_device +
-       " (rendering, and the Vulkan column of Table 3). Our Newton core: " + c.core + ".");
+       " (rendering, and the Vulkan column of Table 3). Our Newton core: " + c.core + "." +
+       (c.gpu_clocks.empty() ? std::string() : " GPU clocks after our timed block (Tables 3–4): " + c.gpu_clocks + "."));
   line();
   line("**Settings:** |G| = " + std::to_string(c.samples) + " boundary samples, |H| = " + std::to_string(c.hessian_samples) +
        " (r = " + fixed(c.hessian_ratio, 2) + "), PartProj; " + std::to_string(c.frames) + " frames over the keyframes' range " +

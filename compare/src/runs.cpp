@@ -325,6 +325,81 @@ std::vector<Snapshot> snapshots(const Inputs& in, const OurSequence& ours, const
   return snaps;
 }
 
+std::unique_ptr<MeshEvaluator> make_mesh_evaluator(const Backends& b, const Cage& cage, std::span<const cd> points) {
+  std::unique_ptr<MeshEvaluator> e = b.mesh_evaluator ? b.mesh_evaluator(cage, points) : nullptr;
+  return e ? std::move(e) : make_cpu_mesh_evaluator(cage, points);
+}
+
+std::string OurTiming::describe() const {
+  char buf[640];
+  std::snprintf(buf, sizeof buf,
+                "timed in one block: %d warm-up frames (not timed), then the sequence's %d solved frames back to back, each "
+                "solve followed by f at the render mesh's vertices from cached basis rows on %s (the rows evaluated once per "
+                "mesh, %.0f ms), nothing else in between",
+                warmup, frames, evaluator == "cpu" ? "the CPU" : evaluator == "cuda" ? "the GPU (CUDA)" : evaluator.c_str(),
+                eval_setup_ms);
+  std::string s = buf;
+  if (!clocks_after.empty()) s += "; GPU clocks before the warm-up: " + clocks_before + "; after the block: " + clocks_after;
+  return s;
+}
+
+OurTiming time_ours(const Inputs& in, const OurSequence& ours, const TriMesh& mesh, const Options& o) {
+  constexpr int kWarmup = 10;
+  OurTiming r;
+  const Cage& cage = in.setup->cage;
+  Interpolator& interp = *ours.interp;
+  auto t0 = Clock::now();
+  const std::unique_ptr<MeshEvaluator> ev = make_mesh_evaluator(o.backends, cage, mesh.vertices);
+  r.eval_setup_ms = ms_since(t0);
+  r.evaluator = ev->name();
+  auto clocks = [&] { return o.backends.gpu_clocks ? o.backends.gpu_clocks() : std::string(); };
+  r.clocks_before = clocks();
+  say(o.progress, false, "ours timed for Tables 3-4: %d warm-up frames, then %d frames in one block (solve + f at %d vertices on %s)",
+      std::min(kWarmup, o.frames), o.frames, mesh.vertex_count(), r.evaluator.c_str());
+  MapValues v;
+  // Warm-up: the sequence's first frames, solved and evaluated as in the block, not timed.
+  std::vector<double> warm;
+  for (int i = 0; i < std::min(kWarmup, o.frames); ++i)
+    warm.push_back(interp.t_begin() + (interp.t_end() - interp.t_begin()) * i / (o.frames - 1));
+  for (const FrameResult& f : interp.sequence(warm, [&](const FrameResult& g, int, int) { ev->evaluate(g.map, v); }))
+    r.warmup += !f.keyframe;
+  // The block: no progress lines, nothing but our frames.
+  std::vector<double> eval(static_cast<size_t>(o.frames), 0.0);
+  const std::vector<FrameResult> frames = interp.sequence(o.frames, [&](const FrameResult& f, int i, int) {
+    const auto te = Clock::now();
+    ev->evaluate(f.map, v);
+    eval[static_cast<size_t>(i)] = ms_since(te);
+  });
+  r.clocks_after = clocks();
+  std::vector<const HarmonicMap*> solved;
+  for (size_t i = 0; i < frames.size(); ++i) {
+    if (frames[i].keyframe) continue;
+    solved.push_back(&frames[i].map);
+    r.solve_ms += frames[i].ms;
+    r.eval_ms += eval[i];
+    r.iterations += frames[i].iterations;
+  }
+  r.frames = static_cast<int>(solved.size());
+  const double n = std::max(1.0, static_cast<double>(r.frames));
+  r.solve_ms /= n;
+  r.eval_ms /= n;
+  r.iterations /= n;
+  r.eval_cpu_ms = r.eval_ms;
+  if (r.evaluator != "cpu" && !solved.empty()) {  // the CPU evaluator at the same maps, after the block
+    const std::unique_ptr<MeshEvaluator> cpu = make_cpu_mesh_evaluator(cage, mesh.vertices);
+    cpu->evaluate(*solved.front(), v);
+    r.eval_cpu_ms = 0;
+    for (const HarmonicMap* m : solved) {
+      t0 = Clock::now();
+      cpu->evaluate(*m, v);
+      r.eval_cpu_ms += ms_since(t0) / n;
+    }
+  }
+  say(o.progress, false, "ours in one block: solve %.2f ms + f at the vertices %.3f ms (%s) per frame, %.2f iterations%s%s",
+      r.solve_ms, r.eval_ms, r.evaluator.c_str(), r.iterations, r.clocks_after.empty() ? "" : "; GPU ", r.clocks_after.c_str());
+  return r;
+}
+
 std::vector<size_t> timed_frames(size_t frames, int timing_frames) {
   std::vector<size_t> timed;
   for (int k = 0; k < timing_frames; ++k)
@@ -352,42 +427,49 @@ std::vector<Table3Row> run_table3(const Inputs& in, const std::vector<FrameResul
     t0 = Clock::now();
     const baselines::ArapInterpolation a(m, std::move(ak));
     row.arap_factor_ms = ms_since(t0);
-    double arap_sum = 0, cpu_sum = 0, gpu_sum = 0;
+    // Ours: f at the vertices from rows cached once per mesh, on the CPU and on the
+    // backend's evaluator where that is not the CPU; one untimed evaluation each first.
+    t0 = Clock::now();
+    const std::unique_ptr<MeshEvaluator> cpu_eval = make_cpu_mesh_evaluator(cage, m.vertices);
+    row.ours_eval_setup_ms = ms_since(t0);
+    std::unique_ptr<MeshEvaluator> backend_eval = backends.mesh_evaluator ? backends.mesh_evaluator(cage, m.vertices) : nullptr;
+    if (backend_eval && std::string(backend_eval->name()) == "cpu") backend_eval.reset();
+    MapValues values;
+    cpu_eval->evaluate(ours[timed.front()].map, values);
+    if (backend_eval) backend_eval->evaluate(ours[timed.front()].map, values);
+    double arap_sum = 0, cpu_sum = 0, gpu_sum = 0, cuda_sum = 0;
     for (size_t i : timed) {
       t0 = Clock::now();
       const std::vector<cd> p = a.positions(ours[i].t);
       arap_sum += ms_since(t0);
       t0 = Clock::now();
-      const std::vector<cd> f = map_points_chunked(cage, ours[i].map, m.vertices);
+      cpu_eval->evaluate(ours[i].map, values);
       cpu_sum += ms_since(t0);
-      if (p.size() != f.size()) throw std::logic_error("table 3: sizes disagree");
+      if (p.size() != static_cast<size_t>(values.f.size())) throw std::logic_error("table 3: sizes disagree");
+      if (backend_eval) {
+        t0 = Clock::now();
+        backend_eval->evaluate(ours[i].map, values);
+        cuda_sum += ms_since(t0);
+      }
       if (backends.dense_eval) {
         t0 = Clock::now();
         const size_t n = backends.dense_eval(cage, ours[i].map, m.vertices);
         gpu_sum += ms_since(t0);
-        if (n != f.size()) throw std::logic_error("table 3: sizes disagree");
+        if (n != p.size()) throw std::logic_error("table 3: sizes disagree");
       }
     }
     const double n = static_cast<double>(timed.size());
     row.arap_ms = arap_sum / n;
     row.ours_eval_cpu_ms = cpu_sum / n;
+    if (backend_eval) row.ours_eval_cuda_ms = cuda_sum / n;
     row.ours_eval_gpu_ms = backends.dense_eval ? gpu_sum / n : std::numeric_limits<double>::quiet_NaN();
     rows.push_back(row);
     say(progress, false,
-        "table 3: %d vertices: ARAP factorisation %.0f ms, %.1f ms per frame; ours f at the vertices %.1f ms (CPU), %.1f ms (Vulkan)",
-        row.vertices, row.arap_factor_ms, row.arap_ms, row.ours_eval_cpu_ms, row.ours_eval_gpu_ms);
+        "table 3: %d vertices: ARAP factorisation %.0f ms, %.1f ms per frame; ours f at the vertices from cached rows %.3f ms (CPU), "
+        "%.3f ms (CUDA); basis per frame %.1f ms (Vulkan)",
+        row.vertices, row.arap_factor_ms, row.arap_ms, row.ours_eval_cpu_ms, row.ours_eval_cuda_ms, row.ours_eval_gpu_ms);
   }
   return rows;
-}
-
-double eval_ms(const Inputs& in, const std::vector<FrameResult>& ours, const std::vector<size_t>& timed, const TriMesh& mesh) {
-  double ms = 0;
-  for (size_t i : timed) {
-    const auto t0 = Clock::now();
-    const std::vector<cd> f = map_points_chunked(in.setup->cage, ours[i].map, mesh.vertices);
-    ms += ms_since(t0) / static_cast<double>(timed.size());
-  }
-  return ms;
 }
 
 }  // namespace hsi::compare

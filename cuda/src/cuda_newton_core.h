@@ -23,30 +23,6 @@
 namespace hsi::cuda {
 
 
-// Pinned staging for host → device copies, refilled only once the device has read its
-// previous contents (the event marks the end of the last copy out of it).
-template <class T>
-class Upload {
- public:
-  explicit Upload(size_t count) : buf_(count) {}
-  T* begin_fill() {
-    if (pending_) HSI_CUDA_CHECK(cudaEventSynchronize(done_));
-    pending_ = false;
-    return buf_.get();
-  }
-  void send(T* dst, size_t count, cudaStream_t stream) {
-    if (count > buf_.size()) throw Error("hsi::cuda: upload larger than its staging buffer");
-    HSI_CUDA_CHECK(cudaMemcpyAsync(dst, buf_.get(), count * sizeof(T), cudaMemcpyHostToDevice, stream));
-    HSI_CUDA_CHECK(cudaEventRecord(done_, stream));
-    pending_ = true;
-  }
-
- private:
-  PinnedArray<T> buf_;
-  Event done_;
-  bool pending_ = false;
-};
-
 inline sample::Projection to_device(HessianProjection p) {
   switch (p) {
     case HessianProjection::Delete: return sample::Projection::Delete;
@@ -131,6 +107,7 @@ class CudaNewtonCore final : public NewtonCore {
       setup_ = setup;
       certifier_ = std::make_unique<DeviceCertifier>(setup->shape, setup->cage, setup->G, stream_, blas_);
     }
+    warm_up();
   }
 
   // Nothing may be in flight while the members free their memory.
@@ -256,6 +233,15 @@ class CudaNewtonCore final : public NewtonCore {
   Upload<double2> coef_up_;
   PinnedArray<double> scalar_down_;
   PinnedArray<double2> coef_down_;
+
+  // Set-up work that would otherwise fall on the first solve (issue #23: the first frame
+  // took 140–165 ms): every kernel and cuBLAS / cuSOLVER routine a solve uses runs once
+  // here, at the sizes of a solve, on this core's stream and handles (so the modules
+  // they load lazily are loaded, and the libraries' workspaces allocated), and with a
+  // setup the device spaces of both its map spaces are made and a stepper is driven
+  // through every call of an iteration from the identity map. Leaves the documented
+  // initial state (a = b = 0, zero direction, identity targets). device_newton.cpp.
+  void warm_up();
 
   // The device stepper (make_stepper()): what it needs beyond the per-call interface.
   DeviceSpace& device_space(const MapSpace& space);

@@ -119,6 +119,30 @@ class Event {
   cudaEvent_t e_ = nullptr;
 };
 
+// Pinned staging for host → device copies, refilled only once the device has read its
+// previous contents (the event marks the end of the last copy out of it).
+template <class T>
+class Upload {
+ public:
+  explicit Upload(size_t count) : buf_(count) {}
+  T* begin_fill() {
+    if (pending_) HSI_CUDA_CHECK(cudaEventSynchronize(done_));
+    pending_ = false;
+    return buf_.get();
+  }
+  void send(T* dst, size_t count, cudaStream_t stream) {
+    if (count > buf_.size()) throw Error("hsi::cuda: upload larger than its staging buffer");
+    HSI_CUDA_CHECK(cudaMemcpyAsync(dst, buf_.get(), count * sizeof(T), cudaMemcpyHostToDevice, stream));
+    HSI_CUDA_CHECK(cudaEventRecord(done_, stream));
+    pending_ = true;
+  }
+
+ private:
+  PinnedArray<T> buf_;
+  Event done_;
+  bool pending_ = false;
+};
+
 // A cuBLAS handle bound to a stream, scalars passed from the host.
 class BlasHandle {
  public:

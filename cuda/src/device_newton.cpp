@@ -331,6 +331,62 @@ class DeviceStepper final : public NewtonStepper {
   double q0_ = 0, q1_ = 0, q2_ = 0;
 };
 
+void CudaNewtonCore::warm_up() {
+  // The per-call interface (the host stepper's path), at zero coefficients: a = b = 0 and
+  // a zero direction afterwards, as before.
+  const Eigen::VectorXd zero = Eigen::VectorXd::Zero(4 * static_cast<Eigen::Index>(n_));
+  set_coefficients(zero);
+  (void)energy();
+  (void)gradient();
+  (void)hessian(HessianProjection::PartProj, false);
+  set_direction(zero);
+  (void)max_safe_step();
+  (void)energy_at(0.5);
+  if (!setup_) return;
+  // The device stepper in both spaces of the setup, from the identity map: the
+  // interpolation's space with the rotation freed and not, exact and projected Hessians,
+  // trial energies, both certificates and a trial step accepted; the authoring space with
+  // a quadratic term (its extra products).
+  const HarmonicMap identity = identity_map(setup_->cage);
+  constexpr double kSteps[kBatch] = {1, 0.5, 0.25, 0.125};
+  double energies[kBatch];
+  auto iterate = [&](DeviceStepper& st, const MapSpace& space, bool free_rotation) {
+    const Eigen::VectorXd x0 = space.reduce(identity).x;
+    (void)st.start(x0);
+    HessianChoice exact;
+    exact.exact = true;
+    // A ridge that keeps every system definite (the freed rotation is a null direction
+    // at the identity): the direction stays finite, so every later call sees numbers.
+    const double ridge = 1e-3 * std::max(st.linearize(exact), 1.0);
+    (void)st.solve(ridge);
+    HessianChoice projected;
+    projected.free_rotation = free_rotation;
+    (void)st.linearize(projected);
+    (void)st.solve(ridge);
+    st.trial_energies(kSteps, energies);
+    (void)st.certify(0, true);
+    (void)st.certify(kSteps[3], false);
+    st.accept(kSteps[3]);
+    (void)st.x();
+  };
+  {
+    DeviceStepper st(*this, device_space(setup_->metric_space), nullptr, true);
+    iterate(st, setup_->metric_space, true);
+  }
+  {
+    QuadraticTerm quad;
+    const Eigen::Index dim = setup_->map_space.dim();
+    quad.Q = Eigen::MatrixXd::Identity(dim, dim);
+    quad.c = Eigen::VectorXd::Zero(dim);
+    DeviceStepper st(*this, device_space(setup_->map_space), &quad, true);
+    iterate(st, setup_->map_space, false);
+  }
+  // Back to the documented initial state.
+  set_coefficients(zero);
+  set_direction(zero);
+  HSI_CUDA_CHECK(cudaStreamSynchronize(stream_));
+}
+
 std::unique_ptr<NewtonStepper> CudaNewtonCore::make_stepper(const MapSpace& space, const Certifier* certifier,
                                                             const QuadraticTerm* quad) {
   // Only for the setup this core was made with: its certifier is the one on the device.

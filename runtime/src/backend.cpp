@@ -5,6 +5,8 @@
 #include "built.h"
 #include "hsi/domain.h"
 #if HSI_RUNTIME_CUDA
+#include "hsi/cuda/clocks.h"
+#include "hsi/cuda/mesh_evaluator.h"
 #include "hsi/cuda/newton_core.h"
 #endif
 
@@ -77,26 +79,83 @@ NewtonCoreChoice make_newton_core(const ShapeSetup& setup, Backend requested) {
   return make_newton_core(setup, requested, requested == Backend::Cpu ? CudaStatus{} : cuda_status());
 }
 
-NewtonCoreChoice make_newton_core(const ShapeSetup& setup, Backend requested, const CudaStatus& cuda) {
-  NewtonCoreChoice r;
-  r.choice = choose_backend(requested, cuda);
+namespace {
+
+// The one fallback policy of the factories below: the choice for `requested`, then the
+// CUDA object (make_cuda) where CUDA was chosen, else the CPU one (make_cpu). A CUDA
+// object that cannot be made (out of device memory, say): auto falls back to the CPU
+// with the reason, cuda throws BackendUnavailable. `what` names the object in messages.
+template <class T, class MakeCuda, class MakeCpu>
+std::unique_ptr<T> make_on_backend(Backend requested, const CudaStatus& cuda, const char* what, BackendChoice& choice,
+                                   MakeCuda&& make_cuda, MakeCpu&& make_cpu) {
+  choice = choose_backend(requested, cuda);
 #if HSI_RUNTIME_CUDA
-  if (r.choice.used == Backend::Cuda) {
+  if (choice.used == Backend::Cuda) {
     try {
-      r.core = hsi::cuda::make_newton_core(setup);
-      return r;
+      return make_cuda();
     } catch (const hsi::cuda::Error& e) {
-      if (requested == Backend::Cuda) throw BackendUnavailable(std::string("--backend cuda: the CUDA core could not be made: ") + e.what());
-      r.choice.used = Backend::Cpu;
-      r.choice.fallback = std::string("the CUDA core could not be made on ") + r.choice.device + ": " + e.what();
-      r.choice.device.clear();
+      if (requested == Backend::Cuda) throw BackendUnavailable(std::string("--backend cuda: the CUDA ") + what + " could not be made: " + e.what());
+      choice.used = Backend::Cpu;
+      choice.fallback = std::string("the CUDA ") + what + " could not be made on " + choice.device + ": " + e.what();
+      choice.device.clear();
     }
   }
 #else
-  if (r.choice.used == Backend::Cuda) throw BackendUnavailable(std::string("--backend cuda: ") + built::kNoCuda);
+  (void)make_cuda;
+  (void)what;
+  if (choice.used == Backend::Cuda) throw BackendUnavailable(std::string("--backend cuda: ") + built::kNoCuda);
 #endif
-  r.core = make_cpu_newton_core(setup.D_G, setup.H);
+  return make_cpu();
+}
+
+// What the factories make on CUDA; in a build without it make_on_backend never calls these.
+std::unique_ptr<NewtonCore> cuda_core(const ShapeSetup& setup) {
+#if HSI_RUNTIME_CUDA
+  return hsi::cuda::make_newton_core(setup);
+#else
+  (void)setup;
+  throw BackendUnavailable(std::string("--backend cuda: ") + built::kNoCuda);
+#endif
+}
+std::unique_ptr<MeshEvaluator> cuda_mesh_evaluator(const Cage& cage, std::span<const cd> points, const MeshEvaluatorOptions& o) {
+#if HSI_RUNTIME_CUDA
+  return std::make_unique<hsi::cuda::MeshEvaluator>(cage, points, o);
+#else
+  (void)cage, (void)points, (void)o;
+  throw BackendUnavailable(std::string("--backend cuda: ") + built::kNoCuda);
+#endif
+}
+
+}  // namespace
+
+NewtonCoreChoice make_newton_core(const ShapeSetup& setup, Backend requested, const CudaStatus& cuda) {
+  NewtonCoreChoice r;
+  r.core = make_on_backend<NewtonCore>(requested, cuda, "core", r.choice, [&] { return cuda_core(setup); },
+                                       [&] { return make_cpu_newton_core(setup.D_G, setup.H); });
   return r;
+}
+
+MeshEvaluatorChoice make_mesh_evaluator(const Cage& cage, std::span<const cd> points, Backend requested,
+                                        const MeshEvaluatorOptions& options) {
+  return make_mesh_evaluator(cage, points, requested, requested == Backend::Cpu ? CudaStatus{} : cuda_status(), options);
+}
+
+MeshEvaluatorChoice make_mesh_evaluator(const Cage& cage, std::span<const cd> points, Backend requested, const CudaStatus& cuda,
+                                        const MeshEvaluatorOptions& options) {
+  MeshEvaluatorChoice r;
+  r.evaluator = make_on_backend<MeshEvaluator>(requested, cuda, "mesh evaluator", r.choice,
+                                               [&] { return cuda_mesh_evaluator(cage, points, options); },
+                                               [&] { return make_cpu_mesh_evaluator(cage, points, options); });
+  return r;
+}
+
+std::string gpu_clocks() {
+#if HSI_RUNTIME_CUDA
+  if (!cuda_status().available) return "";
+  return hsi::cuda::clocks().describe();
+#else
+  return "";
+#endif
 }
 
 std::string describe(const BackendChoice& c) {

@@ -14,6 +14,7 @@
 #include <string_view>
 #include <vector>
 
+#include "hsi/mesh_evaluator.h"
 #include "hsi/newton.h"
 #include "hsi/shape_setup.h"
 
@@ -36,6 +37,12 @@ struct Backends {
   // `dense_eval_unavailable` is the reason the report prints in its place.
   DenseEval dense_eval;
   std::string dense_eval_unavailable = "no GPU dense evaluation was given";
+  // f at a mesh's vertices from cached basis rows (Tables 3–4: ours = solve + f at the
+  // vertices), on the Newton core's backend; null: the CPU evaluator (which Table 3
+  // also times at every resolution).
+  std::function<std::unique_ptr<MeshEvaluator>(const Cage&, std::span<const cd>)> mesh_evaluator;
+  // The GPU's clocks now, one line (hsi::runtime::gpu_clocks); null or empty: no GPU.
+  std::function<std::string()> gpu_clocks;
 };
 
 // Progress, one line per phase and per run within a phase; `transient` lines are

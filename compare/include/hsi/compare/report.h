@@ -32,6 +32,7 @@ struct MetricVariantFacts {
 struct Comparison {
   // What, where, when.
   std::string scene_path, name, date, vulkan_device;
+  std::string gpu_clocks;  // after our timed block (runs.h, OurTiming); empty: no GPU
   Machine machine;
   int loops = 1, holes = 0;
   double size = 1;  // the shape's bounding-box diagonal: distances are relative to it

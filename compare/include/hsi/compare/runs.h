@@ -4,6 +4,8 @@
 // and the timings of Tables 3–4. Each run's numbers are plain values for the later stages.
 #pragma once
 
+#include <cmath>
+#include <limits>
 #include <memory>
 #include <optional>
 #include <string>
@@ -129,17 +131,39 @@ struct Snapshot {
 // At t = 0.25, 0.5, 0.75 of the segment, ours warm-started from the sequence's frame before t.
 std::vector<Snapshot> snapshots(const Inputs& in, const OurSequence& ours, const Baselines& b);
 
+// Ours timed for Tables 3–4 (issue #23) in one block: `warmup` frames untimed, then the
+// sequence's frames back to back, each solved (warm-started from the one before) and then
+// f evaluated at the render mesh's vertices from cached basis rows, nothing else in
+// between: a GPU then does not idle, and drop its clocks, between our frames as it does
+// while the baselines run on the CPU.
+struct OurTiming {
+  std::string evaluator = "cpu";  // where f at the vertices was evaluated (MeshEvaluator::name)
+  int warmup = 0, frames = 0;     // solved frames (keyframes are not solved and not counted)
+  double solve_ms = 0, eval_ms = 0, iterations = 0;  // means per solved frame of the block
+  double eval_cpu_ms = 0;         // the CPU evaluator at the same maps (= eval_ms where it is the one timed)
+  double eval_setup_ms = 0;       // the basis rows at the vertices, once per mesh
+  std::string clocks_before, clocks_after;  // the GPU's clocks before the warm-up and after the block; empty: no GPU
+  double total_ms() const { return solve_ms + eval_ms; }
+  std::string describe() const;   // how it was timed, for the tables' captions
+};
+OurTiming time_ours(const Inputs& in, const OurSequence& ours, const TriMesh& mesh, const Options& o);
+
+// The cached evaluator of the caller's backend (Backends::mesh_evaluator), else the CPU one.
+std::unique_ptr<MeshEvaluator> make_mesh_evaluator(const Backends& b, const Cage& cage, std::span<const cd> points);
+
 // Table 3: time per frame against the render mesh's resolution.
 struct Table3Row {
   int vertices = 0, triangles = 0;
-  double mesh_s = 0, arap_factor_ms = 0, arap_ms = 0, ours_eval_cpu_ms = 0;
+  double mesh_s = 0, arap_factor_ms = 0, arap_ms = 0, ours_eval_cpu_ms = 0;  // f from cached rows on the CPU
   double ours_eval_gpu_ms = 0;  // NaN where no GPU dense evaluation was given
+  double ours_eval_cuda_ms = std::numeric_limits<double>::quiet_NaN();  // cached rows on the GPU; NaN: not the backend
+  double ours_eval_setup_ms = 0;  // the CPU evaluator's rows at the vertices, once per mesh
+  // f at the vertices on the backend our solve ran on: CUDA where timed, else the CPU.
+  double ours_eval_ms() const { return std::isnan(ours_eval_cuda_ms) ? ours_eval_cpu_ms : ours_eval_cuda_ms; }
 };
 // Frames of the sequence whose maps and times Table 3 uses.
 std::vector<size_t> timed_frames(size_t frames, int timing_frames);
 std::vector<Table3Row> run_table3(const Inputs& in, const std::vector<FrameResult>& ours, const std::vector<size_t>& timed,
                                   const Backends& backends, const Progress& progress);
-// Ours at the render mesh for Table 4: f at its vertices on the CPU, mean ms over `timed`.
-double eval_ms(const Inputs& in, const std::vector<FrameResult>& ours, const std::vector<size_t>& timed, const TriMesh& mesh);
 
 }  // namespace hsi::compare

@@ -2,6 +2,8 @@
 // report.json and as markdown sections for report.md (heading, what was measured, table).
 #pragma once
 
+#include <cmath>
+#include <limits>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
@@ -18,8 +20,12 @@ struct Table4 {
   double ccw16_bm_ms = 0;
   int ccw16_bm_mesh_vertices = 0;
   bool ccw16_bm_own_mesh = false;  // on a coarser mesh than the render mesh
-  double ours_solve_ms = 0, ours_iterations = 0, ours_eval_cpu_ms = 0;
-  double ours_total_ms() const { return ours_solve_ms + ours_eval_cpu_ms; }
+  double ours_solve_ms = 0, ours_iterations = 0, ours_eval_cpu_ms = 0;  // f from cached rows on the CPU
+  double ours_eval_cuda_ms = std::numeric_limits<double>::quiet_NaN();  // on the GPU; NaN: not our backend
+  std::string ours_timing{};  // how ours was timed (OurTiming::describe); empty: means over the sequence
+  // f at the vertices on the backend our solve ran on: CUDA where timed, else the CPU.
+  double ours_eval_ms() const { return std::isnan(ours_eval_cuda_ms) ? ours_eval_cpu_ms : ours_eval_cuda_ms; }
+  double ours_total_ms() const { return ours_solve_ms + ours_eval_ms(); }
   double arap_over_ours_solve() const { return arap_ms / ours_solve_ms; }
   double arap_over_ours_total() const { return arap_ms / ours_total_ms(); }
 };
@@ -31,6 +37,7 @@ struct Table3Context {
   size_t timed_frames = 0;
   std::string gpu_device;       // e.g. "llvmpipe (CPU)"
   std::string gpu_unavailable;  // non-empty: no GPU column, this is why
+  std::string ours_timing{};    // how ours was timed (OurTiming::describe); empty: means over the sequence
 };
 
 nlohmann::json run_json(const OurRun& r);  // one row of Table 1 or 2

@@ -7,11 +7,13 @@
 #pragma once
 
 #include <memory>
+#include <span>
 #include <stdexcept>
 #include <string>
 #include <string_view>
 #include <vector>
 
+#include "hsi/mesh_evaluator.h"
 #include "hsi/newton.h"
 #include "hsi/shape_setup.h"
 
@@ -66,6 +68,25 @@ struct NewtonCoreChoice {
 NewtonCoreChoice make_newton_core(const ShapeSetup& setup, Backend requested);
 // The same, the CUDA status already known (a front-end that makes many cores asks once).
 NewtonCoreChoice make_newton_core(const ShapeSetup& setup, Backend requested, const CudaStatus& cuda);
+
+// f at a fixed set of points (a mesh's vertices) from cached basis rows
+// (hsi/mesh_evaluator.h), on the backend a request gives, decided as for the Newton
+// core: the CUDA evaluator keeps the rows on the GPU; if making it fails (the rows do
+// not fit in device memory, say), auto falls back to the CPU with that reason and cuda
+// throws BackendUnavailable.
+struct MeshEvaluatorChoice {
+  std::unique_ptr<MeshEvaluator> evaluator;
+  BackendChoice choice;
+};
+MeshEvaluatorChoice make_mesh_evaluator(const Cage& cage, std::span<const cd> points, Backend requested,
+                                        const MeshEvaluatorOptions& options = {});
+MeshEvaluatorChoice make_mesh_evaluator(const Cage& cage, std::span<const cd> points, Backend requested, const CudaStatus& cuda,
+                                        const MeshEvaluatorOptions& options = {});
+
+// The GPU's clocks now, in one line for a report ("SM 1980 MHz (max 1980 MHz), memory
+// 2619 MHz, read by NVML" or, where NVML cannot be loaded, the device's peak clock from
+// cudaDevAttrClockRate, named as such); empty where this build or machine has no CUDA device.
+std::string gpu_clocks();
 
 // One line for a log: "cpu", "cuda (NVIDIA H100 (sm_90))" or "cpu (CUDA not used: <why>)".
 std::string describe(const BackendChoice& choice);
