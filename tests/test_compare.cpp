@@ -97,29 +97,29 @@ PerFrame made_frames(int n, bool boundary_metric) {
     p.our_iters.push_back(p.keyframe.back() ? 0 : 5);
     // On the mesh, per triangle: the keyframes' envelope, ours there, and the mesh methods.
     // As made, the claims come out: ARAP does not fail (κ at most 1.6 / 1.45 of the
-    // keyframes', no flip), FFMP scales (30% outside the area envelope, ours 2%), GE is
+    // keyframes', no flip), FFMP scales (a triangle 30% smaller than both keyframes', ours 2%), GE is
     // close (0.5% of the size) with a 5% κ peak, ours within its bounds.
     p.mesh_bound_kappa.push_back(1.45);
     p.mesh_bound_iso.push_back(5.6);
     p.ours_mesh_kappa.push_back(1.22 + 0.1 * bump);
     p.ours_mesh_iso.push_back(4.1 + bump);
-    p.ours_mesh_area.push_back(0.02 * bump);
+    p.ours_mesh_shrink.push_back(0.02 * bump);
     p.arap_kappa.push_back(1.3 + 0.3 * bump);
     p.arap_iso.push_back(4.3 + 2 * bump);
     p.arap_ms.push_back(2.0);
     p.arap_flipped.push_back(0);
-    p.arap_area.push_back(0.05 * bump);
+    p.arap_shrink.push_back(0.05 * bump);
     p.ffmp_kappa.push_back(1.3 + 0.5 * bump);
     p.ffmp_iso.push_back(4.3 + 3 * bump);
     p.ffmp_ms.push_back(200.0);
     p.ffmp_flipped.push_back(0);
-    p.ffmp_area.push_back(0.3 * bump);
+    p.ffmp_shrink.push_back(0.3 * bump);
     p.ge_kappa.push_back(1.45 * (1 + 0.05 * bump));
     p.ge_iso.push_back(4.2 + bump);
     p.ge_ms.push_back(p.keyframe.back() ? kNaN : 800.0);
     p.ge_iters.push_back(3);
     p.ge_flipped.push_back(0);
-    p.ge_area.push_back(0.04 * bump);
+    p.ge_shrink.push_back(0.04 * bump);
     p.ge_converged.push_back(1);
     p.ge_dist.push_back(0.005 * bump);
     p.ccw_kappa.push_back(1.25 + 0.2 * bump);
@@ -322,7 +322,7 @@ TEST_CASE("table 4: time per frame against ARAP, FFMP and GE, ratios, the bounda
   CHECK(j["ccw16_boundary_metric_mesh_vertices"] == 4200);
 }
 
-TEST_CASE("the keyframes on a mesh: their distortion, area envelope and turn, against which a frame is held", "[compare]") {
+TEST_CASE("the keyframes on a mesh: their distortion, areas and turn, against which a frame is held", "[compare]") {
   TriMesh mesh;
   mesh.vertices = {{0, 0}, {1, 0}, {0, 1}};
   mesh.triangles = {{0, 1, 2}};
@@ -342,10 +342,10 @@ TEST_CASE("the keyframes on a mesh: their distortion, area envelope and turn, ag
   };
   CHECK(stretched(3).det[0] == Approx(3));
   CHECK(stretched(3).turn[0] == Approx(0).margin(1e-12));
-  CHECK(m.area_departure(0.5, stretched(2)) == 0);                 // within [1, 4]
-  CHECK(m.area_departure(0.5, stretched(0.5)) == Approx(1));       // 1 / 0.5 − 1
-  CHECK(m.area_departure(0.5, stretched(5)) == Approx(0.25));      // 5 / 4 − 1
-  CHECK(std::isinf(m.area_departure(0.5, stretched(-1))));         // flipped
+  CHECK(m.area_shrink(0.5, stretched(2)) == 0);            // within [1, 4]
+  CHECK(m.area_shrink(0.5, stretched(0.5)) == Approx(1));  // 1 / 0.5 − 1
+  CHECK(m.area_shrink(0.5, stretched(5)) == 0);            // growing beyond both keyframes does not count
+  CHECK(std::isinf(m.area_shrink(0.5, stretched(-1))));    // flipped
 }
 
 TEST_CASE("claims: each decided on made-up runs where the answer is known", "[compare]") {
@@ -367,14 +367,14 @@ TEST_CASE("claims: each decided on made-up runs where the answer is known", "[co
     c.keyframes_max_turn = 0.5;  // about 29°: the claim's condition is not met, and the evidence says so
     CHECK_THAT(claim(c, "arap_fails").evidence, Contains("no large rotation in this scene"));
   }
-  SECTION("FFMP scales unnaturally: more than 10% outside the keyframes' area envelope, and more than ours") {
+  SECTION("FFMP scales unnaturally: a triangle more than 10% smaller than both keyframes', and more than ours") {
     Comparison c = base;
     CHECK(claim(c, "ffmp_scales").holds);
     CHECK(claim(c, "ffmp_scales").value == Approx(0.3));
-    for (double& v : c.per_frame.ffmp_area) v *= 0.3;  // 9%
+    for (double& v : c.per_frame.ffmp_shrink) v *= 0.3;  // 9%
     CHECK_FALSE(claim(c, "ffmp_scales").holds);
     c = base;
-    for (double& v : c.per_frame.ours_mesh_area) v *= 20;  // ours 40%: FFMP no worse than ours
+    for (double& v : c.per_frame.ours_mesh_shrink) v *= 20;  // ours 40%: FFMP no worse than ours
     CHECK_FALSE(claim(c, "ffmp_scales").holds);
   }
   SECTION("GE is close to ours but with distortion peaks") {
@@ -481,7 +481,7 @@ TEST_CASE("report.json carries the fields the README lists; report.md embeds the
     }
     for (const char* method : {"arap", "ffmp", "ge", "ccw16"}) CHECK(j["side_by_side"][0].contains(method));
     CHECK(j["sequence"]["ge"]["iterations"].size() == 5);
-    CHECK(j["summary"]["ffmp"]["max_area_departure"].get<double>() == Approx(0.3));
+    CHECK(j["summary"]["ffmp"]["max_area_shrink"].get<double>() == Approx(0.3));
     CHECK(j["table3_resolution"][0]["ge_ms"].get<double>() == 150);
     CHECK(j["table3_resolution"][0]["ge_iterations"].get<double>() == 3);
     CHECK(j["table4_per_frame"]["ffmp_ms"].get<double>() == 200);

@@ -55,17 +55,18 @@ std::vector<Claim> decide_claims(const Comparison& c, const ClaimThresholds& th)
     Claim k;
     k.id = "ffmp_scales";
     k.claim = "FFMP scales unnaturally";
-    const double ffmp = max_of(p.ffmp_area), ours = max_of(p.ours_mesh_area);
-    k.definition = "some triangle's area ratio (image area / rest area) leaves the neighbouring keyframes' [min, max] on that "
-                   "triangle by more than " + percent(th.ffmp_area) + " (relative), and by more than ours does (ours at the "
-                   "same mesh's vertices)";
-    k.holds = ffmp > th.ffmp_area && ffmp > ours;
+    const double ffmp = max_of(p.ffmp_shrink), ours = max_of(p.ours_mesh_shrink);
+    k.definition = "some triangle's area ratio (image area / rest area) falls below both neighbouring keyframes' on that "
+                   "triangle by more than " + percent(th.ffmp_shrink) + " (min(det_k, det_k+1) / det \xe2\x88\x92 1), and by more "
+                   "than ours does (ours at the same mesh's vertices); only shrinking counts, since the blended metric, ours' and "
+                   "GE's target, never shrinks a triangle below both keyframes but may grow one beyond both";
+    k.holds = ffmp > th.ffmp_shrink && ffmp > ours;
     k.value = ffmp;
-    k.threshold = th.ffmp_area;
+    k.threshold = th.ffmp_shrink;
     k.verdict = k.holds ? "holds" : "does not hold";
-    k.evidence = "largest departure from the keyframes' area envelope over " + frames + ", per triangle on " + mesh + ": FFMP " +
-                 percent(ffmp) + ", ours " + percent(ours) + ", ARAP " + percent(max_of(p.arap_area)) + ", GE " +
-                 percent(max_of(p.ge_area)) + "; FFMP frames with flipped triangles: " + std::to_string(frames_with(p.ffmp_flipped));
+    k.evidence = "largest shrinking below both keyframes over " + frames + ", per triangle on " + mesh + ": FFMP " +
+                 percent(ffmp) + ", ours " + percent(ours) + ", ARAP " + percent(max_of(p.arap_shrink)) + ", GE " +
+                 percent(max_of(p.ge_shrink)) + "; FFMP frames with flipped triangles: " + std::to_string(frames_with(p.ffmp_flipped));
     out.push_back(k);
   }
   {

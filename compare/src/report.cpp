@@ -24,13 +24,13 @@ json sequence_json(const Comparison& c) {
                        {"isometric_certified_bound", nums(p.bound_iso_c)}}},
             {"keyframes_on_mesh", {{"kappa", nums(p.mesh_bound_kappa)}, {"isometric", nums(p.mesh_bound_iso)}}},
             {"ours_on_mesh", {{"kappa", nums(p.ours_mesh_kappa)}, {"isometric", nums(p.ours_mesh_iso)},
-                              {"area_departure", nums(p.ours_mesh_area)}}},
+                              {"area_shrink", nums(p.ours_mesh_shrink)}}},
             {"arap", {{"kappa", nums(p.arap_kappa)}, {"isometric", nums(p.arap_iso)}, {"flipped", p.arap_flipped}, {"ms", nums(p.arap_ms)},
-                      {"area_departure", nums(p.arap_area)}}},
+                      {"area_shrink", nums(p.arap_shrink)}}},
             {"ffmp", {{"kappa", nums(p.ffmp_kappa)}, {"isometric", nums(p.ffmp_iso)}, {"flipped", p.ffmp_flipped}, {"ms", nums(p.ffmp_ms)},
-                      {"area_departure", nums(p.ffmp_area)}}},
+                      {"area_shrink", nums(p.ffmp_shrink)}}},
             {"ge", {{"kappa", nums(p.ge_kappa)}, {"isometric", nums(p.ge_iso)}, {"flipped", p.ge_flipped}, {"ms", nums(p.ge_ms)},
-                    {"iterations", p.ge_iters}, {"converged", p.ge_converged}, {"area_departure", nums(p.ge_area)},
+                    {"iterations", p.ge_iters}, {"converged", p.ge_converged}, {"area_shrink", nums(p.ge_shrink)},
                     {"distance_to_ours_after_rigid_alignment_over_size", nums(p.ge_dist)}}},
             {"ccw16", {{"kappa", nums(p.ccw_kappa)}, {"isometric", nums(p.ccw_iso)}, {"ms", nums(p.ccw_ms)},
                        {"max_hole_period_over_size", nums(p.ccw_period)}}}};
@@ -63,16 +63,16 @@ json summary_json(const Comparison& c) {
       {"keyframes_on_mesh", {{"max_kappa", num(max_of(p.mesh_bound_kappa))}, {"max_isometric", num(max_of(p.mesh_bound_iso))},
                              {"max_turn_degrees", c.keyframes_max_turn * 180 / M_PI}}},
       {"ours_on_mesh", {{"max_kappa", num(max_of(p.ours_mesh_kappa))}, {"max_isometric", num(max_of(p.ours_mesh_iso))},
-                        {"max_area_departure", num(max_of(p.ours_mesh_area))}}},
+                        {"max_area_shrink", num(max_of(p.ours_mesh_shrink))}}},
       {"arap", {{"max_kappa", num(max_of(p.arap_kappa))}, {"max_isometric", num(max_of(p.arap_iso))}, {"frames_with_flips", arap_folded},
                 {"keyframe_error_over_size", c.arap_key_error}, {"setup_ms", c.arap_setup_ms}, {"mean_ms", mean_of(p.arap_ms)},
-                {"max_area_departure", num(max_of(p.arap_area))}}},
+                {"max_area_shrink", num(max_of(p.arap_shrink))}}},
       {"ffmp", {{"max_kappa", num(max_of(p.ffmp_kappa))}, {"max_isometric", num(max_of(p.ffmp_iso))},
                 {"frames_with_flips", folded(p.ffmp_flipped)}, {"setup_ms", c.ffmp_setup_ms}, {"mean_ms", mean_of(p.ffmp_ms)},
-                {"max_area_departure", num(max_of(p.ffmp_area))}}},
+                {"max_area_shrink", num(max_of(p.ffmp_shrink))}}},
       {"ge", {{"max_kappa", num(max_of(p.ge_kappa))}, {"max_isometric", num(max_of(p.ge_iso))}, {"frames_with_flips", folded(p.ge_flipped)},
               {"not_converged", static_cast<int>(std::count(p.ge_converged.begin(), p.ge_converged.end(), 0.0))},
-              {"setup_ms", c.ge_setup_ms}, {"mean_ms", mean_of(p.ge_ms)}, {"max_area_departure", num(max_of(p.ge_area))},
+              {"setup_ms", c.ge_setup_ms}, {"mean_ms", mean_of(p.ge_ms)}, {"max_area_shrink", num(max_of(p.ge_shrink))},
               {"max_distance_to_ours_after_rigid_alignment_over_size", num(max_of(p.ge_dist))}}},
       {"ccw16", {{"max_kappa", num(max_of(p.ccw_kappa))}, {"max_isometric", num(max_of(p.ccw_iso))},
                  {"max_hole_period_over_size", num(max_of(p.ccw_period))}, {"setup_ms", c.ccw_setup_ms}, {"mean_ms", mean_of(p.ccw_ms)}}}};
@@ -159,8 +159,8 @@ json report_json(const Comparison& c) {
   rep["distortion_kinds"] = {
       {"sampled", "ours' kappa / isometric and the keyframes' bound: sampled at the certificate's breakpoints on the boundary"},
       {"per_triangle", "arap, ffmp, ge, keyframes_on_mesh, ours_on_mesh: per triangle of the piecewise-linear frame on the render "
-                       "mesh (ours_on_mesh: our map at its vertices); area_departure: how far a triangle's area ratio leaves the "
-                       "neighbouring keyframes' [min, max] on it (relative)"},
+                       "mesh (ours_on_mesh: our map at its vertices); area_shrink: how far a triangle's area ratio falls below "
+                       "both neighbouring keyframes' on it, min(det_k, det_k+1) / det - 1 (0: none smaller than both)"},
       {"certified", "*_certified_bound: the certificate's bounds over the boundary, so over the shape (Theorem 2); isometric from "
                     "the sigma bounds; \"nan\" where a frame is not certified"}};
   rep["sequence"] = sequence_json(c);

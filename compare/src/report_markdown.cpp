@@ -77,12 +77,12 @@ std::string report_markdown(const Comparison& c) {
   line("| keyframes on the mesh (per triangle) | " + fixed(max_of(p.mesh_bound_kappa), 4) + " | " + fixed(max_of(p.mesh_bound_iso), 4) +
        " | | largest turn between neighbouring keyframes " + fixed(c.keyframes_max_turn * 180 / M_PI, 0) + "\xc2\xb0 |");
   line("| ours on the mesh (per triangle) | " + fixed(max_of(p.ours_mesh_kappa), 4) + " | " + fixed(max_of(p.ours_mesh_iso), 4) + " | " +
-       std::to_string(p.size()) + " | area outside the keyframes' envelope by up to " + sci(max_of(p.ours_mesh_area)) + " (relative) |");
+       std::to_string(p.size()) + " | a triangle shrunk below both keyframes by up to " + sci(max_of(p.ours_mesh_shrink)) + " (relative) |");
   line("| ARAP | " + fixed(max_of(p.arap_kappa), 4) + " | " + fixed(max_of(p.arap_iso), 4) + " | " + std::to_string(p.size()) + " | " +
        std::to_string(arap_folded) + " frames with flipped triangles; keyframes reproduced to " + sci(c.arap_key_error) + " \xc3\x97 size |");
   line("| FFMP | " + fixed(max_of(p.ffmp_kappa), 4) + " | " + fixed(max_of(p.ffmp_iso), 4) + " | " + std::to_string(p.size()) + " | " +
-       std::to_string(folded(p.ffmp_flipped)) + " frames with flipped triangles; area outside the keyframes' envelope by up to " +
-       sci(max_of(p.ffmp_area)) + " (relative) |");
+       std::to_string(folded(p.ffmp_flipped)) + " frames with flipped triangles; a triangle shrunk below both keyframes by up to " +
+       sci(max_of(p.ffmp_shrink)) + " (relative) |");
   const int ge_unconverged = static_cast<int>(std::count(p.ge_converged.begin(), p.ge_converged.end(), 0.0));
   line("| GE | " + fixed(max_of(p.ge_kappa), 4) + " | " + fixed(max_of(p.ge_iso), 4) + " | " + std::to_string(p.size()) + " | " +
        std::to_string(folded(p.ge_flipped)) + " frames with flipped triangles, " + std::to_string(ge_unconverged) +

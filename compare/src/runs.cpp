@@ -204,15 +204,13 @@ double MeshKeyframes::iso_bound(double t) const {
   const auto [a, b] = around(t);
   return std::max(distortion[a].max_isometric, distortion[b].max_isometric);
 }
-double MeshKeyframes::area_departure(double t, const TriangleShape& frame) const {
+double MeshKeyframes::area_shrink(double t, const TriangleShape& frame) const {
   const auto [a, b] = around(t);
   double worst = 0;
   for (size_t i = 0; i < frame.det.size(); ++i) {
-    const double lo = std::min(shape[a].det[i], shape[b].det[i]), hi = std::max(shape[a].det[i], shape[b].det[i]);
     const double d = frame.det[i];
     if (!(d > 0)) return std::numeric_limits<double>::infinity();
-    if (d < lo) worst = std::max(worst, lo / d - 1);
-    if (d > hi) worst = std::max(worst, d / hi - 1);
+    worst = std::max(worst, std::min(shape[a].det[i], shape[b].det[i]) / d - 1);
   }
   return worst;
 }
@@ -327,21 +325,21 @@ PerFrame measure_sequence(const Inputs& in, const std::vector<FrameResult>& ours
   PerFrame p;
   for (auto* v : {&p.t, &p.our_kappa, &p.our_iso, &p.bound_kappa, &p.bound_iso, &p.our_ms, &p.our_iters, &p.our_kappa_c,
                   &p.our_iso_c, &p.bound_kappa_c, &p.bound_iso_c, &p.mesh_bound_kappa, &p.mesh_bound_iso, &p.ours_mesh_kappa,
-                  &p.ours_mesh_iso, &p.ours_mesh_area, &p.arap_kappa, &p.arap_iso, &p.arap_ms, &p.arap_flipped, &p.arap_area,
-                  &p.ffmp_kappa, &p.ffmp_iso, &p.ffmp_ms, &p.ffmp_flipped, &p.ffmp_area, &p.ge_kappa, &p.ge_iso, &p.ge_ms,
-                  &p.ge_iters, &p.ge_flipped, &p.ge_area, &p.ge_converged, &p.ge_dist, &p.ccw_kappa, &p.ccw_iso, &p.ccw_ms,
+                  &p.ours_mesh_iso, &p.ours_mesh_shrink, &p.arap_kappa, &p.arap_iso, &p.arap_ms, &p.arap_flipped, &p.arap_shrink,
+                  &p.ffmp_kappa, &p.ffmp_iso, &p.ffmp_ms, &p.ffmp_flipped, &p.ffmp_shrink, &p.ge_kappa, &p.ge_iso, &p.ge_ms,
+                  &p.ge_iters, &p.ge_flipped, &p.ge_shrink, &p.ge_converged, &p.ge_dist, &p.ccw_kappa, &p.ccw_iso, &p.ccw_ms,
                   &p.ccw_period})
     v->resize(F);
   for (auto* v : {&p.bm_kappa, &p.bm_iso, &p.bm_ms, &p.bm_fit, &p.ccw_dist, &p.bm_dist}) v->assign(F, nan);
   p.keyframe.resize(F);
   say(progress, false, "baselines over the sequence: ARAP, FFMP and CCW16 at %zu frames ...", F);
-  // A mesh method's frame: its largest per-triangle distortion, flips and area departure.
+  // A mesh method's frame: its largest per-triangle distortion, flips and shrinking.
   struct MeshFrame {
     double kappa, iso, flipped, area;
   };
   auto on_mesh = [&](double t, const std::vector<cd>& pos) {
     const baselines::MeshDistortion d = baselines::mesh_distortion(b.mesh, pos);
-    return MeshFrame{d.max_kappa, d.max_isometric, static_cast<double>(d.flipped), keys.area_departure(t, triangle_shape(b.mesh, pos))};
+    return MeshFrame{d.max_kappa, d.max_isometric, static_cast<double>(d.flipped), keys.area_shrink(t, triangle_shape(b.mesh, pos))};
   };
   for (size_t i = 0; i < F; ++i) {
     const FrameResult& f = ours[i];
@@ -365,20 +363,20 @@ PerFrame measure_sequence(const Inputs& in, const std::vector<FrameResult>& ours
     const MeshFrame om = on_mesh(f.t, ours_at);
     p.ours_mesh_kappa[i] = om.kappa;
     p.ours_mesh_iso[i] = om.iso;
-    p.ours_mesh_area[i] = om.area;
+    p.ours_mesh_shrink[i] = om.area;
 
     auto t0 = Clock::now();
     const std::vector<cd> pos = b.arap->positions(f.t);
     p.arap_ms[i] = ms_since(t0);
     const MeshFrame a = on_mesh(f.t, pos);
-    p.arap_kappa[i] = a.kappa, p.arap_iso[i] = a.iso, p.arap_flipped[i] = a.flipped, p.arap_area[i] = a.area;
+    p.arap_kappa[i] = a.kappa, p.arap_iso[i] = a.iso, p.arap_flipped[i] = a.flipped, p.arap_shrink[i] = a.area;
     t0 = Clock::now();
     const std::vector<cd> fp = b.ffmp->positions(f.t);
     p.ffmp_ms[i] = ms_since(t0);
     const MeshFrame m = on_mesh(f.t, fp);
-    p.ffmp_kappa[i] = m.kappa, p.ffmp_iso[i] = m.iso, p.ffmp_flipped[i] = m.flipped, p.ffmp_area[i] = m.area;
+    p.ffmp_kappa[i] = m.kappa, p.ffmp_iso[i] = m.iso, p.ffmp_flipped[i] = m.flipped, p.ffmp_shrink[i] = m.area;
     const MeshFrame g = on_mesh(f.t, ge[i].positions);
-    p.ge_kappa[i] = g.kappa, p.ge_iso[i] = g.iso, p.ge_flipped[i] = g.flipped, p.ge_area[i] = g.area;
+    p.ge_kappa[i] = g.kappa, p.ge_iso[i] = g.iso, p.ge_flipped[i] = g.flipped, p.ge_shrink[i] = g.area;
     p.ge_ms[i] = f.keyframe ? nan : ge[i].ms;  // at a keyframe ours is the keyframe itself, unsolved: neither is timed there
     p.ge_iters[i] = ge[i].iterations;
     p.ge_converged[i] = ge[i].converged;

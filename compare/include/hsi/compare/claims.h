@@ -19,9 +19,11 @@ struct ClaimThresholds {
   double arap_kappa_factor = 2.0;
   // "large rotations": some triangle turns by more than this between neighbouring keyframes.
   double large_turn_deg = 90;
-  // "FFMP scales unnaturally": some triangle's area ratio leaves the neighbouring keyframes'
-  // [min, max] on that triangle by more than this (relative), and by more than ours does.
-  double ffmp_area = 0.10;
+  // "FFMP scales unnaturally": some triangle shrinks below both neighbouring keyframes' area
+  // on it by more than this (relative), and by more than ours does (MeshKeyframes::area_shrink:
+  // the metric blend never shrinks a triangle below both keyframes; a linear blend of turning
+  // frames, FFMP's, does).
+  double ffmp_shrink = 0.10;
   // "GE is close to ours": its largest vertex distance to ours after the best rigid
   // alignment, over the sequence, below this fraction of the shape's size.
   double ge_close = 0.02;
