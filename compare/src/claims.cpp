@@ -17,9 +17,6 @@ double max_excess(const std::vector<double>& a, const std::vector<double>& b) {
     if (!std::isnan(a[i]) && !std::isnan(b[i])) m = std::max(m, a[i] / b[i] - 1);
   return m;
 }
-int frames_with(const std::vector<double>& v) {
-  return static_cast<int>(std::count_if(v.begin(), v.end(), [](double x) { return x > 0; }));
-}
 std::string percent(double v) { return std::isfinite(v) ? fixed(100 * v, 1) + "%" : fixed(v, 1); }
 std::string times(double v) { return sci(v) + "\xc3\x97"; }
 
@@ -36,7 +33,7 @@ std::vector<Claim> decide_claims(const Comparison& c, const ClaimThresholds& th)
     Claim k;
     k.id = "arap_fails";
     k.claim = "ARAP fails under large rotations";
-    const int flipped = frames_with(p.arap_flipped);
+    const int flipped = count_positive(p.arap_flipped);
     const double ratio = max_excess(p.arap_kappa, p.mesh_bound_kappa) + 1;
     const double turn_deg = c.keyframes_max_turn * 180 / M_PI;
     k.definition = "a frame with a flipped triangle, or ARAP's largest per-triangle \xce\xba above " + fixed(th.arap_kappa_factor, 1) +
@@ -66,7 +63,7 @@ std::vector<Claim> decide_claims(const Comparison& c, const ClaimThresholds& th)
     k.verdict = k.holds ? "holds" : "does not hold";
     k.evidence = "largest shrinking below both keyframes over " + frames + ", per triangle on " + mesh + ": FFMP " +
                  percent(ffmp) + ", ours " + percent(ours) + ", ARAP " + percent(max_of(p.arap_shrink)) + ", GE " +
-                 percent(max_of(p.ge_shrink)) + "; FFMP frames with flipped triangles: " + std::to_string(frames_with(p.ffmp_flipped));
+                 percent(max_of(p.ge_shrink)) + "; FFMP frames with flipped triangles: " + std::to_string(count_positive(p.ffmp_flipped));
     out.push_back(k);
   }
   {
@@ -86,8 +83,8 @@ std::vector<Claim> decide_claims(const Comparison& c, const ClaimThresholds& th)
                                                                                       : "does not hold: neither close nor peaks";
     k.evidence = "GE to ours after rigid alignment up to " + sci(gap) + " \xc3\x97 size; GE's \xce\xba above the keyframes' by up to " +
                  percent(peak) + " (ours at the same mesh's vertices: " + percent(ours_peak) + "), per triangle on " + mesh +
-                 "; GE frames with flipped triangles " + std::to_string(frames_with(p.ge_flipped)) + ", not converged " +
-                 std::to_string(static_cast<int>(std::count(p.ge_converged.begin(), p.ge_converged.end(), 0.0)));
+                 "; GE frames with flipped triangles " + std::to_string(count_positive(p.ge_flipped)) + ", not converged " +
+                 std::to_string(count_not_converged(p.ge_converged));
     out.push_back(k);
   }
   {

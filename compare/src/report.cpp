@@ -48,8 +48,7 @@ json sequence_json(const Comparison& c) {
 json summary_json(const Comparison& c) {
   const PerFrame& p = c.per_frame;
   const SequenceSummary& o = c.ours;
-  auto folded = [](const std::vector<double>& v) { return static_cast<int>(std::count_if(v.begin(), v.end(), [](double x) { return x > 0; })); };
-  const int arap_folded = folded(p.arap_flipped);
+  const int arap_folded = count_positive(p.arap_flipped);
   json s = {
       {"ours", {{"frames", o.frames}, {"certified", o.certified}, {"not_converged", o.not_converged},
                 {"frames_within_bound", c.ours_within_bound}, {"max_bound_excess", o.max_bound_excess},
@@ -68,10 +67,10 @@ json summary_json(const Comparison& c) {
                 {"keyframe_error_over_size", c.arap_key_error}, {"setup_ms", c.arap_setup_ms}, {"mean_ms", mean_of(p.arap_ms)},
                 {"max_area_shrink", num(max_of(p.arap_shrink))}}},
       {"ffmp", {{"max_kappa", num(max_of(p.ffmp_kappa))}, {"max_isometric", num(max_of(p.ffmp_iso))},
-                {"frames_with_flips", folded(p.ffmp_flipped)}, {"setup_ms", c.ffmp_setup_ms}, {"mean_ms", mean_of(p.ffmp_ms)},
+                {"frames_with_flips", count_positive(p.ffmp_flipped)}, {"setup_ms", c.ffmp_setup_ms}, {"mean_ms", mean_of(p.ffmp_ms)},
                 {"max_area_shrink", num(max_of(p.ffmp_shrink))}}},
-      {"ge", {{"max_kappa", num(max_of(p.ge_kappa))}, {"max_isometric", num(max_of(p.ge_iso))}, {"frames_with_flips", folded(p.ge_flipped)},
-              {"not_converged", static_cast<int>(std::count(p.ge_converged.begin(), p.ge_converged.end(), 0.0))},
+      {"ge", {{"max_kappa", num(max_of(p.ge_kappa))}, {"max_isometric", num(max_of(p.ge_iso))}, {"frames_with_flips", count_positive(p.ge_flipped)},
+              {"not_converged", count_not_converged(p.ge_converged)},
               {"setup_ms", c.ge_setup_ms}, {"mean_ms", mean_of(p.ge_ms)}, {"max_area_shrink", num(max_of(p.ge_shrink))},
               {"max_distance_to_ours_after_rigid_alignment_over_size", num(max_of(p.ge_dist))}}},
       {"ccw16", {{"max_kappa", num(max_of(p.ccw_kappa))}, {"max_isometric", num(max_of(p.ccw_iso))},

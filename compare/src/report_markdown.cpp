@@ -8,8 +8,7 @@ namespace hsi::compare {
 
 std::string report_markdown(const Comparison& c) {
   const PerFrame& p = c.per_frame;
-  auto folded = [](const std::vector<double>& v) { return static_cast<int>(std::count_if(v.begin(), v.end(), [](double x) { return x > 0; })); };
-  const int arap_folded = folded(p.arap_flipped);
+  const int arap_folded = count_positive(p.arap_flipped);
   std::string md;
   auto line = [&md](const std::string& s = "") { md += s + "\n"; };
   line("# hsi compare: " + c.name);
@@ -81,11 +80,11 @@ std::string report_markdown(const Comparison& c) {
   line("| ARAP | " + fixed(max_of(p.arap_kappa), 4) + " | " + fixed(max_of(p.arap_iso), 4) + " | " + std::to_string(p.size()) + " | " +
        std::to_string(arap_folded) + " frames with flipped triangles; keyframes reproduced to " + sci(c.arap_key_error) + " \xc3\x97 size |");
   line("| FFMP | " + fixed(max_of(p.ffmp_kappa), 4) + " | " + fixed(max_of(p.ffmp_iso), 4) + " | " + std::to_string(p.size()) + " | " +
-       std::to_string(folded(p.ffmp_flipped)) + " frames with flipped triangles; a triangle shrunk below both keyframes by up to " +
+       std::to_string(count_positive(p.ffmp_flipped)) + " frames with flipped triangles; a triangle shrunk below both keyframes by up to " +
        sci(max_of(p.ffmp_shrink)) + " (relative) |");
-  const int ge_unconverged = static_cast<int>(std::count(p.ge_converged.begin(), p.ge_converged.end(), 0.0));
+  const int ge_unconverged = count_not_converged(p.ge_converged);
   line("| GE | " + fixed(max_of(p.ge_kappa), 4) + " | " + fixed(max_of(p.ge_iso), 4) + " | " + std::to_string(p.size()) + " | " +
-       std::to_string(folded(p.ge_flipped)) + " frames with flipped triangles, " + std::to_string(ge_unconverged) +
+       std::to_string(count_positive(p.ge_flipped)) + " frames with flipped triangles, " + std::to_string(ge_unconverged) +
        " not converged; up to " + sci(max_of(p.ge_dist)) + " \xc3\x97 size from ours after rigid alignment |");
   line("| CCW16 (log derivatives) | " + fixed(max_of(p.ccw_kappa), 4) + " | " + fixed(max_of(p.ccw_iso), 4) + " | " + std::to_string(p.size()) + " | " +
        (c.holes ? "not a map: largest hole period " + sci(max_of(p.ccw_period)) + " \xc3\x97 size" : std::string("simply connected: a map")) + " |");

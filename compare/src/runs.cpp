@@ -400,10 +400,9 @@ PerFrame measure_sequence(const Inputs& in, const std::vector<FrameResult>& ours
     }
     say(progress, true, "baselines: frame %zu/%zu", i + 1, F);
   }
-  auto folded = [](const std::vector<double>& v) { return static_cast<int>(std::count_if(v.begin(), v.end(), [](double x) { return x > 0; })); };
   say(progress, false,
       "baselines over the sequence, ms per frame (frames with folds): ARAP %.1f (%d), FFMP %.1f (%d), GE %.1f (%d); CCW16 (log derivatives) %.1f",
-      mean_of(p.arap_ms), folded(p.arap_flipped), mean_of(p.ffmp_ms), folded(p.ffmp_flipped), mean_of(p.ge_ms), folded(p.ge_flipped),
+      mean_of(p.arap_ms), count_positive(p.arap_flipped), mean_of(p.ffmp_ms), count_positive(p.ffmp_flipped), mean_of(p.ge_ms), count_positive(p.ge_flipped),
       mean_of(p.ccw_ms));
   if (b.bm.applies)
     say(progress, false, "CCW16 (boundary metric): %.1f ms per frame; after rigid alignment within %.2e of the size of ours (log derivatives: %.2e)",
