@@ -72,7 +72,8 @@ void grow(BoundingBox& b, cd p) {
 double colour_range_hi(const std::vector<Snapshot>& snaps, bool boundary_metric) {
   double hi = 1;
   for (const Snapshot& s : snaps)
-    for (double k : {s.ours.distortion.conformal_max, s.arap_d.max_kappa, s.ccw.max_kappa, boundary_metric ? s.bm.max_kappa : 1.0})
+    for (double k : {s.ours.distortion.conformal_max, s.arap_d.max_kappa, s.ffmp_d.max_kappa, s.ge_d.max_kappa, s.ccw.max_kappa,
+                     boundary_metric ? s.bm.max_kappa : 1.0})
       if (std::isfinite(k)) hi = std::max(hi, std::min(k, s.ours.bound.conformal_max));
   return compute::round_distortion_hi(hi);
 }
@@ -86,7 +87,7 @@ SideBySide side_by_side(compute::Context& ctx, const Inputs& in, const Baselines
   const double inf = std::numeric_limits<double>::infinity();
   BoundingBox box{cd(inf, inf), cd(-inf, -inf)};
   for (const Snapshot& s : snaps)
-    for (const auto* v : {&s.ours_pos, &s.arap_pos, &s.ccw.positions, &s.bm.positions})
+    for (const auto* v : {&s.ours_pos, &s.arap_pos, &s.ffmp_pos, &s.ge_pos, &s.ccw.positions, &s.bm.positions})
       for (const cd& p : *v) grow(box, p);
   SideBySide r;
   r.range_hi = colour_range_hi(snaps, bm);
@@ -140,18 +141,23 @@ SideBySide side_by_side(compute::Context& ctx, const Inputs& in, const Baselines
       }
       cols.push_back(std::move(c));
     }
-    {
-      // Per-triangle distortion, drawn flat (each triangle's three corners get its value).
+    // A mesh method: per-triangle distortion, drawn flat (each triangle's three corners get its value).
+    auto mesh_column = [&](const char* name, const std::vector<cd>& at, const baselines::MeshDistortion& d, const std::string& more) {
       std::vector<cd> pos(unwelded.source.size());
       std::vector<double> kappa(unwelded.source.size());
       for (size_t v = 0; v < pos.size(); ++v) {
-        pos[v] = s.arap_pos[static_cast<size_t>(unwelded.source[v])];
-        kappa[v] = s.arap_d.kappa[v / 3];
+        pos[v] = at[static_cast<size_t>(unwelded.source[v])];
+        kappa[v] = d.kappa[v / 3];
       }
-      Column c{"ARAP [ACOL00]", "", s.arap_d.flipped > 0, flat.render(pos, kappa, view, style)};
-      c.stats = "max \xce\xba " + fixed(s.arap_d.max_kappa, 3) + " per triangle, " + std::to_string(s.arap_d.flipped) + " flipped";
+      Column c{name, "", d.flipped > 0, flat.render(pos, kappa, view, style)};
+      c.stats = "max \xce\xba " + fixed(d.max_kappa, 3) + " per triangle, " + std::to_string(d.flipped) + " flipped" + more;
       cols.push_back(std::move(c));
-    }
+    };
+    mesh_column("ARAP [ACOL00]", s.arap_pos, s.arap_d, "");
+    mesh_column("FFMP [KG08]", s.ffmp_pos, s.ffmp_d, "");
+    mesh_column("GE [SGK19]", s.ge_pos, s.ge_d,
+                ", " + std::to_string(s.ge_iterations) + " it" + (s.ge_converged ? "" : " NOT CONVERGED"));
+    if (!s.ge_converged) cols.back().stats_alarm = true;
     {
       const double period = s.ccw.hole_period.empty() ? 0.0 : max_of(s.ccw.hole_period);
       // Any period above rounding makes the frame multivalued; above 0.1% of the size it shows.
@@ -194,9 +200,15 @@ int plots(const PerFrame& p, const PlotLabels& l, Outputs& out) {
       l.boundary_metric_coarse_vertices > 0 ? " (" + std::to_string(l.boundary_metric_coarse_vertices) + "-vertex mesh)" : std::string();
   const std::string bm_name = "CCW16 (boundary metric) at vertices" + bm_mesh_note;
   constexpr double kBmR = 0.6, kBmG = 0.25, kBmB = 0.7;  // the boundary-metric variant's colour in every plot
-  auto distortion_plot = [&](const std::string& file, const std::string& what, const std::string& symbol, const std::vector<double>& a,
-                             const std::vector<double>& b, const std::vector<double>& c, const std::vector<double>& d,
+  constexpr double kFfmpR = 0.85, kFfmpG = 0.15, kFfmpB = 0.45, kGeR = 0.45, kGeG = 0.3, kGeB = 0.1;  // FFMP's and GE's
+  // Per method its values: a ours (sampled), b ARAP, m FFMP, g GE, c CCW16 (log derivatives), d CCW16 (boundary metric).
+  struct Methods {
+    const std::vector<double>&a, &b, &m, &g, &c, &d;
+    const std::vector<double>& mesh_bound;  // the keyframes' envelope per triangle on the render mesh
+  };
+  auto distortion_plot = [&](const std::string& file, const std::string& what, const std::string& symbol, const Methods& v,
                              const std::vector<double>& bound, const std::vector<double>& a_cert, const std::vector<double>& bound_cert) {
+    const std::vector<double>&a = v.a, &b = v.b, &c = v.c, &d = v.d;
     PlotSpec s;
     s.title = l.scene_name + ": largest " + what + " per frame, each method vs the keyframes'";
     s.xlabel = "t (keyframes at the dotted lines)";
@@ -206,25 +218,30 @@ int plots(const PerFrame& p, const PlotLabels& l, Outputs& out) {
                 {"keyframes: certified bound", bound_cert, 0.55, 0.55, 0.55, true, true, 2.4},
                 {"ours (sampled at breakpoints on \xe2\x88\x82\xce\xa9)", a, 0.12, 0.35, 0.75, false, false, 2.2},
                 {"ARAP (per triangle)", b, 0.9, 0.45, 0.05, false, false, 1.6},
+                {"FFMP (per triangle)", v.m, kFfmpR, kFfmpG, kFfmpB, false, false, 1.6},
+                {"GE (per triangle)", v.g, kGeR, kGeG, kGeB, false, false, 1.6},
                 {ccw_name, c, 0.15, 0.6, 0.25, false, false, 1.6},
-                {"keyframes (sampled)", bound, 0.1, 0.1, 0.1, true, true, 1.4}};
+                {"keyframes (sampled)", bound, 0.1, 0.1, 0.1, true, true, 1.4},
+                {"keyframes on the mesh (per triangle)", v.mesh_bound, 0.55, 0.35, 0.2, true, true, 1.2}};
     // Drawn first and wide, so that ours stays visible on top where the two coincide (Fig. 8).
     if (l.boundary_metric) s.series.insert(s.series.begin(), {bm_name, d, kBmR, kBmG, kBmB, false, false, 4.5});
     s.flagged = p.uncertified_t;
     s.unconverged = p.unconverged_t;
     s.x_marks = l.keyframe_times;
     s.y_scale = AxisScale::kAuto;
-    if (std::any_of(b.begin(), b.end(), [](double v) { return std::isinf(v); }))
-      s.note = "\xe2\x96\xb2 at the top: ARAP frames with flipped triangles (distortion unbounded).  ";
+    auto folds = [](const std::vector<double>& x) { return std::any_of(x.begin(), x.end(), [](double y) { return std::isinf(y); }); };
+    if (folds(b) || folds(v.m) || folds(v.g))
+      s.note = "\xe2\x96\xb2 at the top: mesh-method frames with flipped triangles (distortion unbounded).  ";
     if (l.boundary_metric) s.note += "CCW16 (boundary metric) drawn wide under the others: it nearly coincides with ours.  ";
     if (!p.uncertified_t.empty()) s.note += "Red lines: frames of ours that could not be certified.  ";
     if (!p.unconverged_t.empty()) s.note += "Orange dashed: frames of ours whose Newton solve did not converge.";
     draw::plot_series(out.add(file), s);
   };
-  distortion_plot("kappa.png", "conformal distortion \xce\xba = \xcf\x83\xe2\x82\x81/\xcf\x83\xe2\x82\x82", "\xce\xba", p.our_kappa,
-                  p.arap_kappa, p.ccw_kappa, p.bm_kappa, p.bound_kappa, p.our_kappa_c, p.bound_kappa_c);
-  distortion_plot("isometric.png", "isometric distortion (symmetric Dirichlet)", "E_SD", p.our_iso, p.arap_iso, p.ccw_iso, p.bm_iso,
-                  p.bound_iso, p.our_iso_c, p.bound_iso_c);
+  distortion_plot("kappa.png", "conformal distortion \xce\xba = \xcf\x83\xe2\x82\x81/\xcf\x83\xe2\x82\x82", "\xce\xba",
+                  {p.our_kappa, p.arap_kappa, p.ffmp_kappa, p.ge_kappa, p.ccw_kappa, p.bm_kappa, p.mesh_bound_kappa}, p.bound_kappa, p.our_kappa_c,
+                  p.bound_kappa_c);
+  distortion_plot("isometric.png", "isometric distortion (symmetric Dirichlet)", "E_SD",
+                  {p.our_iso, p.arap_iso, p.ffmp_iso, p.ge_iso, p.ccw_iso, p.bm_iso, p.mesh_bound_iso}, p.bound_iso, p.our_iso_c, p.bound_iso_c);
   {
     PlotSpec s;
     s.title = l.scene_name + ": time per frame on this machine (" + std::to_string(l.mesh_vertices) + "-vertex mesh for the baselines)";
@@ -233,6 +250,8 @@ int plots(const PerFrame& p, const PlotLabels& l, Outputs& out) {
     s.x = p.t;
     s.series = {{"ours: solve (" + l.core + ")", p.our_ms, 0.12, 0.35, 0.75, false, false, 2.0},
                 {"ARAP: one sparse solve", p.arap_ms, 0.9, 0.45, 0.05, false, false, 1.6},
+                {"FFMP: two sparse solves (one factorised per frame)", p.ffmp_ms, kFfmpR, kFfmpG, kFfmpB, false, false, 1.6},
+                {"GE: Newton on the mesh", p.ge_ms, kGeR, kGeG, kGeB, false, false, 1.6},
                 {"CCW16 (log derivatives): blend + integrate", p.ccw_ms, 0.15, 0.6, 0.25, false, false, 1.6}};
     if (l.boundary_metric)
       s.series.push_back({"CCW16 (boundary metric): fit + integrate" + bm_mesh_note, p.bm_ms, kBmR, kBmG, kBmB, false, false, 1.6});

@@ -58,6 +58,14 @@ inline double mean_of(const std::vector<double>& v) {
   return n ? s / n : std::numeric_limits<double>::quiet_NaN();
 }
 
+// Frames whose value is > 0 (e.g. with flipped triangles), and GE's frames that did not converge.
+inline int count_positive(const std::vector<double>& v) {
+  return static_cast<int>(std::count_if(v.begin(), v.end(), [](double x) { return x > 0; }));
+}
+inline int count_not_converged(const std::vector<double>& converged) {
+  return static_cast<int>(converged.size()) - count_positive(converged);
+}
+
 // A progress line, printf-formatted (nothing without a progress callback).
 __attribute__((format(printf, 3, 4))) inline void say(const Progress& progress, bool transient, const char* f, ...) {
   if (!progress) return;

@@ -22,7 +22,16 @@ json sequence_json(const Comparison& c) {
                       {"isometric_certified_bound", nums(p.our_iso_c)}, {"ms", nums(p.our_ms)}, {"iterations", p.our_iters}}},
             {"bound", {{"kappa", nums(p.bound_kappa)}, {"isometric", nums(p.bound_iso)}, {"kappa_certified_bound", nums(p.bound_kappa_c)},
                        {"isometric_certified_bound", nums(p.bound_iso_c)}}},
-            {"arap", {{"kappa", nums(p.arap_kappa)}, {"isometric", nums(p.arap_iso)}, {"flipped", p.arap_flipped}, {"ms", nums(p.arap_ms)}}},
+            {"keyframes_on_mesh", {{"kappa", nums(p.mesh_bound_kappa)}, {"isometric", nums(p.mesh_bound_iso)}}},
+            {"ours_on_mesh", {{"kappa", nums(p.ours_mesh_kappa)}, {"isometric", nums(p.ours_mesh_iso)},
+                              {"area_shrink", nums(p.ours_mesh_shrink)}}},
+            {"arap", {{"kappa", nums(p.arap_kappa)}, {"isometric", nums(p.arap_iso)}, {"flipped", p.arap_flipped}, {"ms", nums(p.arap_ms)},
+                      {"area_shrink", nums(p.arap_shrink)}}},
+            {"ffmp", {{"kappa", nums(p.ffmp_kappa)}, {"isometric", nums(p.ffmp_iso)}, {"flipped", p.ffmp_flipped}, {"ms", nums(p.ffmp_ms)},
+                      {"area_shrink", nums(p.ffmp_shrink)}}},
+            {"ge", {{"kappa", nums(p.ge_kappa)}, {"isometric", nums(p.ge_iso)}, {"flipped", p.ge_flipped}, {"ms", nums(p.ge_ms)},
+                    {"iterations", p.ge_iters}, {"converged", p.ge_converged}, {"area_shrink", nums(p.ge_shrink)},
+                    {"distance_to_ours_after_rigid_alignment_over_size", nums(p.ge_dist)}}},
             {"ccw16", {{"kappa", nums(p.ccw_kappa)}, {"isometric", nums(p.ccw_iso)}, {"ms", nums(p.ccw_ms)},
                        {"max_hole_period_over_size", nums(p.ccw_period)}}}};
   if (c.bm.applies) {
@@ -39,8 +48,7 @@ json sequence_json(const Comparison& c) {
 json summary_json(const Comparison& c) {
   const PerFrame& p = c.per_frame;
   const SequenceSummary& o = c.ours;
-  int arap_folded = 0;
-  for (double v : p.arap_flipped) arap_folded += v > 0;
+  const int arap_folded = count_positive(p.arap_flipped);
   json s = {
       {"ours", {{"frames", o.frames}, {"certified", o.certified}, {"not_converged", o.not_converged},
                 {"frames_within_bound", c.ours_within_bound}, {"max_bound_excess", o.max_bound_excess},
@@ -51,8 +59,20 @@ json summary_json(const Comparison& c) {
                 {"max_isometric", num(max_of(p.our_iso))}, {"mean_iterations", o.mean_iterations}, {"mean_ms", o.mean_ms}}},
       {"bound", {{"max_kappa", num(max_of(p.bound_kappa))}, {"max_isometric", num(max_of(p.bound_iso))},
                  {"max_kappa_certified_bound", num(max_of(p.bound_kappa_c))}, {"max_isometric_certified_bound", num(max_of(p.bound_iso_c))}}},
+      {"keyframes_on_mesh", {{"max_kappa", num(max_of(p.mesh_bound_kappa))}, {"max_isometric", num(max_of(p.mesh_bound_iso))},
+                             {"max_turn_degrees", c.keyframes_max_turn * 180 / M_PI}}},
+      {"ours_on_mesh", {{"max_kappa", num(max_of(p.ours_mesh_kappa))}, {"max_isometric", num(max_of(p.ours_mesh_iso))},
+                        {"max_area_shrink", num(max_of(p.ours_mesh_shrink))}}},
       {"arap", {{"max_kappa", num(max_of(p.arap_kappa))}, {"max_isometric", num(max_of(p.arap_iso))}, {"frames_with_flips", arap_folded},
-                {"keyframe_error_over_size", c.arap_key_error}, {"setup_ms", c.arap_setup_ms}, {"mean_ms", mean_of(p.arap_ms)}}},
+                {"keyframe_error_over_size", c.arap_key_error}, {"setup_ms", c.arap_setup_ms}, {"mean_ms", mean_of(p.arap_ms)},
+                {"max_area_shrink", num(max_of(p.arap_shrink))}}},
+      {"ffmp", {{"max_kappa", num(max_of(p.ffmp_kappa))}, {"max_isometric", num(max_of(p.ffmp_iso))},
+                {"frames_with_flips", count_positive(p.ffmp_flipped)}, {"setup_ms", c.ffmp_setup_ms}, {"mean_ms", mean_of(p.ffmp_ms)},
+                {"max_area_shrink", num(max_of(p.ffmp_shrink))}}},
+      {"ge", {{"max_kappa", num(max_of(p.ge_kappa))}, {"max_isometric", num(max_of(p.ge_iso))}, {"frames_with_flips", count_positive(p.ge_flipped)},
+              {"not_converged", count_not_converged(p.ge_converged)},
+              {"setup_ms", c.ge_setup_ms}, {"mean_ms", mean_of(p.ge_ms)}, {"max_area_shrink", num(max_of(p.ge_shrink))},
+              {"max_distance_to_ours_after_rigid_alignment_over_size", num(max_of(p.ge_dist))}}},
       {"ccw16", {{"max_kappa", num(max_of(p.ccw_kappa))}, {"max_isometric", num(max_of(p.ccw_iso))},
                  {"max_hole_period_over_size", num(max_of(p.ccw_period))}, {"setup_ms", c.ccw_setup_ms}, {"mean_ms", mean_of(p.ccw_ms)}}}};
   s["ccw16_boundary_metric"] =
@@ -74,6 +94,10 @@ json side_by_side_json(const Comparison& c) {
                              {"kappa_max_certified_bound", num(s.ours.distortion_certified.conformal_max)},
                              {"bound_kappa_certified", num(s.ours.certified_bound.conformal_max)}}},
                    {"arap", {{"kappa_max", num(s.arap_d.max_kappa)}, {"isometric_max", num(s.arap_d.max_isometric)}, {"flipped", s.arap_d.flipped}}},
+                   {"ffmp", {{"kappa_max", num(s.ffmp_d.max_kappa)}, {"isometric_max", num(s.ffmp_d.max_isometric)}, {"flipped", s.ffmp_d.flipped}}},
+                   {"ge", {{"kappa_max", num(s.ge_d.max_kappa)}, {"isometric_max", num(s.ge_d.max_isometric)}, {"flipped", s.ge_d.flipped},
+                           {"iterations", s.ge_iterations}, {"converged", s.ge_converged},
+                           {"max_distance_to_ours_after_rigid_alignment_over_size", s.ge_gap.rigid}}},
                    {"ccw16", {{"kappa_max", num(s.ccw.max_kappa)}, {"isometric_max", num(s.ccw.max_isometric)},
                               {"hole_period_over_size", over_size(s.ccw.hole_period, c.size)},
                               {"seam_jump_over_size", over_size(s.ccw.seam_jump, c.size)},
@@ -134,6 +158,9 @@ json report_json(const Comparison& c) {
   rep["keyframes"] = kf;
   rep["distortion_kinds"] = {
       {"sampled", "ours' kappa / isometric and the keyframes' bound: sampled at the certificate's breakpoints on the boundary"},
+      {"per_triangle", "arap, ffmp, ge, keyframes_on_mesh, ours_on_mesh: per triangle of the piecewise-linear frame on the render "
+                       "mesh (ours_on_mesh: our map at its vertices); area_shrink: how far a triangle's area ratio falls below "
+                       "both neighbouring keyframes' on it, min(det_k, det_k+1) / det - 1 (0: none smaller than both)"},
       {"certified", "*_certified_bound: the certificate's bounds over the boundary, so over the shape (Theorem 2); isometric from "
                     "the sigma bounds; \"nan\" where a frame is not certified"}};
   rep["sequence"] = sequence_json(c);
@@ -176,8 +203,9 @@ json report_json(const Comparison& c) {
   for (const OurRun& r : c.table2) t2.push_back(run_json(r));
   rep["table1_projection"] = t1;
   rep["table2_ratio"] = t2;
-  rep["table3_resolution"] = table3_json(c.table3, c.table3_context.ours_solve_ms);
+  rep["table3_resolution"] = table3_json(c.table3, c.table3_context);
   rep["table4_per_frame"] = table4_json(c.table4);
+  rep["claims"] = claims_json(c.claims);
   rep["total_s"] = c.total_s;
   return rep;
 }

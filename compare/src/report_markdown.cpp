@@ -1,5 +1,6 @@
 // report.md of hsi compare (hsi/compare/report.h): the figures, the distortion over the
-// sequence, Fig. 2 or Fig. 8, and Tables 1–4 (tables.h), with the machine heading it.
+// sequence, Fig. 2 or Fig. 8, Tables 1–4 (tables.h) and the claims (claims.h), with the
+// machine heading it.
 #include "format.h"
 #include "hsi/compare/report.h"
 
@@ -7,8 +8,7 @@ namespace hsi::compare {
 
 std::string report_markdown(const Comparison& c) {
   const PerFrame& p = c.per_frame;
-  int arap_folded = 0;
-  for (double v : p.arap_flipped) arap_folded += v > 0;
+  const int arap_folded = count_positive(p.arap_flipped);
   std::string md;
   auto line = [&md](const std::string& s = "") { md += s + "\n"; };
   line("# hsi compare: " + c.name);
@@ -30,15 +30,15 @@ std::string report_markdown(const Comparison& c) {
        "-vertex, " + std::to_string(c.mesh_triangles) + "-triangle mesh" +
        (c.bm.own_mesh ? " (CCW16 (boundary metric) on a coarser " + std::to_string(c.bm.mesh_vertices) + "-vertex one: see Fig. 8)"
                     : std::string()) +
-       "; keyframes for ARAP are our keyframe maps at its vertices, for CCW16 their coefficients.");
+       "; keyframes for ARAP, FFMP and GE are our keyframe maps at its vertices, for CCW16 their coefficients.");
   line();
-  line(c.bm.applies ? "## Side by side (ours, ARAP, CCW16 with log derivatives, CCW16 with the boundary metric)"
-                  : "## Side by side (ours, ARAP, CCW16 with log derivatives)");
+  line(c.bm.applies ? "## Side by side (ours, ARAP, FFMP, GE, CCW16 with log derivatives, CCW16 with the boundary metric)"
+                  : "## Side by side (ours, ARAP, FFMP, GE, CCW16 with log derivatives)");
   line();
   line("At t = 0.25, 0.5, 0.75 between keyframes " + std::to_string(c.segment) + " and " + std::to_string(c.segment + 1) +
        ". Texture with the conformal distortion \xce\xba = \xcf\x83\xe2\x82\x81/\xcf\x83\xe2\x82\x82 over it, one colour range [1, " +
        fixed(c.range_hi, 2) + "] for every panel (up to the keyframes' bound, rounded up); larger values and folds saturate to the top colour. "
-       "Ours: \xce\xba of the map at the mesh's vertices (the dense evaluation on the Vulkan device). ARAP: \xce\xba per triangle, drawn flat. "
+       "Ours: \xce\xba of the map at the mesh's vertices (the dense evaluation on the Vulkan device). ARAP, FFMP and GE: \xce\xba per triangle, drawn flat; GE's iterations for the frame (warm-started from its sequence's frame before t). "
        "CCW16: \xce\xba from its blended f_z, f_zbar at the vertices, positions integrated along a spanning tree of the mesh; "
        "two variants of it, CCW16 (log derivatives) and CCW16 (boundary metric), differ in what they blend (see " + std::string(c.bm.applies ? "Fig. 8" : "Fig. 2") + " below)." +
        (c.bm.applies ? (c.bm.own_mesh ? " CCW16 (boundary metric) is drawn on its own, coarser " + std::to_string(c.bm.mesh_vertices) +
@@ -55,8 +55,10 @@ std::string report_markdown(const Comparison& c) {
   line("Largest distortion per frame. Ours, sampled: the largest value at the certificate's breakpoints on \xe2\x88\x82\xce\xa9 "
        "(observed, not a bound); ours, certified bound: the certificate's upper bound over \xe2\x88\x82\xce\xa9, so over \xce\xa9 "
        "(Theorem 2; the isometric one derived from the \xcf\x83\xe2\x82\x81 upper and \xcf\x83\xe2\x82\x82 lower bounds). "
-       "ARAP: over the triangles of the mesh. CCW16: over the mesh's vertices. The keyframes' bound: the envelope of the two "
-       "neighbouring keyframes' distortion, sampled or certified alike.");
+       "ARAP, FFMP, GE: over the triangles of the mesh. CCW16: over the mesh's vertices. The keyframes' bound: the envelope of the two "
+       "neighbouring keyframes' distortion, sampled or certified alike; on the mesh: the same envelope of the keyframes' largest "
+       "per-triangle distortion on the render mesh (what the mesh methods are given), and ours on the mesh: our map at its "
+       "vertices, per triangle (a control for the mesh methods' numbers).");
   line();
   line("![largest conformal distortion](kappa.png)");
   line();
@@ -72,8 +74,19 @@ std::string report_markdown(const Comparison& c) {
   line("| ours (certified bound) | " + fixed(max_of(p.our_kappa_c), 4) + " | " + fixed(max_of(p.our_iso_c), 4) + " | " +
        std::to_string(c.ours.certified) + " | " + std::to_string(c.ours.within_certified_bounds) +
        " within the keyframes' certified bound (largest excess " + sci(c.ours.max_certified_bound_excess) + ", relative) |");
+  line("| keyframes on the mesh (per triangle) | " + fixed(max_of(p.mesh_bound_kappa), 4) + " | " + fixed(max_of(p.mesh_bound_iso), 4) +
+       " | | largest turn between neighbouring keyframes " + fixed(c.keyframes_max_turn * 180 / M_PI, 0) + "\xc2\xb0 |");
+  line("| ours on the mesh (per triangle) | " + fixed(max_of(p.ours_mesh_kappa), 4) + " | " + fixed(max_of(p.ours_mesh_iso), 4) + " | " +
+       std::to_string(p.size()) + " | a triangle shrunk below both keyframes by up to " + sci(max_of(p.ours_mesh_shrink)) + " (relative) |");
   line("| ARAP | " + fixed(max_of(p.arap_kappa), 4) + " | " + fixed(max_of(p.arap_iso), 4) + " | " + std::to_string(p.size()) + " | " +
        std::to_string(arap_folded) + " frames with flipped triangles; keyframes reproduced to " + sci(c.arap_key_error) + " \xc3\x97 size |");
+  line("| FFMP | " + fixed(max_of(p.ffmp_kappa), 4) + " | " + fixed(max_of(p.ffmp_iso), 4) + " | " + std::to_string(p.size()) + " | " +
+       std::to_string(count_positive(p.ffmp_flipped)) + " frames with flipped triangles; a triangle shrunk below both keyframes by up to " +
+       sci(max_of(p.ffmp_shrink)) + " (relative) |");
+  const int ge_unconverged = count_not_converged(p.ge_converged);
+  line("| GE | " + fixed(max_of(p.ge_kappa), 4) + " | " + fixed(max_of(p.ge_iso), 4) + " | " + std::to_string(p.size()) + " | " +
+       std::to_string(count_positive(p.ge_flipped)) + " frames with flipped triangles, " + std::to_string(ge_unconverged) +
+       " not converged; up to " + sci(max_of(p.ge_dist)) + " \xc3\x97 size from ours after rigid alignment |");
   line("| CCW16 (log derivatives) | " + fixed(max_of(p.ccw_kappa), 4) + " | " + fixed(max_of(p.ccw_iso), 4) + " | " + std::to_string(p.size()) + " | " +
        (c.holes ? "not a map: largest hole period " + sci(max_of(p.ccw_period)) + " \xc3\x97 size" : std::string("simply connected: a map")) + " |");
   if (c.bm.applies)
@@ -142,6 +155,7 @@ std::string report_markdown(const Comparison& c) {
   md += table2_markdown(c.table2, c.table_frames);
   md += table3_markdown(c.table3, c.table3_context);
   md += table4_markdown(c.table4, static_cast<int>(p.size()));
+  md += claims_markdown(c.claims);
   line("Raw numbers: [report.json](report.json). Made by `hsi compare` in " + fixed(c.total_s, 1) + " s.");
   return md;
 }

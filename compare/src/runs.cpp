@@ -1,4 +1,4 @@
-// hsi compare's runs: ours, ARAP, CCW16 and the timings (hsi/compare/runs.h).
+// hsi compare's runs: ours, ARAP, FFMP, GE, CCW16 and the timings (hsi/compare/runs.h).
 #include "hsi/compare/runs.h"
 
 #include <algorithm>
@@ -159,14 +159,71 @@ double metric_rows_bytes(const TriMesh& mesh, int columns, const baselines::Ccw1
   return points * columns * 2.0 * sizeof(cd);
 }
 
+TriangleShape triangle_shape(const TriMesh& rest, std::span<const cd> positions) {
+  TriangleShape s;
+  s.det.assign(rest.triangles.size(), 0.0);
+  s.turn.assign(rest.triangles.size(), 0.0);
+  for (size_t t = 0; t < rest.triangles.size(); ++t) {
+    const auto& v = rest.triangles[t];
+    const cd z0 = rest.vertices[static_cast<size_t>(v[0])], w0 = positions[static_cast<size_t>(v[0])];
+    const cd e1 = rest.vertices[static_cast<size_t>(v[1])] - z0, e2 = rest.vertices[static_cast<size_t>(v[2])] - z0;
+    const cd d1 = positions[static_cast<size_t>(v[1])] - w0, d2 = positions[static_cast<size_t>(v[2])] - w0;
+    // The affine map z ↦ f_z z + f_zbar z̄ taking the rest edges e1, e2 to d1, d2.
+    const cd den = e1 * std::conj(e2) - e2 * std::conj(e1);
+    if (std::abs(den) == 0) continue;
+    const cd fz = (d1 * std::conj(e2) - d2 * std::conj(e1)) / den, fzbar = (e1 * d2 - e2 * d1) / den;
+    s.det[t] = std::norm(fz) - std::norm(fzbar);
+    s.turn[t] = std::arg(fz);
+  }
+  return s;
+}
+
+MeshKeyframes mesh_keyframes(const TriMesh& mesh, const std::vector<baselines::MeshKeyframe>& keys) {
+  MeshKeyframes m;
+  for (const auto& k : keys) {
+    m.times.push_back(k.time);
+    m.distortion.push_back(baselines::mesh_distortion(mesh, k.positions));
+    m.shape.push_back(triangle_shape(mesh, k.positions));
+  }
+  for (size_t k = 0; k + 1 < m.shape.size(); ++k)
+    for (size_t t = 0; t < mesh.triangles.size(); ++t)
+      m.max_turn = std::max(m.max_turn, std::abs(std::remainder(m.shape[k + 1].turn[t] - m.shape[k].turn[t], 2 * M_PI)));
+  return m;
+}
+
+std::pair<size_t, size_t> MeshKeyframes::around(double t) const {
+  size_t k = 0;
+  while (k + 2 < times.size() && t > times[k + 1]) ++k;
+  return {k, k + 1};
+}
+double MeshKeyframes::kappa_bound(double t) const {
+  const auto [a, b] = around(t);
+  return std::max(distortion[a].max_kappa, distortion[b].max_kappa);
+}
+double MeshKeyframes::iso_bound(double t) const {
+  const auto [a, b] = around(t);
+  return std::max(distortion[a].max_isometric, distortion[b].max_isometric);
+}
+double MeshKeyframes::area_shrink(double t, const TriangleShape& frame) const {
+  const auto [a, b] = around(t);
+  double worst = 0;
+  for (size_t i = 0; i < frame.det.size(); ++i) {
+    const double d = frame.det[i];
+    if (!(d > 0)) return std::numeric_limits<double>::infinity();
+    worst = std::max(worst, std::min(shape[a].det[i], shape[b].det[i]) / d - 1);
+  }
+  return worst;
+}
+
 Baselines set_up_baselines(const Inputs& in, const Options& o) {
   Baselines b;
   const Cage& cage = in.setup->cage;
   const Shape& shape = in.scene.shape;
-  say(o.progress, false, "baselines: meshing the shape (about %d vertices), setting up ARAP and CCW16 ...", o.mesh_vertices);
+  say(o.progress, false, "baselines: meshing the shape (about %d vertices), setting up ARAP, FFMP, GE and CCW16 ...", o.mesh_vertices);
   b.mesh = mesh_with(shape, o.mesh_vertices);
   for (size_t k = 0; k < in.keys.size(); ++k)
     b.arap_keys.push_back({in.times[k], map_points_chunked(cage, in.keys[k], b.mesh.vertices)});
+  b.keys_on_mesh = mesh_keyframes(b.mesh, b.arap_keys);
   // A baseline that refuses the keyframes (e.g. a keyframe that flips a triangle of
   // the mesh) stops the comparison with its reason and what to try.
   auto baseline = [&](const char* name, auto make) {
@@ -175,20 +232,27 @@ Baselines set_up_baselines(const Inputs& in, const Options& o) {
     } catch (const InputError& e) {
       throw InputError(o.scene + ": the " + name + " baseline refuses this scene's keyframes on the " +
                        std::to_string(b.mesh.vertex_count()) + "-vertex mesh: " + e.what() +
-                       (std::string(name) == "ARAP" ? " (a finer mesh, --mesh-vertices, may resolve a flipped triangle)" : ""));
+                       (std::string(name) != "CCW16" ? " (a finer mesh, --mesh-vertices, may resolve a flipped triangle)" : ""));
     }
   };
   auto t0 = Clock::now();
   b.arap.emplace(baseline("ARAP", [&] { return baselines::ArapInterpolation(b.mesh, b.arap_keys); }));
   b.arap_setup_ms = ms_since(t0);
+  t0 = Clock::now();
+  b.ffmp.emplace(baseline("FFMP", [&] { return baselines::FfmpInterpolation(b.mesh, b.arap_keys); }));
+  b.ffmp_setup_ms = ms_since(t0);
+  t0 = Clock::now();
+  b.ge.emplace(baseline("GE", [&] { return baselines::GeInterpolation(b.mesh, b.arap_keys); }));
+  b.ge_setup_ms = ms_since(t0);
   std::vector<baselines::Ccw16Keyframe> ccw_keys;
   for (size_t k = 0; k < in.keys.size(); ++k) ccw_keys.push_back({in.times[k], in.keys[k]});
   t0 = Clock::now();
   b.ccw.emplace(baseline("CCW16", [&] { return baselines::Ccw16Interpolation(shape, cage, ccw_keys); }));
   b.ccw_mesh.emplace(b.ccw->prepare(b.mesh));
   b.ccw_setup_ms = ms_since(t0);
-  say(o.progress, false, "render mesh %d vertices, %d triangles; ARAP set up in %.0f ms, CCW16 (log derivatives) in %.0f ms",
-      b.mesh.vertex_count(), b.mesh.triangle_count(), b.arap_setup_ms, b.ccw_setup_ms);
+  say(o.progress, false,
+      "render mesh %d vertices, %d triangles; set up in ms: ARAP %.0f, FFMP %.0f, GE %.0f, CCW16 (log derivatives) %.0f",
+      b.mesh.vertex_count(), b.mesh.triangle_count(), b.arap_setup_ms, b.ffmp_setup_ms, b.ge_setup_ms, b.ccw_setup_ms);
 
   // CCW16's boundary-metric variant (the one the paper's Fig. 8 compares with): the metric
   // blended on the boundary, f_z and f_zbar rebuilt by a least-squares Hilbert transform.
@@ -233,19 +297,50 @@ Baselines set_up_baselines(const Inputs& in, const Options& o) {
   return b;
 }
 
-PerFrame measure_sequence(const Inputs& in, const std::vector<FrameResult>& ours, const Baselines& b, const Progress& progress) {
+std::vector<baselines::GeFrame> run_ge_sequence(const std::vector<FrameResult>& ours, const Baselines& b, const Progress& progress) {
+  std::vector<double> ts;
+  for (const FrameResult& f : ours) ts.push_back(f.t);
+  say(progress, false, "GE over the sequence: %zu frames on the %d-vertex mesh, each warm-started from the previous one ...", ts.size(),
+      b.mesh.vertex_count());
+  std::vector<baselines::GeFrame> ge = b.ge->sequence(ts, [&](const baselines::GeFrame& f, int i, int n) {
+    say(progress, true, "GE: frame %d/%d  t = %.4f  %d it  %.0f ms%s", i + 1, n, f.time, f.iterations, f.ms,
+        f.converged ? "" : "  NOT CONVERGED");
+  });
+  double ms = 0, it = 0;
+  int not_converged = 0;
+  for (const baselines::GeFrame& f : ge) ms += f.ms, it += f.iterations, not_converged += !f.converged;
+  say(progress, false, "GE over the sequence: %.2f iterations and %.0f ms per frame, %d frame(s) not converged",
+      it / static_cast<double>(ge.size()), ms / static_cast<double>(ge.size()), not_converged);
+  return ge;
+}
+
+PerFrame measure_sequence(const Inputs& in, const std::vector<FrameResult>& ours, const Baselines& b,
+                          const std::vector<baselines::GeFrame>& ge, const Progress& progress) {
   const size_t F = ours.size();
+  if (ge.size() != F) throw std::logic_error("measure_sequence: GE has " + std::to_string(ge.size()) + " frames, ours " + std::to_string(F));
   const double nan = std::numeric_limits<double>::quiet_NaN(), inf = std::numeric_limits<double>::infinity();
   const Cage& cage = in.setup->cage;
   const double size = in.size();
+  const MeshKeyframes& keys = b.keys_on_mesh;
   PerFrame p;
   for (auto* v : {&p.t, &p.our_kappa, &p.our_iso, &p.bound_kappa, &p.bound_iso, &p.our_ms, &p.our_iters, &p.our_kappa_c,
-                  &p.our_iso_c, &p.bound_kappa_c, &p.bound_iso_c, &p.arap_kappa, &p.arap_iso, &p.arap_ms, &p.arap_flipped,
-                  &p.ccw_kappa, &p.ccw_iso, &p.ccw_ms, &p.ccw_period})
+                  &p.our_iso_c, &p.bound_kappa_c, &p.bound_iso_c, &p.mesh_bound_kappa, &p.mesh_bound_iso, &p.ours_mesh_kappa,
+                  &p.ours_mesh_iso, &p.ours_mesh_shrink, &p.arap_kappa, &p.arap_iso, &p.arap_ms, &p.arap_flipped, &p.arap_shrink,
+                  &p.ffmp_kappa, &p.ffmp_iso, &p.ffmp_ms, &p.ffmp_flipped, &p.ffmp_shrink, &p.ge_kappa, &p.ge_iso, &p.ge_ms,
+                  &p.ge_iters, &p.ge_flipped, &p.ge_shrink, &p.ge_converged, &p.ge_dist, &p.ccw_kappa, &p.ccw_iso, &p.ccw_ms,
+                  &p.ccw_period})
     v->resize(F);
   for (auto* v : {&p.bm_kappa, &p.bm_iso, &p.bm_ms, &p.bm_fit, &p.ccw_dist, &p.bm_dist}) v->assign(F, nan);
   p.keyframe.resize(F);
-  say(progress, false, "baselines over the sequence: ARAP and CCW16 at %zu frames ...", F);
+  say(progress, false, "baselines over the sequence: ARAP, FFMP and CCW16 at %zu frames ...", F);
+  // A mesh method's frame: its largest per-triangle distortion, flips and shrinking.
+  struct MeshFrame {
+    double kappa, iso, flipped, area;
+  };
+  auto on_mesh = [&](double t, const std::vector<cd>& pos) {
+    const baselines::MeshDistortion d = baselines::mesh_distortion(b.mesh, pos);
+    return MeshFrame{d.max_kappa, d.max_isometric, static_cast<double>(d.flipped), keys.area_shrink(t, triangle_shape(b.mesh, pos))};
+  };
   for (size_t i = 0; i < F; ++i) {
     const FrameResult& f = ours[i];
     p.t[i] = f.t;
@@ -262,13 +357,31 @@ PerFrame measure_sequence(const Inputs& in, const std::vector<FrameResult>& ours
     p.our_iters[i] = f.iterations;
     if (!f.certified) p.uncertified_t.push_back(f.t);
     if (!f.converged) p.unconverged_t.push_back(f.t);
+    p.mesh_bound_kappa[i] = keys.kappa_bound(f.t);
+    p.mesh_bound_iso[i] = keys.iso_bound(f.t);
+    const std::vector<cd> ours_at = map_points_chunked(cage, f.map, b.mesh.vertices);
+    const MeshFrame om = on_mesh(f.t, ours_at);
+    p.ours_mesh_kappa[i] = om.kappa;
+    p.ours_mesh_iso[i] = om.iso;
+    p.ours_mesh_shrink[i] = om.area;
+
     auto t0 = Clock::now();
     const std::vector<cd> pos = b.arap->positions(f.t);
     p.arap_ms[i] = ms_since(t0);
-    const baselines::MeshDistortion d = baselines::mesh_distortion(b.mesh, pos);
-    p.arap_kappa[i] = d.max_kappa;
-    p.arap_iso[i] = d.max_isometric;
-    p.arap_flipped[i] = d.flipped;
+    const MeshFrame a = on_mesh(f.t, pos);
+    p.arap_kappa[i] = a.kappa, p.arap_iso[i] = a.iso, p.arap_flipped[i] = a.flipped, p.arap_shrink[i] = a.area;
+    t0 = Clock::now();
+    const std::vector<cd> fp = b.ffmp->positions(f.t);
+    p.ffmp_ms[i] = ms_since(t0);
+    const MeshFrame m = on_mesh(f.t, fp);
+    p.ffmp_kappa[i] = m.kappa, p.ffmp_iso[i] = m.iso, p.ffmp_flipped[i] = m.flipped, p.ffmp_shrink[i] = m.area;
+    const MeshFrame g = on_mesh(f.t, ge[i].positions);
+    p.ge_kappa[i] = g.kappa, p.ge_iso[i] = g.iso, p.ge_flipped[i] = g.flipped, p.ge_shrink[i] = g.area;
+    p.ge_ms[i] = f.keyframe ? nan : ge[i].ms;  // at a keyframe ours is the keyframe itself, unsolved: neither is timed there
+    p.ge_iters[i] = ge[i].iterations;
+    p.ge_converged[i] = ge[i].converged;
+    p.ge_dist[i] = point_gap(ge[i].positions, ours_at, size).rigid;
+
     t0 = Clock::now();
     const baselines::Ccw16Frame c = b.ccw->frame(f.t, *b.ccw_mesh);
     p.ccw_ms[i] = ms_since(t0);
@@ -277,19 +390,19 @@ PerFrame measure_sequence(const Inputs& in, const std::vector<FrameResult>& ours
     p.ccw_period[i] = c.hole_period.empty() ? 0.0 : max_of(c.hole_period) / size;
     if (b.bm.applies) {
       t0 = Clock::now();
-      const baselines::Ccw16Frame m = b.bm.interp->frame(f.t, *b.bm.prepared);
+      const baselines::Ccw16Frame bmf = b.bm.interp->frame(f.t, *b.bm.prepared);
       p.bm_ms[i] = ms_since(t0);
-      p.bm_kappa[i] = m.max_kappa;
-      p.bm_iso[i] = m.max_isometric;
-      p.bm_fit[i] = m.fit_metric;
-      const std::vector<cd> ours_at = map_points_chunked(cage, f.map, b.mesh.vertices);
+      p.bm_kappa[i] = bmf.max_kappa;
+      p.bm_iso[i] = bmf.max_isometric;
+      p.bm_fit[i] = bmf.fit_metric;
       p.ccw_dist[i] = point_gap(c.positions, ours_at, size).rigid;
-      p.bm_dist[i] = point_gap(m.positions, b.bm.own_mesh ? map_points_chunked(cage, f.map, b.bm.coarse.vertices) : ours_at, size).rigid;
+      p.bm_dist[i] = point_gap(bmf.positions, b.bm.own_mesh ? map_points_chunked(cage, f.map, b.bm.coarse.vertices) : ours_at, size).rigid;
     }
     say(progress, true, "baselines: frame %zu/%zu", i + 1, F);
   }
-  say(progress, false, "baselines over the sequence: ARAP %.1f ms per frame (%d frames with folds), CCW16 (log derivatives) %.1f ms per frame",
-      mean_of(p.arap_ms), static_cast<int>(std::count_if(p.arap_flipped.begin(), p.arap_flipped.end(), [](double v) { return v > 0; })),
+  say(progress, false,
+      "baselines over the sequence, ms per frame (frames with folds): ARAP %.1f (%d), FFMP %.1f (%d), GE %.1f (%d); CCW16 (log derivatives) %.1f",
+      mean_of(p.arap_ms), count_positive(p.arap_flipped), mean_of(p.ffmp_ms), count_positive(p.ffmp_flipped), mean_of(p.ge_ms), count_positive(p.ge_flipped),
       mean_of(p.ccw_ms));
   if (b.bm.applies)
     say(progress, false, "CCW16 (boundary metric): %.1f ms per frame; after rigid alignment within %.2e of the size of ours (log derivatives: %.2e)",
@@ -297,7 +410,7 @@ PerFrame measure_sequence(const Inputs& in, const std::vector<FrameResult>& ours
   return p;
 }
 
-std::vector<Snapshot> snapshots(const Inputs& in, const OurSequence& ours, const Baselines& b) {
+std::vector<Snapshot> snapshots(const Inputs& in, const OurSequence& ours, const Baselines& b, const std::vector<baselines::GeFrame>& ge) {
   const Cage& cage = in.setup->cage;
   const std::vector<FrameResult>& seq = ours.frames;
   std::vector<Snapshot> snaps;
@@ -313,6 +426,14 @@ std::vector<Snapshot> snapshots(const Inputs& in, const OurSequence& ours, const
     s.ours_pos = map_points_chunked(cage, s.ours.map, b.mesh.vertices);
     s.arap_pos = b.arap->positions(s.t);
     s.arap_d = baselines::mesh_distortion(b.mesh, s.arap_pos);
+    s.ffmp_pos = b.ffmp->positions(s.t);
+    s.ffmp_d = baselines::mesh_distortion(b.mesh, s.ffmp_pos);
+    const baselines::GeFrame g = b.ge->frame(s.t, ge[j].positions);
+    s.ge_pos = g.positions;
+    s.ge_iterations = g.iterations;
+    s.ge_converged = g.converged;
+    s.ge_d = baselines::mesh_distortion(b.mesh, s.ge_pos);
+    s.ge_gap = point_gap(s.ge_pos, s.ours_pos, in.size());
     s.ccw = b.ccw->frame(s.t, *b.ccw_mesh);
     s.gap = point_gap(s.ccw.positions, s.ours_pos, in.size());
     if (b.bm.applies) {
@@ -399,6 +520,15 @@ OurTiming time_ours(const Inputs& in, const OurSequence& ours, const TriMesh& me
       r.solve_ms, r.eval_ms, r.evaluator.c_str(), r.iterations, r.clocks_after.empty() ? "" : "; GPU ", r.clocks_after.c_str());
   return r;
 }
+namespace {
+// The keyframe nearest time t.
+size_t nearest_keyframe(const std::vector<baselines::MeshKeyframe>& keys, double t) {
+  size_t k = 0;
+  for (size_t j = 1; j < keys.size(); ++j)
+    if (std::abs(keys[j].time - t) < std::abs(keys[k].time - t)) k = j;
+  return k;
+}
+}  // namespace
 
 std::vector<size_t> timed_frames(size_t frames, int timing_frames) {
   std::vector<size_t> timed;
@@ -407,10 +537,33 @@ std::vector<size_t> timed_frames(size_t frames, int timing_frames) {
   return timed;
 }
 
+std::string ge_not_run_note(int vertices, int max_vertices, const std::vector<Table3Row>& rows) {
+  // GE's cost per frame grows about linearly with the mesh (one sparse Cholesky of 2n
+  // unknowns per iteration, same iterations): the estimate scales the largest row it ran at.
+  const Table3Row* ran = nullptr;
+  for (const Table3Row& r : rows)
+    if (r.ge_not_run.empty() && std::isfinite(r.ge_ms) && (!ran || r.vertices > ran->vertices)) ran = &r;
+  std::string note = "not run: above " + std::to_string(max_vertices) + " vertices (--ge-max-vertices)";
+  if (ran) {
+    char b[160];
+    std::snprintf(b, sizeof b, "; est. %.0f s/frame (%d-vertex row \xc3\x97 %.1f)", ran->ge_ms / 1000.0 * vertices / ran->vertices,
+                  ran->vertices, static_cast<double>(vertices) / ran->vertices);
+    note += b;
+  }
+  return note;
+}
+
+baselines::GeFrame ge_cold_frame(const Inputs& in, const Baselines& b, int segment) {
+  return b.ge->frame(in.t_mid, b.arap_keys[static_cast<size_t>(segment)].positions);
+}
+
 // Ours: the solve does not see the mesh; a frame at the mesh costs the solve plus f at
-// its vertices. ARAP: one sparse solve per frame on the mesh, after a factorisation.
+// its vertices. ARAP: one sparse solve per frame on the mesh, after a factorisation. GE:
+// Newton on the mesh, warm-started (below).
 std::vector<Table3Row> run_table3(const Inputs& in, const std::vector<FrameResult>& ours, const std::vector<size_t>& timed,
-                                  const Backends& backends, const Progress& progress) {
+                                  const Options& o) {
+  const Backends& backends = o.backends;
+  const Progress& progress = o.progress;
   const Cage& cage = in.setup->cage;
   std::vector<Table3Row> rows;
   for (int v : in.table3) {
@@ -425,7 +578,7 @@ std::vector<Table3Row> run_table3(const Inputs& in, const std::vector<FrameResul
     std::vector<baselines::ArapKeyframe> ak;
     for (size_t k = 0; k < in.keys.size(); ++k) ak.push_back({in.times[k], map_points_chunked(cage, in.keys[k], m.vertices)});
     t0 = Clock::now();
-    const baselines::ArapInterpolation a(m, std::move(ak));
+    const baselines::ArapInterpolation a(m, ak);
     row.arap_factor_ms = ms_since(t0);
     // Ours: f at the vertices from rows cached once per mesh, on the CPU and on the
     // backend's evaluator where that is not the CPU; one untimed evaluation each first.
@@ -463,11 +616,36 @@ std::vector<Table3Row> run_table3(const Inputs& in, const std::vector<FrameResul
     row.ours_eval_cpu_ms = cpu_sum / n;
     if (backend_eval) row.ours_eval_cuda_ms = cuda_sum / n;
     row.ours_eval_gpu_ms = backends.dense_eval ? gpu_sum / n : std::numeric_limits<double>::quiet_NaN();
-    rows.push_back(row);
     say(progress, false,
         "table 3: %d vertices: ARAP factorisation %.0f ms, %.1f ms per frame; ours f at the vertices from cached rows %.3f ms (CPU), "
         "%.3f ms (CUDA); basis per frame %.1f ms (Vulkan)",
         row.vertices, row.arap_factor_ms, row.arap_ms, row.ours_eval_cpu_ms, row.ours_eval_cuda_ms, row.ours_eval_gpu_ms);
+    if (row.vertices > o.ge_max_vertices) {
+      row.ge_not_run = ge_not_run_note(row.vertices, o.ge_max_vertices, rows);
+      say(progress, false, "table 3: GE at %d vertices %s", row.vertices, row.ge_not_run.c_str());
+    } else {
+      // Each timed frame warm-started from GE's own frame at the sequence's previous time,
+      // which is solved (untimed) from our frame there: as in a played sequence, without
+      // solving the whole sequence at every resolution.
+      say(progress, false, "table 3: GE at %d vertices, %zu frame(s) ...", row.vertices, timed.size());
+      const baselines::GeInterpolation ge(m, ak);
+      double ms = 0, it = 0;
+      for (size_t i : timed) {
+        const size_t prev = i > 0 ? i - 1 : i;
+        std::vector<cd> start = map_points_chunked(cage, ours[prev].map, m.vertices);
+        if (baselines::mesh_distortion(m, start).flipped > 0) start = ak[nearest_keyframe(ak, ours[prev].t)].positions;
+        const baselines::GeFrame primed = ge.frame(ours[prev].t, start);
+        const baselines::GeFrame g = ge.frame(ours[i].t, primed.positions);
+        ms += g.ms;
+        it += g.iterations;
+        row.ge_not_converged += !g.converged;
+      }
+      row.ge_ms = ms / n;
+      row.ge_iterations = it / n;
+      say(progress, false, "table 3: GE at %d vertices: %.0f ms and %.1f iterations per frame%s", row.vertices, row.ge_ms,
+          row.ge_iterations, row.ge_not_converged ? ", NOT CONVERGED in some frames" : "");
+    }
+    rows.push_back(row);
   }
   return rows;
 }

@@ -1,7 +1,8 @@
 // hsi compare as a library: the paper's claims reproduced on one scene against the
-// baselines (issue #11), measured in one run. The pipeline, stage by stage: runs.h (ours,
-// ARAP, CCW16, timings), alignment.h (Fig. 8), figures.h (panels, plots), tables.h
-// (Tables 1–4), report.h (report.json, report.md). What is picked per machine (the Newton
+// baselines (issues #11, #24), measured in one run. The pipeline, stage by stage: runs.h
+// (ours, ARAP, FFMP, GE, CCW16, timings), alignment.h (Fig. 8), figures.h (panels, plots),
+// tables.h (Tables 1–4), claims.h (the paper's claims decided on the scene), report.h
+// (report.json, report.md). What is picked per machine (the Newton
 // core, the GPU dense evaluation) comes from the caller in Backends: no choice is made here.
 #pragma once
 
@@ -63,6 +64,7 @@ struct Options {
   std::vector<double> ratios = {1.0, 0.5, 0.2, 0.1, 0.05};   // Table 2's Hessian sample ratios r
   std::vector<int> table3_vertices = {8000, 80000, 800000};  // Table 3's mesh resolutions (about)
   bool no_800k = false;             // skip Table 3's rows of 800k vertices or more
+  int ge_max_vertices = 200'000;    // Table 3 runs GE up to this many vertices; above, the row says why not and estimates it
   Backends backends;
   Progress progress;                // null: silent
 };

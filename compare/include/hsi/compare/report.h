@@ -1,6 +1,6 @@
-// hsi compare, stage 5: the report. Everything the earlier stages measured, as plain values
+// hsi compare, stage 6: the report. Everything the earlier stages measured, as plain values
 // (a Comparison), written as report.json (every raw number) and report.md (the figures,
-// Fig. 2 or Fig. 8, Tables 1–4; the README's compare section lists both).
+// Fig. 2 or Fig. 8, Tables 1–4, the claims; the README's compare section lists both).
 #pragma once
 
 #include <nlohmann/json.hpp>
@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "hsi/compare/alignment.h"
+#include "hsi/compare/claims.h"
 #include "hsi/compare/runs.h"
 #include "hsi/compare/tables.h"
 #include "hsi/machine.h"
@@ -48,7 +49,8 @@ struct Comparison {
   PerFrame per_frame;
   SequenceSummary ours;
   int ours_within_bound = 0;
-  double arap_setup_ms = 0, ccw_setup_ms = 0, arap_key_error = 0;
+  double arap_setup_ms = 0, ffmp_setup_ms = 0, ge_setup_ms = 0, ccw_setup_ms = 0, arap_key_error = 0;
+  double keyframes_max_turn = 0;  // the largest per-triangle turn between neighbouring keyframes on the mesh, radians
   MetricVariantFacts bm;
   // Side by side, Fig. 8 (where the boundary-metric variant applies).
   std::vector<Snapshot> snaps;
@@ -59,6 +61,7 @@ struct Comparison {
   std::vector<Table3Row> table3;
   Table3Context table3_context;
   Table4 table4;
+  std::vector<Claim> claims;  // decide_claims(*this)
   double total_s = 0;
 };
 

@@ -1,18 +1,22 @@
 // hsi compare, stage 1: the runs. Ours at the chosen settings (the main sequence, the side-
-// by-side frames, the sequences of Tables 1–2), ARAP [ACOL00] and CCW16 (log derivatives;
-// on a simply-connected shape also its boundary-metric variant, Fig. 8) on the render mesh,
-// and the timings of Tables 3–4. Each run's numbers are plain values for the later stages.
+// by-side frames, the sequences of Tables 1–2), the mesh baselines ARAP [ACOL00], FFMP
+// [KG08] and GE [SGK19] and CCW16 (log derivatives; on a simply-connected shape also its
+// boundary-metric variant, Fig. 8) on the render mesh, and the timings of Tables 3–4. Each
+// run's numbers are plain values for the later stages.
 #pragma once
 
 #include <cmath>
 #include <limits>
 #include <memory>
 #include <optional>
+#include <span>
 #include <string>
 #include <vector>
 
 #include "hsi/baselines/arap.h"
 #include "hsi/baselines/ccw16.h"
+#include "hsi/baselines/ffmp.h"
+#include "hsi/baselines/ge.h"
 #include "hsi/compare/alignment.h"
 #include "hsi/compare/compare.h"
 #include "hsi/png.h"
@@ -81,14 +85,47 @@ struct MetricVariant {
   std::optional<baselines::Ccw16Mesh> prepared;
 };
 
+// Per triangle of a mesh under positions: the area ratio det J (image area / rest area)
+// and the turn arg f_z (radians; f_z the conformal part of J). Degenerate: det 0.
+struct TriangleShape {
+  std::vector<double> det, turn;
+};
+TriangleShape triangle_shape(const TriMesh& rest, std::span<const cd> positions);
+
+// The keyframes on the render mesh, as the mesh baselines receive them: per keyframe its
+// largest per-triangle distortion and each triangle's area ratio, so that a frame between
+// keyframes k and k+1 can be held against them on the same triangles.
+struct MeshKeyframes {
+  std::vector<double> times;
+  std::vector<baselines::MeshDistortion> distortion;
+  std::vector<TriangleShape> shape;
+  double max_turn = 0;  // the largest per-triangle turn between neighbouring keyframes, radians (wrapped to [0, π])
+  // The neighbouring keyframes of time t (its interval; clamped to the range).
+  std::pair<size_t, size_t> around(double t) const;
+  // Per frame: the envelope (max) of the two neighbouring keyframes' largest κ / isometric.
+  double kappa_bound(double t) const;
+  double iso_bound(double t) const;
+  // How far the frame shrinks a triangle below both neighbouring keyframes: the largest
+  // min(det_k, det_k+1) / det − 1 over the triangles (0: none smaller than both), +inf for a
+  // flipped or degenerate triangle. Only shrinking counts: the metric blend that ours and GE
+  // target never shrinks a triangle below both keyframes (√det is concave on positive
+  // definite 2×2 matrices: √det M(t) ≥ (1−s)√det M_k + s√det M_k+1), but it may grow one
+  // beyond both (axes that turn), so growth is no sign of an unnatural scaling.
+  double area_shrink(double t, const TriangleShape& frame) const;
+};
+MeshKeyframes mesh_keyframes(const TriMesh& mesh, const std::vector<baselines::MeshKeyframe>& keys);
+
 // The baselines, set up on the render mesh with our keyframes.
 struct Baselines {
   TriMesh mesh;  // the render mesh
-  std::vector<baselines::ArapKeyframe> arap_keys;
+  std::vector<baselines::ArapKeyframe> arap_keys;  // our keyframe maps at its vertices: ARAP's, FFMP's and GE's keyframes
+  MeshKeyframes keys_on_mesh;
   std::optional<baselines::ArapInterpolation> arap;
+  std::optional<baselines::FfmpInterpolation> ffmp;
+  std::optional<baselines::GeInterpolation> ge;
   std::optional<baselines::Ccw16Interpolation> ccw;
   std::optional<baselines::Ccw16Mesh> ccw_mesh;
-  double arap_setup_ms = 0, ccw_setup_ms = 0;
+  double arap_setup_ms = 0, ffmp_setup_ms = 0, ge_setup_ms = 0, ccw_setup_ms = 0;
   double arap_key_error = 0;  // ARAP's largest distance to its keyframes / size (a check of the baseline)
   MetricVariant bm;
   const TriMesh& bm_mesh() const { return bm.own_mesh ? bm.coarse : mesh; }
@@ -101,35 +138,49 @@ TriMesh mesh_with(const Shape& shape, int vertices);
 // f of a map at many points, in chunks so that the basis rows stay small.
 std::vector<cd> map_points_chunked(const Cage& cage, const HarmonicMap& map, std::span<const cd> points);
 
+// GE over the main sequence's times, each frame warm-started from the previous one.
+std::vector<baselines::GeFrame> run_ge_sequence(const std::vector<FrameResult>& ours, const Baselines& b, const Progress& progress);
+
 // Per frame of the main sequence: each method's largest distortion and its time. Ours
 // sampled at the certificate's breakpoints (as the keyframes' bound_*) and certified (*_c,
 // NaN where not certified); the boundary-metric variant and both CCW16 variants'
 // distances to ours after rigid alignment (Fig. 8) only on a simply-connected shape (NaN else).
+// On the render mesh, per triangle: the mesh methods (ARAP, FFMP, GE), ours at the mesh's
+// vertices (ours_mesh_*, the same discretisation: a control), and the keyframes' envelope
+// there (mesh_bound_*); *_shrink: how far a triangle shrinks below both keyframes
+// (MeshKeyframes::area_shrink).
 struct PerFrame {
   std::vector<double> t, our_kappa, our_iso, bound_kappa, bound_iso, our_ms, our_iters;
   std::vector<double> our_kappa_c, our_iso_c, bound_kappa_c, bound_iso_c;
-  std::vector<double> arap_kappa, arap_iso, arap_ms, arap_flipped;
+  std::vector<double> mesh_bound_kappa, mesh_bound_iso, ours_mesh_kappa, ours_mesh_iso, ours_mesh_shrink;
+  std::vector<double> arap_kappa, arap_iso, arap_ms, arap_flipped, arap_shrink;
+  std::vector<double> ffmp_kappa, ffmp_iso, ffmp_ms, ffmp_flipped, ffmp_shrink;
+  std::vector<double> ge_kappa, ge_iso, ge_ms, ge_iters, ge_flipped, ge_shrink, ge_converged, ge_dist;  // ge_dist: to ours, rigid, / size
   std::vector<double> ccw_kappa, ccw_iso, ccw_ms, ccw_period;
   std::vector<double> bm_kappa, bm_iso, bm_ms, bm_fit, ccw_dist, bm_dist;
   std::vector<bool> keyframe;
   std::vector<double> uncertified_t, unconverged_t;
   size_t size() const { return t.size(); }
 };
-PerFrame measure_sequence(const Inputs& in, const std::vector<FrameResult>& ours, const Baselines& b, const Progress& progress);
+PerFrame measure_sequence(const Inputs& in, const std::vector<FrameResult>& ours, const Baselines& b,
+                          const std::vector<baselines::GeFrame>& ge, const Progress& progress);
 
 // One time of the side-by-side figures, every method at it.
 struct Snapshot {
   double u = 0, t = 0;  // fraction of the keyframe interval, time
   FrameResult ours;
-  std::vector<cd> ours_pos, arap_pos;  // at the render mesh's vertices
-  baselines::MeshDistortion arap_d;
+  std::vector<cd> ours_pos, arap_pos, ffmp_pos, ge_pos;  // at the render mesh's vertices
+  baselines::MeshDistortion arap_d, ffmp_d, ge_d;
+  int ge_iterations = 0;
+  bool ge_converged = true;
+  Gap ge_gap;  // GE vs ours
   baselines::Ccw16Frame ccw, bm;  // CCW16: log derivatives; boundary metric (simply connected only)
   Gap gap, bm_gap;                // ours vs each CCW16 variant
   std::string png;                // the figure's file name, and its size (figures.h)
   int width = 0, height = 0;
 };
-// At t = 0.25, 0.5, 0.75 of the segment, ours warm-started from the sequence's frame before t.
-std::vector<Snapshot> snapshots(const Inputs& in, const OurSequence& ours, const Baselines& b);
+// At t = 0.25, 0.5, 0.75 of the segment, ours and GE warm-started from their sequence's frame before t.
+std::vector<Snapshot> snapshots(const Inputs& in, const OurSequence& ours, const Baselines& b, const std::vector<baselines::GeFrame>& ge);
 
 // Ours timed for Tables 3–4 (issue #23) in one block: `warmup` frames untimed, then the
 // sequence's frames back to back, each solved (warm-started from the one before) and then
@@ -152,6 +203,9 @@ OurTiming time_ours(const Inputs& in, const OurSequence& ours, const TriMesh& me
 std::unique_ptr<MeshEvaluator> make_mesh_evaluator(const Backends& b, const Cage& cage, std::span<const cd> points);
 
 // Table 3: time per frame against the render mesh's resolution.
+// GE at a row: warm-started from its own frame at the sequence's previous time (that one
+// solved from our frame there, untimed); above Options::ge_max_vertices not run, and
+// ge_not_run says why, with an estimate from the largest row it ran at.
 struct Table3Row {
   int vertices = 0, triangles = 0;
   double mesh_s = 0, arap_factor_ms = 0, arap_ms = 0, ours_eval_cpu_ms = 0;  // f from cached rows on the CPU
@@ -160,10 +214,19 @@ struct Table3Row {
   double ours_eval_setup_ms = 0;  // the CPU evaluator's rows at the vertices, once per mesh
   // f at the vertices on the backend our solve ran on: CUDA where timed, else the CPU.
   double ours_eval_ms() const { return std::isnan(ours_eval_cuda_ms) ? ours_eval_cpu_ms : ours_eval_cuda_ms; }
+  double ge_ms = std::numeric_limits<double>::quiet_NaN(), ge_iterations = std::numeric_limits<double>::quiet_NaN();
+  int ge_not_converged = 0;
+  std::string ge_not_run;  // non-empty: GE was not run at this row, and why
 };
 // Frames of the sequence whose maps and times Table 3 uses.
 std::vector<size_t> timed_frames(size_t frames, int timing_frames);
 std::vector<Table3Row> run_table3(const Inputs& in, const std::vector<FrameResult>& ours, const std::vector<size_t>& timed,
-                                  const Backends& backends, const Progress& progress);
+                                  const Options& o);
+// What Table 3 says for GE at `vertices` where it is not run, from the rows it ran at.
+std::string ge_not_run_note(int vertices, int max_vertices, const std::vector<Table3Row>& rows);
+
+// GE's middle frame of the side-by-side interval solved from the interval's first keyframe
+// (the paper's Table 1 setting for ours): how many iterations GE needs without a warm start.
+baselines::GeFrame ge_cold_frame(const Inputs& in, const Baselines& b, int segment);
 
 }  // namespace hsi::compare
