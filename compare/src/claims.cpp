@@ -17,7 +17,12 @@ double max_excess(const std::vector<double>& a, const std::vector<double>& b) {
     if (!std::isnan(a[i]) && !std::isnan(b[i])) m = std::max(m, a[i] / b[i] - 1);
   return m;
 }
-std::string percent(double v) { return std::isfinite(v) ? fixed(100 * v, 1) + "%" : fixed(v, 1); }
+// A relative value as a percentage; a round-off-sized negative one (|v| < 5e-4) prints
+// as 0.0%, not "-0.0%".
+std::string percent(double v) {
+  if (!std::isfinite(v)) return fixed(v, 1);
+  return fixed(std::abs(v) < 5e-4 ? 0.0 : 100 * v, 1) + "%";
+}
 std::string times(double v) { return sci(v) + "\xc3\x97"; }
 
 }  // namespace
