@@ -111,6 +111,14 @@ std::vector<cd> read_points(const double* xy, size_t count) {
   return p;
 }
 
+// A Distortion into the report's four fields of one kind (sampled, an envelope, certified).
+void put(const Distortion& d, double& sigma1_max, double& sigma2_min, double& conformal_max, double& isometric_max) {
+  sigma1_max = d.sigma1_max;
+  sigma2_min = d.sigma2_min;
+  conformal_max = d.conformal_max;
+  isometric_max = d.isometric_max;
+}
+
 hsi_frame_report to_report(const FrameResult& f) {
   hsi_frame_report r{};
   r.t = f.t;
@@ -120,27 +128,17 @@ hsi_frame_report to_report(const FrameResult& f) {
   r.iterations = f.iterations;
   r.energy = f.energy;
   r.ms = f.ms;
-  r.sigma1_max = f.distortion.sigma1_max;
-  r.sigma2_min = f.distortion.sigma2_min;
-  r.conformal_max = f.distortion.conformal_max;
-  r.isometric_max = f.distortion.isometric_max;
-  r.bound_sigma1_max = f.bound.sigma1_max;
-  r.bound_sigma2_min = f.bound.sigma2_min;
-  r.bound_conformal_max = f.bound.conformal_max;
-  r.bound_isometric_max = f.bound.isometric_max;
+  put(f.distortion, r.sigma1_max, r.sigma2_min, r.conformal_max, r.isometric_max);
+  put(f.bound, r.bound_sigma1_max, r.bound_sigma2_min, r.bound_conformal_max, r.bound_isometric_max);
   r.bound_excess = f.bound_excess;
   r.overlaps = f.overlap.overlaps();
   r.crossings = f.overlap.crossings;
   r.held = f.held;
   // distortion_certified and certified_bound_excess are NaN for an uncertified frame.
-  r.certified_sigma1_max = f.distortion_certified.sigma1_max;
-  r.certified_sigma2_min = f.distortion_certified.sigma2_min;
-  r.certified_conformal_max = f.distortion_certified.conformal_max;
-  r.certified_isometric_max = f.distortion_certified.isometric_max;
-  r.certified_bound_sigma1_max = f.certified_bound.sigma1_max;
-  r.certified_bound_sigma2_min = f.certified_bound.sigma2_min;
-  r.certified_bound_conformal_max = f.certified_bound.conformal_max;
-  r.certified_bound_isometric_max = f.certified_bound.isometric_max;
+  put(f.distortion_certified, r.certified_sigma1_max, r.certified_sigma2_min, r.certified_conformal_max,
+      r.certified_isometric_max);
+  put(f.certified_bound, r.certified_bound_sigma1_max, r.certified_bound_sigma2_min, r.certified_bound_conformal_max,
+      r.certified_bound_isometric_max);
   r.certified_bound_excess = f.certified_bound_excess;
   return r;
 }
