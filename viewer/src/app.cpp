@@ -483,8 +483,12 @@ void App::draw_panels() {
                        overlays_,    view_,      presenter_->frame_texture(), s,   frame,  &overlap_of(*s.map),
                        render_ms_,   dist_hi_,   hover_handle_,        drag_.releasing,  message_};
   draw_viewport_overlays(c);
-  const PanelRequests req = draw_side_panel(c);
-  draw_timeline(c);
+  PanelRequests req = draw_side_panel(c);
+  const PanelRequests timeline = draw_timeline(c);
+  if (timeline.timing_keyframe >= 0) {
+    req.timing_keyframe = timeline.timing_keyframe;
+    req.timing = timeline.timing;
+  }
   draw_help(overlays_, view_);
   // After drawing: an edit may move the keyframes the panels were given.
   if (req.add_keyframe) add_keyframe();

@@ -261,7 +261,8 @@ PanelRequests draw_side_panel(const PanelContext& c) {
   return req;
 }
 
-void draw_timeline(const PanelContext& c) {
+PanelRequests draw_timeline(const PanelContext& c) {
+  PanelRequests req;
   Playback& play = c.playback;
   const float scale = c.view.scale();
   const ImVec2 vp = c.view.size();
@@ -308,12 +309,48 @@ void draw_timeline(const PanelContext& c) {
     const ImU32 col = st == 1 ? rgba(0.3f, 0.75f, 0.4f, 0.9f) : st == 3 ? rgba(1.0f, 0.55f, 0.05f, 1) : rgba(0.95f, 0.15f, 0.15f, 1);
     dl->AddRectFilled(ImVec2(x_of(i - 0.5), p1.y - 3 * scale), ImVec2(x_of(i + 0.5), p1.y), col);
   }
-  for (const Keyframe& k : c.editor.scene().keyframes) {
+  const std::vector<Keyframe>& keys = c.editor.scene().keyframes;
+  for (const Keyframe& k : keys) {
     const float x = x_of(c.solver.frame_at(k.time));
     const float s = 5 * scale;
     dl->AddTriangleFilled(ImVec2(x - s, p0.y), ImVec2(x + s, p0.y), ImVec2(x, p0.y + s * 1.4f), rgba(1, 0.6f, 0.1f));
   }
+  // Each interval's timing (the one leaving its first keyframe), written in the scrubber
+  // between its keyframes where it fits; a right click on an interval picks another.
+  const float text_y = 0.5f * (p0.y + p1.y) - 0.5f * ImGui::GetTextLineHeight();
+  int hovered_interval = -1;
+  const float mouse_x = ImGui::GetIO().MousePos.x;
+  for (size_t k = 0; k + 1 < keys.size(); ++k) {
+    const float xa = x_of(c.solver.frame_at(keys[k].time)), xb = x_of(c.solver.frame_at(keys[k + 1].time));
+    const char* name = to_string(keys[k].timing);
+    const float w = ImGui::CalcTextSize(name).x;
+    if (xb - xa > w + 24 * scale) dl->AddText(ImVec2(0.5f * (xa + xb) - 0.5f * w, text_y), rgba(0.75f, 0.75f, 0.8f, 0.9f), name);
+    if (mouse_x >= xa && mouse_x < xb) hovered_interval = static_cast<int>(k);
+  }
+  ImGuiStorage* store = ImGui::GetStateStorage();
+  const ImGuiID picked_id = ImGui::GetID("##interval_picked");
+  if (hovered_interval >= 0 && ImGui::IsMouseHoveringRect(ImVec2(p0.x, p0.y), p1) && ImGui::IsMouseClicked(ImGuiMouseButton_Right)) {
+    store->SetInt(picked_id, hovered_interval);
+    ImGui::OpenPopup("##interval_timing");
+  }
+  if (ImGui::BeginPopup("##interval_timing")) {
+    const int k = store->GetInt(picked_id, -1);
+    if (k >= 0 && k + 1 < static_cast<int>(keys.size())) {
+      ImGui::TextDisabled("timing of keyframes %d -> %d", k, k + 1);
+      static const KeyTiming modes[] = {KeyTiming::Linear, KeyTiming::Smooth, KeyTiming::Ease, KeyTiming::Hold};
+      const KeyTiming now = keys[static_cast<size_t>(k)].timing;
+      for (KeyTiming m : modes)
+        if (ImGui::Selectable(to_string(m), m == now) && m != now) {
+          req.timing_keyframe = k;
+          req.timing = m;
+        }
+    } else {
+      ImGui::CloseCurrentPopup();
+    }
+    ImGui::EndPopup();
+  }
   ImGui::End();
+  return req;
 }
 
 void draw_help(Overlays& overlays, const View& view) {
@@ -337,6 +374,7 @@ void draw_help(Overlays& overlays, const View& view) {
       {"H  F1  ?", "this help"},
       {"F", "fit the view; wheel zooms, middle-drag pans"},
       {"drag a handle", "pose the keyframe (at a keyframe)"},
+      {"right click the timeline", "timing of that keyframe interval"},
       {"click the shape", "add a handle"},
       {"right-click a handle", "remove it"},
       {"K", "add a keyframe here (at the last one: append)"},

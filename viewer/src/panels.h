@@ -68,7 +68,8 @@ struct PanelRequests {
 
 void draw_viewport_overlays(const PanelContext& c);
 PanelRequests draw_side_panel(const PanelContext& c);
-void draw_timeline(const PanelContext& c);
+// The timeline also offers each keyframe interval's timing (right click on it).
+PanelRequests draw_timeline(const PanelContext& c);
 void draw_help(Overlays& overlays, const View& view);
 
 }  // namespace hsi::viewer
