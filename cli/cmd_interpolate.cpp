@@ -13,6 +13,7 @@
 #include "hsi/keyframes.h"
 #include "hsi/draw/plot.h"
 #include "hsi/scene_sequence.h"
+#include "hsi/scene_texture.h"
 #include "hsi/runtime/backend.h"
 
 namespace hsi::cli {
@@ -242,6 +243,9 @@ void register_interpolate(CLI::App& app) {
          500);
     if (o->png_count > 0) {
       std::filesystem::create_directories(out / "frames");
+      // The drawings show the sprite through each frame's map, as `hsi keyframes --png` does.
+      std::optional<SceneTexture> tex;
+      if (!scene.texture.empty()) tex = scene_texture(scene, o->scene);
       const int count = std::min<int>(o->png_count, static_cast<int>(frames.size()));
       for (int k = 0; k < count; ++k) {
         const size_t i = count == 1 ? 0 : static_cast<size_t>(k) * (frames.size() - 1) / static_cast<size_t>(count - 1);
@@ -254,6 +258,7 @@ void register_interpolate(CLI::App& app) {
         extras.uncertified = !f.certified;
         extras.overlaps = f.overlap.overlaps();
         extras.not_converged = !f.converged;
+        extras.texture = tex ? &*tex : nullptr;
         char name[64];
         std::snprintf(name, sizeof name, "frame_%04zu.png", i);
         plot_map(out / "frames" / name, scene.shape, setup->cage, f.map, extras, 640);

@@ -40,6 +40,8 @@ timing 0 smooth  # the interval from keyframe 0 to 1 (issue #26)
 seek 15
 screenshot ${HSI_WORK_DIR}/smooth.png   # waits until frame 15 is solved again and drawn
 expect-certified
+key n            # the texture filter toggled (linear -> nearest): the same frame looks different
+screenshot ${HSI_WORK_DIR}/nearest.png
 save ${HSI_WORK_DIR}/saved.json
 exit
 ")
@@ -47,6 +49,7 @@ run(0 ${xvfb} ${HSI_VIEWER} ${HSI_SCENE} --validation --width 960 --height 600 -
 if(NOT EXISTS ${HSI_WORK_DIR}/edit.png)
   message(FATAL_ERROR "the editing script wrote no screenshot")
 endif()
+run(0 ${HSI_CHECK} --differ ${HSI_WORK_DIR}/smooth.png ${HSI_WORK_DIR}/nearest.png)
 file(READ ${HSI_WORK_DIR}/saved.json saved)
 string(JSON handles LENGTH "${saved}" handles)
 if(NOT handles EQUAL 9)

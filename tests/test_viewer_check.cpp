@@ -43,9 +43,28 @@ RgbaImage crop(const RgbaImage& img, int x0, int y0, int w, int h) {
   return out;
 }
 
+// hsi_viewer_check --differ A.png B.png: the two screenshots' viewports (A.png.json's)
+// differ in at least `min_pixels` pixels (the texture filter toggled, say).
+int differ(const std::filesystem::path& a_path, const std::filesystem::path& b_path) {
+  const RgbaImage a = hsi::read_png(a_path), b = hsi::read_png(b_path);
+  std::ifstream meta_file(a_path.string() + ".json");
+  const auto vp = nlohmann::json::parse(meta_file).at("viewport");
+  const int vx = vp[0], vy = vp[1], vw = vp[2], vh = vp[3];
+  check(a.width == b.width && a.height == b.height, "the two screenshots have one size");
+  if (failures) return 1;
+  size_t changed = 0;
+  for (int y = vy; y < vy + vh; ++y)
+    for (int x = vx; x < vx + vw; ++x) changed += !std::equal(a.at(x, y), a.at(x, y) + 3, b.at(x, y));
+  constexpr size_t min_pixels = 100;
+  check(changed >= min_pixels, std::to_string(changed) + " viewport pixels differ between " + a_path.string() + " and " +
+                                   b_path.string() + " (expected at least " + std::to_string(min_pixels) + ")");
+  return failures ? 1 : 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
+  if (argc == 4 && std::string(argv[1]) == "--differ") return differ(argv[2], argv[3]);
   if (argc != 5) {
     std::fprintf(stderr, "usage: %s SHOT.png GOLDEN.png TEXTURE.png FRAME\n", argv[0]);
     return 2;

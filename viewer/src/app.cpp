@@ -108,6 +108,7 @@ void App::load() {
     texture_ = std::move(st.image);
     texture_rect_ = st.rect;
     texture_filter_ = st.filter;
+    overlays_.nearest = st.filter == TextureFilter::Nearest;
     if (!st.checker)
       std::printf("hsi-viewer: texture %s, %s filtering\n", scene.texture_path().string().c_str(),
                   texture_filter_name(st.filter));
@@ -349,6 +350,13 @@ void App::render() {
     renderer_->set_texture(texture_, texture_rect_, texture_filter_);
     rendered_map_ = nullptr;
   }
+  // The texture filter, as toggled (N, or the side panel).
+  if (const TextureFilter want = overlays_.nearest ? TextureFilter::Nearest : TextureFilter::Linear; want != texture_filter_) {
+    presenter_->wait_idle();
+    texture_filter_ = want;
+    renderer_->set_texture(texture_, texture_rect_, texture_filter_);
+    rendered_map_ = nullptr;
+  }
   const compute::View& camera = view_.update_camera(w, h);
 
   const Shown s = shown();
@@ -416,6 +424,7 @@ void App::handle_keys() {
   if (pressed(GLFW_KEY_C)) overlays_.cage = !overlays_.cage;
   if (pressed(GLFW_KEY_P)) overlays_.handles = !overlays_.handles;
   if (pressed(GLFW_KEY_G)) overlays_.status = !overlays_.status;
+  if (pressed(GLFW_KEY_N)) overlays_.nearest = !overlays_.nearest;
   if (pressed(GLFW_KEY_H) || pressed(GLFW_KEY_F1) || (pressed(GLFW_KEY_SLASH) && io.KeyShift)) overlays_.help = !overlays_.help;
   if (pressed(GLFW_KEY_ESCAPE)) overlays_.help = false;
   if (pressed(GLFW_KEY_F)) view_.fit();

@@ -195,6 +195,7 @@ PanelRequests draw_side_panel(const PanelContext& c) {
   ImGui::Checkbox("certificate (G)", &ov.status);
   ImGui::SameLine();
   ImGui::Checkbox("help (H)", &ov.help);
+  ImGui::Checkbox("nearest texels (N)", &ov.nearest);
   ImGui::Separator();
 
   ImGui::TextUnformatted("Keyframes");
@@ -371,6 +372,7 @@ void draw_help(Overlays& overlays, const View& view) {
       {"C", "cage (and hole points)"},
       {"P", "handles"},
       {"G", "certificate status badge"},
+      {"N", "texture filter: nearest texels / linear"},
       {"H  F1  ?", "this help"},
       {"F", "fit the view; wheel zooms, middle-drag pans"},
       {"drag a handle", "pose the keyframe (at a keyframe)"},

@@ -20,6 +20,7 @@ namespace hsi::viewer {
 struct Overlays {
   uint32_t render = 0;  // the renderer's overlays (compute::kOverlayDistortion, compute::kOverlayBoundary)
   bool cage = false, handles = true, status = true, help = false;
+  bool nearest = false;  // texture filtering: nearest texels, else linear (starts as the scene's texture_filter)
 };
 // --overlays (comma-separated names); InputError naming an unknown one.
 Overlays parse_overlays(const std::string& list);

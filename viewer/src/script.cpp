@@ -102,7 +102,7 @@ void ScriptRunner::run(ScriptHost& host) {
       host.seek(static_cast<int>(number(s, 0)));
     } else if (s.op == "key") {
       static const std::vector<std::pair<std::string, int>> names = {
-          {"d", GLFW_KEY_D}, {"b", GLFW_KEY_B}, {"c", GLFW_KEY_C}, {"p", GLFW_KEY_P}, {"g", GLFW_KEY_G}, {"h", GLFW_KEY_H},
+          {"d", GLFW_KEY_D}, {"b", GLFW_KEY_B}, {"c", GLFW_KEY_C}, {"p", GLFW_KEY_P}, {"g", GLFW_KEY_G}, {"h", GLFW_KEY_H}, {"n", GLFW_KEY_N},
           {"l", GLFW_KEY_L}, {"k", GLFW_KEY_K}, {"x", GLFW_KEY_X}, {"space", GLFW_KEY_SPACE}, {"right", GLFW_KEY_RIGHT},
           {"left", GLFW_KEY_LEFT}, {"home", GLFW_KEY_HOME}, {"end", GLFW_KEY_END}, {"f", GLFW_KEY_F}};
       const auto it = std::find_if(names.begin(), names.end(), [&](const auto& k) { return k.first == s.args[0]; });
