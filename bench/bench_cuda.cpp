@@ -154,18 +154,24 @@ struct SequenceStats {
   NewtonResult::Timing per_iteration;
   double scratch_ms = 0;  // the frame midway between the first two keyframes, started from the first
   int scratch_iterations = 0;
+  bench::FrameParts parts;  // where the frames' time went (FrameResult::parts)
 };
 
+// gpu_boundary: the overlap check's image (f at its breakpoints) by the CUDA mesh
+// evaluator, as runtime's make_newton_core gives with the CUDA core; else the setup's CPU one.
 template <class MakeCore>
-SequenceStats run_sequence(const Loaded& L, MakeCore&& make_core, int frames) {
+SequenceStats run_sequence(const Loaded& L, MakeCore&& make_core, int frames, bool gpu_boundary) {
   SequenceStats s;
   auto t0 = Clock::now();
   std::unique_ptr<NewtonCore> core = make_core();
+  std::unique_ptr<MeshEvaluator> boundary;
+  if (gpu_boundary) boundary = std::make_unique<hc::MeshEvaluator>(L.setup->cage, L.setup->overlap.breakpoints().points);
   s.setup_ms = ms_since(t0);
   t0 = Clock::now();
-  Interpolator interp(*L.setup, L.times, L.maps, {}, std::move(core));
+  Interpolator interp(*L.setup, L.times, L.maps, {}, std::move(core), std::move(boundary));
   s.interpolator_ms = ms_since(t0);
   const auto seq = interp.sequence(frames);
+  s.parts = bench::frame_parts(seq);
   s.ran = true;
   int solved = 0;
   double its = 0;
@@ -335,7 +341,7 @@ int main(int argc, char** argv) {
     return 0;
   }
 
-  std::ostringstream calls, floors, seqs;
+  std::ostringstream calls, floors, seqs, parts;
   calls << "## Core calls (ms per call, mean of " << reps << "; CUDA/CPU < 1: CUDA faster)\n\n"
         << "| scene | |G| | n | |H| | E+∇ CPU | E+∇ CUDA | ratio | Hessian CPU | Hessian CUDA | ratio | "
            "safe step+E(s) CPU | safe step+E(s) CUDA | ratio |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
@@ -354,6 +360,11 @@ int main(int argc, char** argv) {
           "CPU/this per iteration |\n"
           "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
 
+  parts << "## Where a frame's time goes (ms, wall clock; FrameResult::parts: the first solved frame, then means over the "
+           "warm frames; image: f at the overlap check's breakpoints, by the CUDA mesh evaluator in the cuda rows, the "
+           "setup's CPU one otherwise; crossings: the exact crossing search on the host; rest: the frame outside its parts)\n\n"
+        << "| scene | |G| | backend | first frame | first: solve | first: image + crossings | warm frame | targets | solve | "
+           "pose | image | crossings | distortion | rest |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
   for (const std::string& path : scenes) {
     for (int samples : sample_counts) {
       std::fprintf(stderr, "%s, |G| = %d: setting up\n", path.c_str(), samples);
@@ -396,12 +407,12 @@ int main(int argc, char** argv) {
       gpu.reset();
       SequenceStats sc, sh, sg;
       std::fprintf(stderr, "  sequence (CUDA, device loop)\n");
-      sg = run_sequence(L, [&] { return hc::make_newton_core(*L.setup); }, frames);
+      sg = run_sequence(L, [&] { return hc::make_newton_core(*L.setup); }, frames, true);
       if (samples <= cpu_sequence_max) {
         std::fprintf(stderr, "  sequence (CUDA, host loop)\n");
-        sh = run_sequence(L, [&] { return hc::make_newton_core(L.setup->D_G, L.setup->H); }, frames);
+        sh = run_sequence(L, [&] { return hc::make_newton_core(L.setup->D_G, L.setup->H); }, frames, false);
         std::fprintf(stderr, "  sequence (CPU)\n");
-        sc = run_sequence(L, [&] { return make_cpu_newton_core(L.setup->D_G, L.setup->H); }, frames);
+        sc = run_sequence(L, [&] { return make_cpu_newton_core(L.setup->D_G, L.setup->H); }, frames, false);
       }
       const std::pair<const char*, const SequenceStats*> rows[] = {{"cpu", &sc}, {"cuda-host", &sh}, {"cuda", &sg}};
       for (const auto& [label, s] : rows) {
@@ -420,11 +431,19 @@ int main(int argc, char** argv) {
         }
         seqs << row;
         std::fprintf(stderr, "  %s", row);
+        if (s->ran) {
+          const bench::FrameParts& p = s->parts;
+          std::snprintf(row, sizeof row,
+                        "| %s | %d | %s | %.3f | %.3f | %.3f | %.3f | %.3f | %.3f | %.3f | %.3f | %.3f | %.3f | %.3f |\n",
+                        L.name.c_str(), G, label, p.first_ms, p.first.solve, p.first.image + p.first.crossings, p.mean_ms,
+                        p.mean.targets, p.mean.solve, p.mean.pose, p.mean.image, p.mean.crossings, p.mean.distortion, p.rest());
+          parts << row;
+        }
       }
     }
   }
   std::printf("\n---\n\n%s\n%s\n%s\n", mesh_eval.str().c_str(), calls.str().c_str(), floors.str().c_str());
-  if (!skip_sequence) std::printf("%s\n", seqs.str().c_str());
+  if (!skip_sequence) std::printf("%s\n%s\n", seqs.str().c_str(), parts.str().c_str());
   std::printf("GPU clocks at the end: %s\n", hc::clocks().describe().c_str());
   return 0;
 }

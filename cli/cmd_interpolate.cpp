@@ -96,7 +96,7 @@ void register_interpolate(CLI::App& app) {
     io.timing = o->timing.empty() ? scene_timings(scene) : std::vector<KeyTiming>{*parse_key_timing(o->timing)};
     runtime::NewtonCoreChoice core = runtime::make_newton_core(*setup, runtime::parse_backend(o->backend));
     std::printf("Newton core: %s\n", runtime::describe(core.choice).c_str());
-    Interpolator interp(*setup, times, maps, io, std::move(core.core));
+    Interpolator interp(*setup, times, maps, io, std::move(core.core), std::move(core.boundary));
 
     const std::filesystem::path out(o->out);
     std::filesystem::create_directories(out);

@@ -171,3 +171,98 @@ TEST_CASE("frames file round-trips and refuses damaged files", "[interpolation][
   CHECK_THROWS_WITH(decode_frames(bytes.substr(0, bytes.size() - 5)), Contains("truncated"));
   CHECK_THROWS_WITH(decode_frames(bytes + "junk"), Contains("trailing bytes"));
 }
+
+TEST_CASE("a frame's parts are each timed and sum to at most its total", "[interpolation]") {
+  TwistScene& S = twist_scene();
+  Interpolator I(*S.setup, S.times, S.maps);
+  const auto frames = I.sequence(9);
+  for (const FrameResult& f : frames) {
+    const FrameResult::Parts& p = f.parts;
+    INFO("t = " << f.t);
+    const double sum = p.targets + p.solve + p.pose + p.image + p.crossings + p.distortion;
+    CHECK(sum <= f.ms);
+    if (f.keyframe) {  // the keyframe itself, made at set-up: nothing timed
+      CHECK(sum == 0);
+      continue;
+    }
+    CHECK(p.targets > 0);
+    CHECK(p.solve > 0);
+    CHECK(p.pose > 0);
+    CHECK(p.image > 0);
+    CHECK(p.crossings > 0);
+    CHECK(p.distortion > 0);
+    CHECK(p.solve >= f.timing.energy_gradient + f.timing.hessian + f.timing.solve + f.timing.certificate);
+  }
+}
+
+TEST_CASE("frames are those of the plain frame loop: set-up certificates and the cached image change no result",
+          "[interpolation]") {
+  // The reference: each solved frame by newton_solve on a fresh CPU core, its start
+  // certified by the solve itself after a keyframe (as before issue #23), the pose as
+  // documented, the overlap from the dense basis product at the breakpoints.
+  TwistScene& S = twist_scene();
+  const ShapeSetup& setup = *S.setup;
+  Interpolator I(setup, S.times, S.maps, {}, nullptr,
+                 make_cpu_mesh_evaluator(setup.cage, setup.overlap.breakpoints().points));  // injected: as the default
+  const auto frames = I.sequence(9);
+  const auto dflt = Interpolator(setup, S.times, S.maps).sequence(9);
+  auto core = make_cpu_newton_core(setup.D_G, setup.H);
+  const MatrixXcd C = evaluate_basis(setup.cage, setup.overlap.breakpoints().points, kBasisC).C;
+  const InterpolationOptions io;
+  const CertificateResult* previous = nullptr;
+  for (size_t i = 0; i < frames.size(); ++i) {
+    const FrameResult& f = frames[i];
+    INFO("frame " << i << ", t = " << f.t);
+    CHECK(f.x == dflt[i].x);
+    CHECK(f.overlap.crossings == dflt[i].overlap.crossings);
+    const VectorXcd dense = C * f.map.phi + (C * f.map.psi).conjugate();
+    const OverlapResult o = setup.overlap.check_points(std::span<const cd>(dense.data(), static_cast<size_t>(dense.size())));
+    CHECK(f.overlap.checked);
+    CHECK(f.overlap.crossings == o.crossings);
+    CHECK(f.overlap.points == o.points);
+    if (f.keyframe) {
+      const CertificateResult c = setup.certifier.certify(f.map);
+      CHECK(f.certificate.certified == c.certified);
+      CHECK(f.certificate.sigma1_max == c.sigma1_max);
+      CHECK(f.certificate.observed_sigma1_max == c.observed_sigma1_max);
+      previous = nullptr;
+      continue;
+    }
+    core->set_targets(I.blended_metric(f.t));
+    NewtonOptions no;
+    no.tolerance = io.tolerance;
+    no.max_iterations = io.max_iterations;
+    no.projection = io.projection;
+    no.exact_hessian_when_definite = io.exact_hessian_when_definite;
+    no.free_rotation = io.free_rotation;
+    no.start_certificate = previous;
+    const NewtonResult n = newton_solve(*core, setup.metric_space, &setup.certifier, nullptr, frames[i - 1].x, no);
+    CHECK(f.x == n.x);
+    CHECK(f.iterations == n.iterations);
+    CHECK(f.energy == n.energy);
+    CHECK(f.certified == n.certified);
+    CHECK(f.certificate.sigma1_max == n.certificate.sigma1_max);
+    CHECK(f.certificate.sigma2_min == n.certificate.sigma2_min);
+    CHECK(f.certificate.conformal_max == n.certificate.conformal_max);
+    CHECK(f.certificate.observed_sigma1_max == n.certificate.observed_sigma1_max);
+    CHECK(f.certificate.observed_sigma2_min == n.certificate.observed_sigma2_min);
+    CHECK(f.certificate.observed_isometric_max == n.certificate.observed_isometric_max);
+    CHECK(f.distortion.sigma1_max == n.certificate.observed_sigma1_max);
+    CHECK(f.distortion_certified.sigma1_max == certified_distortion(n.certificate).sigma1_max);
+    CHECK(f.distortion_certified.isometric_max == certified_distortion(n.certificate).isometric_max);
+    const HarmonicMap canon = setup.metric_space.expand(n.x);
+    const Pose have = I.pose_of(canon), want = I.interpolated_pose(f.t);
+    const cd rot = std::polar(1.0, want.angle - have.angle);
+    const HarmonicMap posed = transform_image(setup.cage, canon, rot, want.centroid - rot * have.centroid);
+    CHECK(f.map.phi == posed.phi);
+    CHECK(f.map.psi == posed.psi);
+    previous = &f.certificate;
+  }
+  // The first solved frame started from keyframe 0's set-up certificate, as a frame
+  // asked for alone does.
+  CHECK(I.frame(frames[1].t).x == frames[1].x);
+  // An evaluator for other points is refused.
+  const std::vector<cd> few{cd(0.1, 0.1), cd(0.2, 0.1)};
+  CHECK_THROWS_WITH(Interpolator(setup, S.times, S.maps, {}, nullptr, make_cpu_mesh_evaluator(setup.cage, few)),
+                    Contains("boundary evaluator is made for 2 points"));
+}

@@ -16,8 +16,15 @@ struct EdgeRef {
 
 // Pairs of edges that intersect, other than neighbours of one loop meeting at
 // their shared vertex (a neighbour pair that folds back onto itself is reported).
-// Exact predicates; stops after max_results pairs.
+// Exact predicates; candidates from a box hierarchy over the edges in loop order;
+// stops after max_results pairs (those found first, in loop order). Pairs in (loop,
+// edge) order, the lower edge first.
 std::vector<std::pair<EdgeRef, EdgeRef>> intersecting_edges(const std::vector<const Loop*>& loops,
                                                             size_t max_results = 1);
+// The same pairs from CGAL's box_self_intersection_d (the search intersecting_edges
+// used before issue #23, several times slower on ~10k-edge polylines): the reference
+// it is tested against. Equal results whenever fewer than max_results pairs exist.
+std::vector<std::pair<EdgeRef, EdgeRef>> intersecting_edges_box_sweep(const std::vector<const Loop*>& loops,
+                                                                      size_t max_results = 1);
 
 }  // namespace hsi::detail

@@ -8,11 +8,21 @@
 #include <numbers>
 #include <sstream>
 
+#include "hsi/stopwatch.h"
+
 namespace hsi {
 
+using Clock = std::chrono::steady_clock;
+
 Interpolator::Interpolator(const ShapeSetup& setup, std::vector<double> times, std::vector<HarmonicMap> keyframes,
-                           const InterpolationOptions& options, std::unique_ptr<NewtonCore> core)
-    : setup_(setup), times_(std::move(times)), keys_(std::move(keyframes)), options_(options), core_(std::move(core)) {
+                           const InterpolationOptions& options, std::unique_ptr<NewtonCore> core,
+                           std::unique_ptr<MeshEvaluator> boundary)
+    : setup_(setup),
+      times_(std::move(times)),
+      keys_(std::move(keyframes)),
+      options_(options),
+      core_(std::move(core)),
+      boundary_(std::move(boundary)) {
   if (keys_.size() < 2) throw InputError("interpolation needs at least two keyframes (got " + std::to_string(keys_.size()) + ")");
   if (keys_.size() != times_.size()) throw InputError("interpolation: keyframe times and maps differ in number");
   for (size_t k = 1; k < times_.size(); ++k)
@@ -21,6 +31,9 @@ Interpolator::Interpolator(const ShapeSetup& setup, std::vector<double> times, s
     throw InputError("interpolation: " + std::to_string(options_.timing.size()) + " keyframe timings for " +
                      std::to_string(keys_.size()) + " keyframes (give one per keyframe, or one for all)");
   if (!core_) core_ = make_cpu_newton_core(setup_.D_G, setup_.H);
+  if (boundary_ && boundary_->size() != setup_.overlap.breakpoints().size())
+    throw InputError("interpolation: the boundary evaluator is made for " + std::to_string(boundary_->size()) +
+                     " points; the overlap check has " + std::to_string(setup_.overlap.breakpoints().size()) + " breakpoints");
   {
     const MatrixXcd C = evaluate_basis(setup_.cage, setup_.G.points, kBasisC).C;
     const double count = static_cast<double>(setup_.G.size());
@@ -39,6 +52,8 @@ Interpolator::Interpolator(const ShapeSetup& setup, std::vector<double> times, s
     if (!c.certified) throw InputError("keyframe " + std::to_string(k) + " is not locally injective: " + c.reason);
     key_distortion_.push_back(measure(c));
     key_certified_.push_back(certified_distortion(c));
+    key_certificate_.push_back(c);
+    key_overlap_.push_back(overlap_of(keys_[k], nullptr));
     key_x_.push_back(setup_.metric_space.reduce(keys_[k]).x);
     const MapValues v = evaluate_map(D, keys_[k]);
     std::vector<Metric> m(static_cast<size_t>(v.f_z.size()));
@@ -55,6 +70,17 @@ Interpolator::Interpolator(const ShapeSetup& setup, std::vector<double> times, s
       p.angle = prev + std::remainder(p.angle - prev, 2 * std::numbers::pi);
     }
     key_poses_.push_back(p);
+  }
+  // What a solve started at keyframe k certifies first (newton_run: the start's full
+  // certificate), made by the core's own stepper as newton_solve makes it, so that the
+  // first frame after a keyframe does not certify from scratch. The targets only give
+  // the start an energy; every solve sets its own.
+  for (size_t k = 0; k < keys_.size(); ++k) {
+    std::unique_ptr<NewtonStepper> st = core_->make_stepper(setup_.metric_space, &setup_.certifier, nullptr);
+    if (!st) st = make_host_stepper(*core_, setup_.metric_space, &setup_.certifier, nullptr);
+    core_->set_targets(key_metrics_[k]);
+    (void)st->start(key_x_[k]);
+    key_start_certificate_.push_back(st->certify(0, true));
   }
 }
 
@@ -141,8 +167,25 @@ double excess(const Distortion& d, const Distortion& b) {
 }
 }  // namespace
 
+OverlapResult Interpolator::overlap_of(const HarmonicMap& map, FrameResult::Parts* parts) {
+  // The posed map is checked (a crossing is invariant under its rigid motion, so the
+  // canonical map would do as well, but the point reported is where the frame is drawn).
+  auto tp = Clock::now();
+  if (boundary_) {
+    boundary_->evaluate(map, boundary_values_);
+  } else {
+    boundary_values_.f = setup_.overlap.image(map);
+  }
+  const VectorXcd& f = boundary_values_.f;
+  if (parts) parts->image = ms_since(tp);
+  tp = Clock::now();
+  OverlapResult o = setup_.overlap.check_points(std::span<const cd>(f.data(), static_cast<size_t>(f.size())));
+  if (parts) parts->crossings = ms_since(tp);
+  return o;
+}
+
 FrameResult Interpolator::frame(double t, const Eigen::VectorXd& warm_start, const CertificateResult* warm_certificate) {
-  const auto t0 = std::chrono::steady_clock::now();
+  const auto t0 = Clock::now();
   FrameResult r;
   r.t = t;
   const int k = segment(t);
@@ -155,14 +198,14 @@ FrameResult Interpolator::frame(double t, const Eigen::VectorXd& warm_start, con
     r.map = keys_[j];
     r.x = key_x_[j];
     r.energy = 2.0;
-    r.certificate = setup_.certifier.certify(r.map);
+    r.certificate = key_certificate_[j];  // made at set-up, as the overlap
     r.distortion = key_distortion_[j];
-    r.overlap = setup_.overlap.check(r.map);
+    r.overlap = key_overlap_[j];
     r.distortion_certified = key_certified_[j];
     r.bound_excess = excess(r.distortion, r.bound);  // 0: j is one of the envelope's keyframes
     r.certified_bound_excess = excess(r.distortion_certified, r.certified_bound);
     r.message = std::move(message);
-    r.ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+    r.ms = ms_since(t0);
     return r;
   };
   for (size_t j = 0; j < times_.size(); ++j)
@@ -175,7 +218,9 @@ FrameResult Interpolator::frame(double t, const Eigen::VectorXd& warm_start, con
     r.held = true;
     return keyframe_itself(static_cast<size_t>(k), "keyframe " + std::to_string(k) + " held");
   }
+  auto tp = Clock::now();
   core_->set_targets(blended_metric(t));
+  r.parts.targets = ms_since(tp);
   NewtonOptions no;
   no.tolerance = options_.tolerance;
   no.max_iterations = options_.max_iterations;
@@ -183,8 +228,13 @@ FrameResult Interpolator::frame(double t, const Eigen::VectorXd& warm_start, con
   no.exact_hessian_when_definite = options_.exact_hessian_when_definite;
   no.free_rotation = options_.free_rotation;
   const Eigen::VectorXd& x0 = warm_start.size() ? warm_start : key_x_[static_cast<size_t>(k)];
-  if (warm_start.size() && warm_certificate && warm_certificate->certified) no.start_certificate = warm_certificate;
+  const CertificateResult* start = warm_start.size() ? warm_certificate : nullptr;
+  for (size_t j = 0; !start && j < key_x_.size(); ++j)  // a keyframe's own coefficients: its start certificate
+    if (x0.size() == key_x_[j].size() && x0 == key_x_[j]) start = &key_start_certificate_[j];
+  if (start && start->certified) no.start_certificate = start;
+  tp = Clock::now();
   const NewtonResult n = newton_solve(*core_, setup_.metric_space, &setup_.certifier, nullptr, x0, no);
+  r.parts.solve = ms_since(tp);
   r.x = n.x;
   r.iterations = n.iterations;
   r.energy = n.energy;
@@ -194,16 +244,20 @@ FrameResult Interpolator::frame(double t, const Eigen::VectorXd& warm_start, con
   r.timing = n.timing;
   r.message = n.message;
   // Pose: move the solution's centroid and Procrustes angle onto the interpolated pose.
+  tp = Clock::now();
   const HarmonicMap canon = setup_.metric_space.expand(n.x);
   const Pose have = pose_of(canon), want = interpolated_pose(t);
   const cd rot = std::polar(1.0, want.angle - have.angle);
   r.map = transform_image(setup_.cage, canon, rot, want.centroid - rot * have.centroid);
+  r.parts.pose = ms_since(tp);
+  r.overlap = overlap_of(r.map, &r.parts);
+  tp = Clock::now();
   r.distortion = measure(n.certificate);
-  r.overlap = setup_.overlap.check(r.map);
   r.distortion_certified = certified_distortion(n.certificate);
   r.bound_excess = excess(r.distortion, r.bound);
   r.certified_bound_excess = excess(r.distortion_certified, r.certified_bound);
-  r.ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+  r.parts.distortion = ms_since(tp);
+  r.ms = ms_since(t0);
   return r;
 }
 
@@ -226,8 +280,8 @@ std::vector<FrameResult> Interpolator::sequence(const std::vector<double>& times
     const double t = times[static_cast<size_t>(i)];
     // Crossing into a new keyframe segment keeps the warm start: frames are continuous.
     // A solved frame's certificate is of its canonical map expand(x): reusable as the
-    // next solve's start (a keyframe's, or a held one's, is of the posed map, so it is
-    // certified again).
+    // next solve's start (a keyframe's, or a held one's, is of the posed map: frame()
+    // takes the keyframe's start certificate made at set-up instead).
     out.push_back(frame(t, warm, out.empty() || out.back().keyframe || out.back().held ? nullptr : &warm_certificate));
     if (out.back().certified) {
       warm = out.back().x;

@@ -62,7 +62,7 @@ OverlapResult search(const Polylines& p, int points) {
 // on their loop are merged into it (overlap.h: the tolerance).
 constexpr double kMergeFraction = 1e-9;
 
-double merge_distance(const std::vector<cd>& image) {
+double merge_distance(std::span<const cd> image) {
   if (image.empty()) return 0;
   double x0 = image[0].real(), x1 = x0, y0 = image[0].imag(), y1 = y0;
   for (const cd& z : image) {
@@ -108,17 +108,20 @@ std::string describe(const OverlapResult& r) {
 }
 
 OverlapChecker::OverlapChecker(const Cage& cage, const CertificateSegments& breakpoints)
-    : seg_(breakpoints), C_(evaluate_basis(cage, seg_.points, kBasisC).C) {}
+    : seg_(breakpoints), f_(make_cpu_mesh_evaluator(cage, seg_.points)) {}
 
-OverlapResult OverlapChecker::check(const HarmonicMap& map) const {
-  if (map.phi.size() != C_.cols() || map.psi.size() != C_.cols())
-    throw InputError("overlap check: the map has " + std::to_string(map.phi.size()) + " coefficients; the cage needs " +
-                     std::to_string(C_.cols()));
-  const VectorXcd f = C_ * map.phi + (C_ * map.psi).conjugate();
-  return check_points(std::vector<cd>(f.data(), f.data() + f.size()));
+VectorXcd OverlapChecker::image(const HarmonicMap& map) const {
+  MapValues v;
+  f_->evaluate(map, v);  // InputError for a map of another cage
+  return std::move(v.f);
 }
 
-OverlapResult OverlapChecker::check_points(const std::vector<cd>& image) const {
+OverlapResult OverlapChecker::check(const HarmonicMap& map) const {
+  const VectorXcd f = image(map);
+  return check_points(std::span<const cd>(f.data(), static_cast<size_t>(f.size())));
+}
+
+OverlapResult OverlapChecker::check_points(std::span<const cd> image) const {
   if (image.size() != seg_.size())
     throw InputError("overlap check: " + std::to_string(image.size()) + " image points for " + std::to_string(seg_.size()) +
                      " breakpoints");

@@ -130,8 +130,17 @@ std::unique_ptr<MeshEvaluator> cuda_mesh_evaluator(const Cage& cage, std::span<c
 
 NewtonCoreChoice make_newton_core(const ShapeSetup& setup, Backend requested, const CudaStatus& cuda) {
   NewtonCoreChoice r;
-  r.core = make_on_backend<NewtonCore>(requested, cuda, "core", r.choice, [&] { return cuda_core(setup); },
-                                       [&] { return make_cpu_newton_core(setup.D_G, setup.H); });
+  r.core = make_on_backend<NewtonCore>(
+      requested, cuda, "core", r.choice,
+      [&] {
+        std::unique_ptr<NewtonCore> core = cuda_core(setup);
+        r.boundary = cuda_mesh_evaluator(setup.cage, setup.overlap.breakpoints().points, {});
+        return core;
+      },
+      [&] {
+        r.boundary.reset();  // a CUDA evaluator made before the fallback is not kept
+        return make_cpu_newton_core(setup.D_G, setup.H);
+      });
   return r;
 }
 

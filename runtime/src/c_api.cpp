@@ -456,7 +456,7 @@ hsi_status hsi_interpolator_create(hsi_scene* s, const hsi_interpolation_options
                                                                          : runtime::Backend::Cpu;
       runtime::NewtonCoreChoice core = runtime::make_newton_core(*h->setup, requested);
       h->backend = core.choice;
-      h->interp = std::make_unique<Interpolator>(*h->setup, times, maps, io, std::move(core.core));
+      h->interp = std::make_unique<Interpolator>(*h->setup, times, maps, io, std::move(core.core), std::move(core.boundary));
     } catch (const runtime::BackendUnavailable& e) {
       delete_handle(h);
       fail(HSI_ERROR_UNSUPPORTED, std::string("hsi_interpolator_create: ") + e.what());

@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "hsi/mesh_evaluator.h"
 #include "hsi/newton.h"
 #include "hsi/shape_setup.h"
 #include "hsi/timing.h"
@@ -57,7 +58,18 @@ struct FrameResult {
   CertificateResult certificate;
   int iterations = 0;
   double energy = 0;         // mean isometric energy against the blended metric (2 = exact)
-  double ms = 0;
+  double ms = 0;             // wall clock of the whole frame (Interpolator::frame), parts included
+  // Where `ms` went, wall clock in ms, each part timed apart (their sum ≤ ms; the rest
+  // is bookkeeping: copies, messages). A keyframe or held frame is the keyframe itself,
+  // its certificate and overlap made at set-up: every part 0.
+  struct Parts {
+    double targets = 0;     // the blended metric at G (blended_metric) and its upload (NewtonCore::set_targets)
+    double solve = 0;       // newton_solve: the iterations, certificates included (`timing` splits them)
+    double pose = 0;        // expand(x), pose_of, interpolated_pose and transform_image
+    double image = 0;       // f at the overlap check's breakpoints (the boundary's image)
+    double crossings = 0;   // the crossing search over the image polylines (OverlapChecker::check_points)
+    double distortion = 0;  // sampled and certified distortion from the certificate
+  } parts;
   Distortion distortion;     // sampled at the certificate's breakpoints (observed values, not bounds)
   // Certified bounds over ∂Ω (so over Ω): σ1 and κ upper bounds, σ2 a *lower* bound,
   // the isometric energy's upper bound derived from those two (certified_distortion()).
@@ -97,9 +109,16 @@ std::vector<double> sequence_times(const std::vector<double>& key_times, int fra
 
 class Interpolator {
  public:
-  // keyframes: certified maps at increasing times (at least two).
+  // keyframes: certified maps at increasing times (at least two). core: the Newton core
+  // (null: the CPU one). boundary: f at setup.overlap.breakpoints().points, the image
+  // every frame's overlap check tests (null: the setup's CPU evaluator; runtime's
+  // make_newton_core gives one on the core's backend); InputError if made for another
+  // number of points. Set-up also certifies each keyframe, checks its overlap and
+  // certifies its reduced coefficients as a solve's start (so no frame certifies from
+  // scratch: the first solved frame costs what a warm one does).
   Interpolator(const ShapeSetup& setup, std::vector<double> times, std::vector<HarmonicMap> keyframes,
-               const InterpolationOptions& options = {}, std::unique_ptr<NewtonCore> core = nullptr);
+               const InterpolationOptions& options = {}, std::unique_ptr<NewtonCore> core = nullptr,
+               std::unique_ptr<MeshEvaluator> boundary = nullptr);
   ~Interpolator();
 
   double t_begin() const { return times_.front(); }
@@ -107,7 +126,9 @@ class Interpolator {
 
   // One frame from a warm start (reduced x; empty = the nearest earlier keyframe).
   // warm_certificate: the certificate of warm_start's map when already known (the
-  // previous frame's), so the solve does not certify its start again.
+  // previous frame's), so the solve does not certify its start again; a keyframe's own
+  // coefficients (no warm start, or the x of a keyframe or held frame) start from the
+  // certificate made at set-up.
   FrameResult frame(double t, const Eigen::VectorXd& warm_start = {}, const CertificateResult* warm_certificate = nullptr);
   // F frames uniform over [t_begin, t_end], each warm-started from the previous one.
   std::vector<FrameResult> sequence(int frames, const std::function<void(const FrameResult&, int, int)>& progress = {});
@@ -129,6 +150,9 @@ class Interpolator {
  private:
   int segment(double t) const;
   Distortion measure(const CertificateResult& c) const;
+  // The overlap check of a frame's map: f at the breakpoints by boundary_ (or the
+  // setup's), then the crossing search; their times into parts when given.
+  OverlapResult overlap_of(const HarmonicMap& map, FrameResult::Parts* parts);
 
   const ShapeSetup& setup_;
   std::vector<double> times_;
@@ -139,8 +163,15 @@ class Interpolator {
   std::vector<Pose> key_poses_;  // angles unwrapped across keyframes
   std::vector<Distortion> key_distortion_;
   std::vector<Distortion> key_certified_;
+  std::vector<CertificateResult> key_certificate_;  // of keys_[k] (a keyframe frame's certificate)
+  std::vector<OverlapResult> key_overlap_;          // of keys_[k] (a keyframe frame's overlap)
+  // Of expand(key_x_[k]) by the core's own stepper: what a solve started there would
+  // certify first (newton_run), made once here.
+  std::vector<CertificateResult> key_start_certificate_;
   InterpolationOptions options_;
   std::unique_ptr<NewtonCore> core_;
+  std::unique_ptr<MeshEvaluator> boundary_;  // null: setup_.overlap's own
+  MapValues boundary_values_;                // its output, reused frame to frame
   // Poses are linear in the coefficients: centroid = c_mean·φ + conj(c_mean·ψ) and the
   // Procrustes sum Σ f_i conj(w_i − w̄) = c_rot·φ + conj(c_rot_bar·ψ), with these rows
   // (sums over G of the basis rows C), so a pose costs O(m), not O(|G| m).

@@ -18,8 +18,11 @@
 // bounding box's diagonal) of the last one kept on its loop is merged into it: a
 // sample a hair's width from a polygon vertex gives a segment whose image round-off
 // can fold back on its neighbours (seen on bar_holes: one "crossing" of two edges at
-// their shared corner in a certified frame), and nothing visible is that small. The search is a box-intersection sweep, O(B log B + crossings)
-// for B breakpoints.
+// their shared corner in a certified frame), and nothing visible is that small. Candidate pairs come from a hierarchy of bounding
+// boxes over each polyline's segments in their order (exact coordinate extremes,
+// compared closed, so no intersecting pair is missed), each decided by the exact
+// predicates: about O(B log B) for B breakpoints on a boundary's image. f at the
+// breakpoints comes from basis rows cached once (mesh_evaluator.h).
 //
 // What is NOT checked: the curve f(∂Ω) between two breakpoints is replaced by the
 // chord. A crossing of the true curves that the chords miss (two image arcs that
@@ -29,11 +32,14 @@
 // any visible overlap.
 #pragma once
 
+#include <memory>
+#include <span>
 #include <string>
 #include <vector>
 
 #include "hsi/certificate.h"
 #include "hsi/harmonic_map.h"
+#include "hsi/mesh_evaluator.h"
 
 namespace hsi {
 
@@ -55,20 +61,26 @@ struct OverlapResult {
 // 11234 breakpoints)"; "not checked".
 std::string describe(const OverlapResult& result);
 
-// Precomputed per shape and cage: the breakpoints and the basis rows C there.
+// Precomputed per shape and cage: the breakpoints and f there from basis rows cached
+// once (the CPU MeshEvaluator, mesh_evaluator.h), so that a check costs one product of
+// the cached rows with the map's coefficients plus the crossing search.
 class OverlapChecker {
  public:
   OverlapChecker(const Cage& cage, const CertificateSegments& breakpoints);
   // Needs the map's full coefficients (basis_size(cage) each); throws InputError otherwise.
   OverlapResult check(const HarmonicMap& map) const;
+  // f at the breakpoints, loop by loop as breakpoints().points: the image check() tests.
+  VectorXcd image(const HarmonicMap& map) const;
   // The same test on image points already evaluated at the breakpoints (loop by loop,
-  // as breakpoints().points).
-  OverlapResult check_points(const std::vector<cd>& image) const;
+  // as breakpoints().points), e.g. by a MeshEvaluator of another backend made for them.
+  OverlapResult check_points(std::span<const cd> image) const;
   const CertificateSegments& breakpoints() const { return seg_; }
 
  private:
   CertificateSegments seg_;
-  MatrixXcd C_;  // basis rows C at the breakpoints (full columns)
+  // f at the breakpoints. The CPU evaluator keeps no state between calls (evaluate only
+  // writes its output), so check() stays const and safe to call from several threads.
+  std::shared_ptr<MeshEvaluator> f_;
 };
 
 // The same test for image polylines given directly (closed, one per loop; edge i

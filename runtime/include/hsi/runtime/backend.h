@@ -63,6 +63,9 @@ BackendChoice choose_backend(Backend requested, const CudaStatus& cuda);
 // falls back to the CPU with that reason and cuda throws BackendUnavailable.
 struct NewtonCoreChoice {
   std::unique_ptr<NewtonCore> core;
+  // f at setup.overlap's breakpoints on the same backend (the image each frame's overlap
+  // check tests): the Interpolator's `boundary`. Null on the CPU (the setup's own is used).
+  std::unique_ptr<MeshEvaluator> boundary;
   BackendChoice choice;
 };
 NewtonCoreChoice make_newton_core(const ShapeSetup& setup, Backend requested);
