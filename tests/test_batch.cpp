@@ -166,6 +166,8 @@ TEST_CASE("a sequence that fails is named while the others finish", "[batch]") {
     CHECK(r.sequences[0].frames.size() == 5);
     CHECK_THAT(r.sequences[1].error, Contains("folded.json") && Contains("keyframe 1 is not locally injective"));
     CHECK(r.sequences[1].frames.empty());
+    CHECK_THROWS_AS(std::rethrow_exception(r.sequences[1].exception), InputError);  // callers sort errors by type
+    CHECK_FALSE(r.sequences[1].cancelled);
     CHECK_THAT(r.sequences[2].error, Contains("late.json") && Contains("time 2 is 2.5"));
     CHECK(r.sequences[3].error.empty());
     for (const FrameResult& f : r.sequences[3].frames) CHECK(f.certified);
@@ -186,4 +188,6 @@ TEST_CASE("a batch cancelled by its progress callback reports its unfinished seq
   CHECK(calls == 3);
   CHECK(r.failed() == 3);  // one worker: the first sequence was stopped in its first run
   CHECK_THAT(r.sequences[0].error, Contains("cancelled"));
+  CHECK(r.sequences[0].cancelled);
+  CHECK_FALSE(r.sequences[0].exception);
 }

@@ -201,6 +201,7 @@ BatchResult solve_batch(const std::vector<BatchSequence>& sequences, const Batch
     const BatchSequence& q = sequences[s];
     if (std::string why = check_sequence(q); !why.empty()) {
       out.sequences[s].error = q.name + ": " + why;
+      out.sequences[s].exception = std::make_exception_ptr(InputError(out.sequences[s].error));
       continue;
     }
     out.sequences[s].frames.resize(q.times.size());
@@ -213,7 +214,12 @@ BatchResult solve_batch(const std::vector<BatchSequence>& sequences, const Batch
   Scheduler scheduler(sequences, runs);
 
   std::mutex mutex;                       // guards errors, stats and progress calls
-  std::vector<std::pair<int, std::string>> run_error(sequences.size(), {-1, ""});  // the earliest failed run's message
+  struct RunError {
+    int run = -1;  // the earliest failed run
+    std::string message;
+    std::exception_ptr exception;
+  };
+  std::vector<RunError> run_error(sequences.size());
   std::vector<char> run_done(runs.size(), 0);  // written by the run's worker only
   std::atomic<bool> cancel{false};
   std::atomic<size_t> done{0};
@@ -223,8 +229,8 @@ BatchResult solve_batch(const std::vector<BatchSequence>& sequences, const Batch
   const auto fail = [&](int r, int sequence, const std::string& what) {
     scheduler.drop(sequence);
     std::lock_guard<std::mutex> lock(mutex);
-    auto& [first, message] = run_error[static_cast<size_t>(sequence)];
-    if (first < 0 || r < first) first = r, message = what;
+    RunError& e = run_error[static_cast<size_t>(sequence)];
+    if (e.run < 0 || r < e.run) e = {r, what, std::current_exception()};
   };
   const auto work = [&] {
 #ifdef _OPENMP
@@ -290,8 +296,13 @@ BatchResult solve_batch(const std::vector<BatchSequence>& sequences, const Batch
   for (size_t s = 0; s < sequences.size(); ++s) {
     BatchSequenceResult& r = out.sequences[s];
     if (!r.error.empty()) continue;
-    if (run_error[s].first >= 0) r.error = sequences[s].name + ": " + run_error[s].second;
-    else if (!complete[s]) r.error = sequences[s].name + ": cancelled before it was finished";
+    if (run_error[s].run >= 0) {
+      r.error = sequences[s].name + ": " + run_error[s].message;
+      r.exception = run_error[s].exception;
+    } else if (!complete[s]) {
+      r.error = sequences[s].name + ": cancelled before it was finished";
+      r.cancelled = true;
+    }
     if (!r.error.empty()) r.frames.clear();
   }
   stats.seconds = seconds_since(t0);

@@ -10,6 +10,7 @@
 #pragma once
 
 #include <cstddef>
+#include <exception>
 #include <functional>
 #include <memory>
 #include <string>
@@ -51,6 +52,8 @@ using BatchProgress = std::function<bool(const FrameResult& frame, int sequence,
 struct BatchSequenceResult {
   std::vector<FrameResult> frames;  // in frame order, as Interpolator::sequence gives them; empty on error
   std::string error;                // empty: solved (its frames carry their own flags); else "NAME: why"
+  std::exception_ptr exception;     // what was thrown (an InputError for bad input), for a caller to sort errors by type; null when cancelled
+  bool cancelled = false;           // not finished because the progress callback stopped the batch
 };
 
 struct BatchStats {
