@@ -10,6 +10,7 @@
 
 #include "hsi/batch.h"
 #include "hsi/keyframes.h"
+#include "hsi/runtime/backend.h"
 #include "hsi/scene_sequence.h"
 
 using namespace hsi;
@@ -190,4 +191,42 @@ TEST_CASE("a batch cancelled by its progress callback reports its unfinished seq
   CHECK_THAT(r.sequences[0].error, Contains("cancelled"));
   CHECK(r.sequences[0].cancelled);
   CHECK_FALSE(r.sequences[0].exception);
+}
+
+TEST_CASE("a batch on CUDA cores gives the frames of Interpolator::sequence on a CUDA core (skips without a GPU)", "[batch][cuda]") {
+  const runtime::CudaStatus cuda = runtime::cuda_status();
+  if (!cuda.available) {
+    WARN("no CUDA core here: " << cuda.detail);
+    return;
+  }
+  const BatchCoreFactory make_core = [cuda](const ShapeSetup& setup) {
+    return runtime::make_newton_core(setup, runtime::Backend::Cuda, cuda).core;
+  };
+  std::vector<BatchSequence> sequences;
+  sequences.push_back(sequence_of("annulus", {KeyTiming::Linear, KeyTiming::Hold, KeyTiming::Linear}, frame_times({0, 1, 2}, 4)));
+  sequences.push_back(sequence_of("glyph_8", {KeyTiming::Smooth}, frame_times({0, 1, 2}, 5)));
+  sequences.push_back(sequence_of("two_holes", {}, sequence_times({0, 2}, 9)));
+  std::vector<std::vector<FrameResult>> reference;
+  {
+    const OneThread one;
+    for (const BatchSequence& q : sequences) {
+      Interpolator I(*q.setup, q.key_times, q.keyframes, q.options, make_core(*q.setup));
+      reference.push_back(I.sequence(q.times));
+    }
+  }
+  for (int workers : {1, 4}) {
+    INFO("workers = " << workers);
+    BatchOptions o;
+    o.workers = workers;
+    o.make_core = make_core;
+    const BatchResult r = solve_batch(sequences, o);
+    REQUIRE(r.failed() == 0);
+    for (size_t s = 0; s < sequences.size(); ++s) {
+      REQUIRE(r.sequences[s].frames.size() == reference[s].size());
+      for (size_t i = 0; i < reference[s].size(); ++i) {
+        CHECK(r.sequences[s].frames[i].certified);
+        require_same(r.sequences[s].frames[i], reference[s][i]);
+      }
+    }
+  }
 }
