@@ -8,41 +8,26 @@
 #include <omp.h>
 #endif
 
+#include "bench_scenes.h"
 #include "hsi/batch.h"
 #include "hsi/keyframes.h"
 #include "hsi/runtime/backend.h"
-#include "hsi/scene_sequence.h"
 
 using namespace hsi;
 using Catch::Matchers::Contains;
 
 namespace {
 
-// A bundled scene at |G| = 1000, its keyframes certified.
-struct TestScene {
-  Scene scene;
-  std::shared_ptr<const ShapeSetup> setup;
-  std::vector<double> times;
-  std::vector<HarmonicMap> maps;
-};
-
-TestScene& bundled(const std::string& name) {
-  static std::map<std::string, TestScene> cache;
+// A bundled scene at |G| = 1000, its keyframes certified (the benchmarks' loader).
+bench::Loaded& bundled(const std::string& name) {
+  static std::map<std::string, bench::Loaded> cache;
   auto it = cache.find(name);
-  if (it != cache.end()) return it->second;
-  TestScene S;
-  S.scene = load_scene(std::string(HSI_ASSETS_DIR) + "/" + name + ".json");
-  S.setup = scene_setup(S.scene, 1000, 0.2);
-  solve_scene_keyframes(S.scene, *S.setup);
-  for (const Keyframe& k : S.scene.keyframes) {
-    S.times.push_back(k.time);
-    S.maps.push_back(*k.coefficients);
-  }
-  return cache.emplace(name, std::move(S)).first->second;
+  if (it == cache.end()) it = cache.emplace(name, bench::load(std::string(HSI_ASSETS_DIR) + "/" + name + ".json", 1000, 0.2)).first;
+  return it->second;
 }
 
 BatchSequence sequence_of(const std::string& name, const std::vector<KeyTiming>& timing, std::vector<double> times) {
-  TestScene& S = bundled(name);
+  bench::Loaded& S = bundled(name);
   BatchSequence q;
   q.name = name;
   q.setup = S.setup.get();
