@@ -2,6 +2,7 @@
 // progress line), or the frames of an earlier hsi interpolate (cmd_bake.cpp).
 #pragma once
 
+#include <memory>
 #include <string>
 
 #include "hsi/scene_sequence.h"
@@ -10,6 +11,8 @@ namespace hsi::cli {
 
 // FROM is a .hsif file or a folder holding frames.hsif; its cage must be the scene's.
 FrameFile frames_from(const std::string& from, Scene& scene);
-SceneSequence interpolate_with_progress(Scene& scene, const SceneSequenceOptions& options, const char* tag);
+// core / setup: as interpolate_scene takes them (null: the CPU core, the scene's setup).
+SceneSequence interpolate_with_progress(Scene& scene, const SceneSequenceOptions& options, const char* tag,
+                                        std::unique_ptr<NewtonCore> core = nullptr, std::shared_ptr<const ShapeSetup> setup = nullptr);
 
 }  // namespace hsi::cli

@@ -8,6 +8,11 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <sstream>
+#include <utility>
+#include <vector>
+#ifdef _OPENMP
+#include <omp.h>
+#endif
 
 #include "hsi/baked_runtime.h"
 #include "hsi/hsi.h"
@@ -333,4 +338,132 @@ TEST_CASE("C API: frame reports carry the certificate's bounds beside the sample
   hsi_sequence_destroy(seq);
   hsi_interpolator_destroy(it);
   hsi_scene_destroy(s);
+}
+
+TEST_CASE("C API: a batch of sequences gives the frames of hsi_interpolator_sequence, for 1 and 3 workers", "[c_api][batch]") {
+  // Three sequences on two shapes, one with every interval held (its frames are the keyframes).
+  std::vector<hsi_interpolator*> its;
+  std::vector<uint32_t> coefficients;
+  const std::vector<uint32_t> counts{5, 7, 9};
+  const std::pair<const char*, hsi_timing> made[] = {
+      {"two_holes", HSI_TIMING_SCENE}, {"annulus", HSI_TIMING_HOLD}, {"annulus", HSI_TIMING_LINEAR}};
+  for (const auto& [name, timing] : made) {
+    hsi_scene* s = nullptr;
+    REQUIRE(hsi_scene_load_file((std::string(HSI_ASSETS_DIR) + "/" + name + ".json").c_str(), &s) == HSI_OK);
+    REQUIRE(hsi_scene_set_sampling(s, 1000, 0) == HSI_OK);
+    hsi_interpolation_options o;
+    hsi_interpolation_options_default(&o);
+    o.timing = timing;
+    hsi_interpolator* it = nullptr;
+    REQUIRE(hsi_interpolator_create(s, &o, &it) == HSI_OK);
+    hsi_scene_info info{};
+    REQUIRE(hsi_scene_get_info(s, &info) == HSI_OK);
+    coefficients.push_back(info.coefficient_count);
+    hsi_scene_destroy(s);
+    its.push_back(it);
+  }
+  // The frames one at a time, with one OpenMP thread as each batch worker runs by default
+  // (the CPU core's energy is an OpenMP sum, rounded by thread count).
+  struct Frames {
+    std::vector<double> coefficients;  // phi and psi of every frame
+    std::vector<hsi_frame_report> reports;
+  };
+  const auto frames_of = [](hsi_sequence* seq, uint32_t m) {
+    Frames F;
+    const uint32_t n = hsi_sequence_frame_count(seq);
+    for (uint32_t f = 0; f < n; ++f) {
+      hsi_frame_report r{};
+      REQUIRE(hsi_sequence_frame_report(seq, f, &r) == HSI_OK);
+      F.reports.push_back(r);
+      std::vector<double> phi(2 * m), psi(2 * m);
+      REQUIRE(hsi_sequence_coefficients(seq, f, phi.data(), psi.data(), m) == HSI_OK);
+      F.coefficients.insert(F.coefficients.end(), phi.begin(), phi.end());
+      F.coefficients.insert(F.coefficients.end(), psi.begin(), psi.end());
+    }
+    return F;
+  };
+  std::vector<Frames> reference;
+  {
+#ifdef _OPENMP
+    const int before = omp_get_max_threads();
+    omp_set_num_threads(1);
+#endif
+    for (size_t k = 0; k < its.size(); ++k) {
+      hsi_sequence* seq = nullptr;
+      REQUIRE(hsi_interpolator_sequence(its[k], counts[k], nullptr, nullptr, &seq) == HSI_OK);
+      reference.push_back(frames_of(seq, coefficients[k]));
+      hsi_sequence_destroy(seq);
+    }
+#ifdef _OPENMP
+    omp_set_num_threads(before);
+#endif
+  }
+  int held = 0;
+  for (const hsi_frame_report& r : reference[1].reports) held += r.held;
+  CHECK(held > 0);
+
+  for (uint32_t workers : {1u, 3u}) {
+    INFO("workers = " << workers);
+    hsi_batch_options o;
+    hsi_batch_options_default(&o);
+    CHECK(o.struct_size == sizeof(hsi_batch_options));
+    CHECK(o.threads_per_worker == 1);
+    o.workers = workers;
+    std::vector<hsi_sequence*> out(its.size(), nullptr);
+    std::vector<hsi_status> statuses(its.size(), HSI_ERROR_INTERNAL);
+    struct Seen {
+      uint64_t calls = 0, total = 0;
+    } seen;
+    auto count_frames = [](uint32_t, uint32_t, uint64_t, uint64_t total, const hsi_frame_report*, void* user) -> int {
+      auto* s = static_cast<Seen*>(user);
+      ++s->calls;
+      s->total = total;
+      return 0;
+    };
+    REQUIRE(hsi_interpolators_sequence_batch(its.data(), counts.data(), static_cast<uint32_t>(its.size()), &o, count_frames, &seen,
+                                             out.data(), statuses.data()) == HSI_OK);
+    CHECK(seen.calls == 21);
+    CHECK(seen.total == 21);
+    for (size_t k = 0; k < its.size(); ++k) {
+      CHECK(statuses[k] == HSI_OK);
+      REQUIRE(out[k]);
+      REQUIRE(hsi_sequence_frame_count(out[k]) == counts[k]);
+      const Frames F = frames_of(out[k], coefficients[k]);
+      for (size_t f = 0; f < counts[k]; ++f) {
+        CHECK(F.reports[f].t == reference[k].reports[f].t);
+        CHECK(F.reports[f].certified == reference[k].reports[f].certified);
+        CHECK(F.reports[f].held == reference[k].reports[f].held);
+        CHECK(F.reports[f].iterations == reference[k].reports[f].iterations);
+        CHECK(F.reports[f].energy == reference[k].reports[f].energy);
+      }
+      CHECK(F.coefficients == reference[k].coefficients);  // exactly
+      hsi_sequence_destroy(out[k]);
+    }
+  }
+
+  // Stopped by its progress callback: the unfinished sequences are cancelled, named, NULL.
+  hsi_batch_options one;
+  hsi_batch_options_default(&one);
+  one.workers = 1;
+  std::vector<hsi_sequence*> out(its.size(), nullptr);
+  std::vector<hsi_status> statuses(its.size(), HSI_OK);
+  auto stop_at_2 = [](uint32_t, uint32_t, uint64_t done, uint64_t, const hsi_frame_report*, void*) -> int { return done >= 2; };
+  CHECK(hsi_interpolators_sequence_batch(its.data(), counts.data(), 3, &one, stop_at_2, nullptr, out.data(), statuses.data()) ==
+        HSI_ERROR_CANCELLED);
+  CHECK_THAT(hsi_last_error(), Contains("3 of 3 sequences failed") && Contains("sequence 0 (scene 'two_holes')") && Contains("cancelled"));
+  for (size_t k = 0; k < its.size(); ++k) {
+    CHECK(statuses[k] == HSI_ERROR_CANCELLED);
+    CHECK(out[k] == nullptr);
+  }
+  // Bad arguments.
+  hsi_batch_options old = one;
+  old.struct_size = 4;
+  CHECK(hsi_interpolators_sequence_batch(its.data(), counts.data(), 3, &old, nullptr, nullptr, out.data(), nullptr) ==
+        HSI_ERROR_INVALID_ARGUMENT);
+  CHECK_THAT(hsi_last_error(), Contains("struct_size"));
+  const uint32_t too_few[] = {5, 1, 5};
+  CHECK(hsi_interpolators_sequence_batch(its.data(), too_few, 3, nullptr, nullptr, nullptr, out.data(), nullptr) ==
+        HSI_ERROR_INVALID_ARGUMENT);
+  CHECK_THAT(hsi_last_error(), Contains("frame_counts[1]"));
+  for (hsi_interpolator* it : its) hsi_interpolator_destroy(it);
 }

@@ -9,11 +9,13 @@
 #include <cstring>
 #include <filesystem>
 #include <new>
+#include <thread>
 
 #include "built.h"
 #include "c_api_internal.h"
 #include "hsi/baked.h"
 #include "hsi/baked_runtime.h"
+#include "hsi/batch.h"
 #include "hsi/keyframes.h"
 #include "hsi/runtime/backend.h"
 
@@ -547,6 +549,127 @@ hsi_status hsi_interpolator_sequence(hsi_interpolator* i, uint32_t frame_count, 
       throw;
     }
     *out = s;
+  });
+}
+
+// ---------------------------------------------------------------- batches
+
+void hsi_batch_options_default(hsi_batch_options* o) {
+  if (!o) return;
+  *o = hsi_batch_options{};
+  o->struct_size = sizeof(hsi_batch_options);
+  o->workers = 0;
+  o->threads_per_worker = 1;
+}
+
+namespace {
+// A failed sequence's exception as a status (its message is the batch's, naming the sequence).
+hsi_status batch_status(const BatchSequenceResult& r) {
+  if (r.cancelled) return HSI_ERROR_CANCELLED;
+  try {
+    if (r.exception) std::rethrow_exception(r.exception);
+  } catch (const InputError&) {
+    return HSI_ERROR_INPUT;
+  } catch (const runtime::BackendUnavailable&) {
+    return HSI_ERROR_UNSUPPORTED;
+  } catch (const std::bad_alloc&) {
+    return HSI_ERROR_OUT_OF_MEMORY;
+  } catch (...) {
+  }
+  return HSI_ERROR_INTERNAL;
+}
+}  // namespace
+
+hsi_status hsi_interpolators_sequence_batch(hsi_interpolator* const* interpolators, const uint32_t* frame_counts, uint32_t count,
+                                            const hsi_batch_options* options, hsi_batch_progress_fn progress, void* user,
+                                            hsi_sequence** out, hsi_status* statuses) {
+  if (out)
+    for (uint32_t k = 0; k < count; ++k) out[k] = nullptr;
+  return guard([&] {
+    const char* fn = "hsi_interpolators_sequence_batch";
+    require(count == 0 || (interpolators && frame_counts && out), fn, "interpolators, frame_counts or out is NULL");
+    hsi_batch_options o;
+    hsi_batch_options_default(&o);
+    if (options) {
+      if (options->struct_size < sizeof(hsi_batch_options))
+        fail(HSI_ERROR_INVALID_ARGUMENT, std::string(fn) + ": options->struct_size is " + std::to_string(options->struct_size) +
+                                             ", expected " + std::to_string(sizeof(hsi_batch_options)) +
+                                             " (set it with hsi_batch_options_default)");
+      o = *options;
+    }
+    if (o.workers > 4096 || o.threads_per_worker > 4096)
+      fail(HSI_ERROR_INVALID_ARGUMENT, std::string(fn) + ": workers and threads_per_worker must be at most 4096");
+    for (uint32_t k = 0; k < count; ++k) {
+      if (!interpolators[k]) fail(HSI_ERROR_INVALID_ARGUMENT, std::string(fn) + ": interpolator " + std::to_string(k) + " is NULL");
+      if (frame_counts[k] < 2 || frame_counts[k] > 10000000)
+        fail(HSI_ERROR_INVALID_ARGUMENT, std::string(fn) + ": frame_counts[" + std::to_string(k) + "] must be in [2, 1e7], got " +
+                                             std::to_string(frame_counts[k]));
+      if (interpolators[k]->backend.used != interpolators[0]->backend.used)
+        fail(HSI_ERROR_INVALID_ARGUMENT, std::string(fn) + ": interpolator " + std::to_string(k) + " uses the " +
+                                             std::string(runtime::to_string(interpolators[k]->backend.used)) + " core, interpolator 0 the " +
+                                             std::string(runtime::to_string(interpolators[0]->backend.used)) +
+                                             " core: a batch runs on one");
+    }
+    if (count == 0) return;
+    std::vector<BatchSequence> batch(count);
+    for (uint32_t k = 0; k < count; ++k) {
+      const hsi_interpolator& i = *interpolators[k];
+      BatchSequence& q = batch[k];
+      q.name = "sequence " + std::to_string(k) + " (scene '" + i.scene->name + "')";
+      q.setup = i.setup.get();
+      for (const Keyframe& kf : i.scene->keyframes) {
+        q.key_times.push_back(kf.time);
+        q.keyframes.push_back(*kf.coefficients);
+      }
+      q.options = i.interp->options();
+      q.times = sequence_times({i.interp->t_begin(), i.interp->t_end()}, static_cast<int>(frame_counts[k]));
+    }
+    BatchOptions bo;
+    bo.workers = o.workers > 0 ? static_cast<int>(o.workers) : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+    bo.threads_per_worker = static_cast<int>(o.threads_per_worker);
+    const runtime::Backend used = interpolators[0]->backend.used;
+    const runtime::CudaStatus cuda = used == runtime::Backend::Cpu ? runtime::CudaStatus{} : runtime::cuda_status();
+    bo.make_core = [used, cuda](const ShapeSetup& setup) { return runtime::make_newton_core(setup, used, cuda).core; };
+    const BatchResult r = solve_batch(batch, bo, [&](const FrameResult& f, int s, int i, size_t done, size_t total) {
+      if (!progress) return true;
+      const hsi_frame_report rep = to_report(f);
+      return progress(static_cast<uint32_t>(s), static_cast<uint32_t>(i), done, total, &rep, user) == 0;
+    });
+    // Every sequence's handle first (none leaks if one cannot be made), then the statuses.
+    std::vector<hsi_sequence*> made(count, nullptr);
+    try {
+      for (uint32_t k = 0; k < count; ++k) {
+        if (!r.sequences[k].error.empty()) continue;
+        made[k] = new_handle<hsi_sequence>();
+        made[k]->scene = interpolators[k]->scene;
+        made[k]->seq.setup = interpolators[k]->setup;
+        made[k]->seq.options = batch[k].options;
+        made[k]->seq.frames = r.sequences[k].frames;
+        made[k]->seq.total_s = r.stats.seconds;
+      }
+    } catch (...) {
+      for (hsi_sequence* h : made) delete_handle(h);
+      throw;
+    }
+    std::string errors;
+    hsi_status first = HSI_OK;
+    for (uint32_t k = 0; k < count; ++k) {
+      const hsi_status st = r.sequences[k].error.empty() ? HSI_OK : batch_status(r.sequences[k]);
+      if (statuses) statuses[k] = st;
+      out[k] = made[k];
+      if (st == HSI_OK) {
+        for (auto it = made[k]->seq.frames.rbegin(); it != made[k]->seq.frames.rend(); ++it)
+          if (it->certified) {
+            interpolators[k]->warm = it->x;
+            break;
+          }
+        continue;
+      }
+      if (first == HSI_OK) first = st;
+      errors += (errors.empty() ? "" : "; ") + r.sequences[k].error + " (" + hsi_status_name(st) + ")";
+    }
+    if (first != HSI_OK)
+      fail(first, std::string(fn) + ": " + std::to_string(r.failed()) + " of " + std::to_string(count) + " sequences failed: " + errors);
   });
 }
 

@@ -4,6 +4,7 @@
 // frame by a rigid pose interpolated across the keyframes (math.md §3).
 #pragma once
 
+#include <algorithm>
 #include <functional>
 #include <memory>
 #include <string>
@@ -107,6 +108,15 @@ std::vector<double> frame_times(const std::vector<double>& key_times, int per_in
 // `frames` (≥ 2) uniform over [first, last] key time, both ends exact. Throws InputError.
 std::vector<double> sequence_times(const std::vector<double>& key_times, int frames, int per_interval = 0);
 
+// Whether the frame at t is a keyframe itself (t one of key_times, or inside a Hold
+// interval of `timing`): Interpolator::frame solves nothing there and ignores its warm
+// start, so a sequence's frames from such a t on do not depend on the frames before it
+// (batch.h solves the runs between them apart).
+inline bool keyframe_itself(const std::vector<double>& key_times, const std::vector<KeyTiming>& timing, double t) {
+  return std::find(key_times.begin(), key_times.end(), t) != key_times.end() ||
+         interval_timing(key_times, timing, t) == KeyTiming::Hold;
+}
+
 class Interpolator {
  public:
   // keyframes: certified maps at increasing times (at least two). core: the Newton core
@@ -123,6 +133,7 @@ class Interpolator {
 
   double t_begin() const { return times_.front(); }
   double t_end() const { return times_.back(); }
+  bool keyframe_itself(double t) const { return hsi::keyframe_itself(times_, options_.timing, t); }
 
   // One frame from a warm start (reduced x; empty = the nearest earlier keyframe).
   // warm_certificate: the certificate of warm_start's map when already known (the

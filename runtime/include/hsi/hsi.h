@@ -251,6 +251,48 @@ typedef int (*hsi_progress_fn)(uint32_t frame, uint32_t frame_count, const hsi_f
 HSI_API hsi_status hsi_interpolator_sequence(hsi_interpolator* interpolator, uint32_t frame_count, hsi_progress_fn progress,
                                              void* user, hsi_sequence** out);
 
+/* ------------------------------------------------------------------ batches */
+
+/* Many sequences solved together by a pool of worker threads (`hsi bake a.json b.json
+ * -o DIR` uses the same engine code): each worker keeps its own Newton core per shape,
+ * and a sequence's runs of frames between keyframe frames (frames at a keyframe time,
+ * or held) are solved apart, as they do not depend on each other. */
+typedef struct hsi_batch_options {
+  uint32_t struct_size;        /* sizeof(hsi_batch_options), set by hsi_batch_options_default: the
+                                  version of this struct (it may grow at its end) */
+  uint32_t workers;            /* worker threads; 0 (default): the machine's hardware threads */
+  uint32_t threads_per_worker; /* OpenMP threads in each worker (the CPU core's sample loops);
+                                  default 1. The CPU core's frames follow this count in their last
+                                  bits (its energy is an OpenMP sum), never the number of workers */
+} hsi_batch_options;
+/* [any thread] */
+HSI_API void hsi_batch_options_default(hsi_batch_options* options);
+
+/* After each frame of a batch: which sequence and frame, frames done so far of all the
+ * batch's, and the frame's report. Called from the workers, one call at a time, frames
+ * of different sequences interleaved. Return non-zero to stop the batch. */
+typedef int (*hsi_batch_progress_fn)(uint32_t sequence, uint32_t frame, uint64_t done, uint64_t total,
+                                     const hsi_frame_report* report, void* user);
+
+/* [per handle: every interpolator] Solves count sequences together: sequence k is
+ * frame_counts[k] (>= 2) frames of interpolators[k], the same frames as
+ * hsi_interpolator_sequence(interpolators[k], frame_counts[k], ...) makes (bit for bit
+ * when that runs with threads_per_worker OpenMP threads; for any number of workers), on
+ * the Newton core the interpolators use (hsi_interpolator_backend), which must be the
+ * same for all of them. out[k] gets the sequence, or NULL when it failed; statuses[k]
+ * (statuses may be NULL) its status. A sequence that fails does not stop the others.
+ * Returns HSI_OK when every sequence was solved, else the status of the first that was
+ * not, and hsi_last_error() names every failed sequence (its index and scene) and why.
+ * A frame that cannot be certified is no failure: its sequence reports it (certified =
+ * 0). Afterwards each interpolator warm-starts hsi_interpolator_frame from its
+ * sequence's last certified frame, as after hsi_interpolator_sequence. progress may be
+ * NULL; when it stops the batch, the unfinished sequences get HSI_ERROR_CANCELLED.
+ * options may be NULL (defaults). */
+HSI_API hsi_status hsi_interpolators_sequence_batch(hsi_interpolator* const* interpolators, const uint32_t* frame_counts,
+                                                    uint32_t count, const hsi_batch_options* options,
+                                                    hsi_batch_progress_fn progress, void* user, hsi_sequence** out,
+                                                    hsi_status* statuses);
+
 /* ------------------------------------------------------------------ sequences */
 
 HSI_API void hsi_sequence_destroy(hsi_sequence* sequence);

@@ -1,0 +1,255 @@
+// Batched baking benchmark (issue #23): S sequences made from the bundled scenes (every
+// assets/*.json with keyframes, repeated with other frame counts and, every other
+// repeat, every keyframe time a frame), solved one at a time (a core and an
+// Interpolator per sequence, then Interpolator::sequence: what a loop over `hsi bake`
+// or hsi_interpolator_sequence does) and by solve_batch with W workers for each W of
+// the list, in one run on one backend. Prints per path: frames, wall time, frames/s,
+// speed-up over one at a time, the set-up inside it (cores, interpolators), certified
+// and converged frames, and whether the frames are identical to the first batch row's
+// (the batch's output must not depend on W). Every time counts everything after the
+// shapes' setups are built (cores, interpolators with their keyframe certificates,
+// solves). Not a test.
+#include <CLI/CLI.hpp>
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <set>
+#include <sstream>
+
+#ifdef _OPENMP
+#include <omp.h>
+#endif
+
+#include "bench_scenes.h"
+#include "hsi/batch.h"
+#include "hsi/machine.h"
+#include "hsi/runtime/backend.h"
+
+using namespace hsi;
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double s_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
+
+std::vector<int> parse_list(const std::string& s) {
+  std::vector<int> out;
+  std::stringstream in(s);
+  std::string item;
+  while (std::getline(in, item, ','))
+    if (!item.empty()) {
+      const int w = std::stoi(item);
+      if (w < 1) throw CLI::ValidationError("--workers", "worker counts must be at least 1 (got " + item + ")");
+      out.push_back(w);
+    }
+  if (out.empty()) throw CLI::ValidationError("--workers", "no worker count given");
+  return out;
+}
+
+struct Row {
+  std::string path;
+  int workers = 0;
+  size_t frames = 0, certified = 0, converged = 0, failed = 0;
+  double seconds = 0, set_up_s = 0;
+  int cores = 0, runs = 0;
+  std::string same;  // identical to the first batch row
+};
+
+void count(Row& row, const std::vector<FrameResult>& frames) {
+  row.frames += frames.size();
+  for (const FrameResult& f : frames) {
+    row.certified += f.certified;
+    row.converged += f.converged;
+  }
+}
+
+// Every frame's coefficients and flags alike (the time each took aside).
+bool same_frames(const std::vector<BatchSequenceResult>& a, const std::vector<BatchSequenceResult>& b) {
+  if (a.size() != b.size()) return false;
+  for (size_t s = 0; s < a.size(); ++s) {
+    if (a[s].frames.size() != b[s].frames.size()) return false;
+    for (size_t i = 0; i < a[s].frames.size(); ++i) {
+      const FrameResult &x = a[s].frames[i], &y = b[s].frames[i];
+      if (x.x != y.x || x.map.phi != y.map.phi || x.map.psi != y.map.psi || x.certified != y.certified || x.converged != y.converged ||
+          x.iterations != y.iterations)
+        return false;
+    }
+  }
+  return true;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app("hsi batched baking benchmark: many sequences one at a time against solve_batch with W workers (issue #23)");
+  std::string backend = "cpu", workers_list = "1,2,4,8,16,32,64", assets = HSI_ASSETS_DIR;
+  int sequences = 64, frames = 100, samples = 0, threads_per_worker = 1;
+  double ratio = 0;
+  bool skip_single = false;
+  app.add_option("--backend", backend, runtime::kBackendHelp)->capture_default_str()->check(CLI::IsMember(runtime::backend_names()));
+  app.add_option("--workers", workers_list, "Batch worker counts W, comma-separated")->capture_default_str();
+  app.add_option("--sequences", sequences, "Sequences S, made from the bundled scenes in turn")->capture_default_str()->check(CLI::Range(1, 100000));
+  app.add_option("--frames", frames, "Frames of the first sequence of each scene; each repeat of a scene adds 7")
+      ->capture_default_str()
+      ->check(CLI::Range(2, 1000000));
+  app.add_option("--samples", samples, "Boundary samples |G| (default: each scene's, 10000 for the bundled ones)")->check(CLI::Range(100, 10000000));
+  app.add_option("--ratio", ratio, "Hessian sample ratio r (default: each scene's)")->check(CLI::Range(1e-6, 1.0));
+  app.add_option("--threads-per-worker", threads_per_worker, "OpenMP threads in each batch worker (0: OpenMP's default)")
+      ->capture_default_str()
+      ->check(CLI::Range(0, 4096));
+  app.add_option("--assets", assets, "Folder of scene files (.json with two or more keyframes)")->capture_default_str();
+  app.add_flag("--skip-single", skip_single, "Leave out the one-at-a-time path (the speed-up column is then empty)");
+  CLI11_PARSE(app, argc, argv);
+  std::vector<int> worker_counts;
+  try {
+    worker_counts = parse_list(workers_list);
+  } catch (const CLI::Error& e) {
+    return app.exit(e);
+  }
+
+  // The backend, decided once: every core of every path is of this kind.
+  const runtime::Backend requested = runtime::parse_backend(backend);
+  const runtime::CudaStatus cuda = requested == runtime::Backend::Cpu ? runtime::CudaStatus{} : runtime::cuda_status();
+  runtime::BackendChoice choice;
+  try {
+    choice = runtime::choose_backend(requested, cuda);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "bench_batch: %s\n", e.what());
+    return 1;
+  }
+  const BatchCoreFactory make_core = [used = choice.used, cuda](const ShapeSetup& setup) {
+    return runtime::make_newton_core(setup, used, cuda).core;
+  };
+
+  // The scenes, then the sequences.
+  std::vector<std::filesystem::path> files;
+  for (const auto& e : std::filesystem::directory_iterator(assets))
+    if (e.path().extension() == ".json") files.push_back(e.path());
+  std::sort(files.begin(), files.end());
+  std::vector<bench::Loaded> scenes;
+  for (const auto& f : files) {
+    try {
+      bench::Loaded L = bench::load(f.string(), samples, ratio);
+      if (L.times.size() >= 2) scenes.push_back(std::move(L));
+    } catch (const std::exception& e) {
+      std::fprintf(stderr, "bench_batch: %s left out: %s\n", f.string().c_str(), e.what());
+    }
+  }
+  if (scenes.empty()) {
+    std::fprintf(stderr, "bench_batch: no scene with keyframes in %s\n", assets.c_str());
+    return 1;
+  }
+  std::vector<BatchSequence> batch;
+  for (int i = 0; i < sequences; ++i) {
+    const bench::Loaded& L = scenes[static_cast<size_t>(i) % scenes.size()];
+    const int repeat = i / static_cast<int>(scenes.size());
+    const int F = frames + 7 * repeat;
+    BatchSequence q;
+    q.name = L.name + " #" + std::to_string(repeat);
+    q.setup = L.setup.get();
+    q.key_times = L.times;
+    q.keyframes = L.maps;
+    for (const Keyframe& k : L.scene.keyframes) q.options.timing.push_back(k.timing);
+    // Even repeats: F frames uniform over the range (interior keyframe times mostly
+    // missed: one run); odd: every keyframe time a frame (a run per interval).
+    const int intervals = static_cast<int>(L.times.size()) - 1;
+    q.times = repeat % 2 == 0 ? sequence_times(L.times, F) : frame_times(L.times, std::max(1, (F - 1) / intervals));
+    batch.push_back(std::move(q));
+  }
+  size_t total = 0;
+  for (const BatchSequence& q : batch) total += q.times.size();
+
+  const Machine machine = this_machine();
+#ifdef _OPENMP
+  const int omp_threads = omp_get_max_threads();
+#else
+  const int omp_threads = 1;
+#endif
+  std::printf("Machine: %s, %d logical cores, %d OpenMP threads by default\n", machine.cpu.c_str(), machine.cores, omp_threads);
+  std::printf("Newton core: %s\n", runtime::describe(choice).c_str());
+  if (choice.used == runtime::Backend::Cuda) std::printf("GPU clocks: %s\n", runtime::gpu_clocks().c_str());
+  std::set<const ShapeSetup*> setups;
+  for (const BatchSequence& q : batch) setups.insert(q.setup);
+  std::printf("%d sequences from %zu scenes (%zu shapes), %zu frames; |G| = %s, first sequence of each scene %d frames (+7 per repeat)\n",
+              sequences, scenes.size(), setups.size(), total, samples > 0 ? std::to_string(samples).c_str() : "each scene's", frames);
+  std::printf("one at a time: a core and an Interpolator per sequence, %d OpenMP threads; batch: W workers x %d OpenMP thread(s) each\n\n",
+              omp_threads, threads_per_worker);
+
+  // Warm-up outside every timing: libraries loaded, the first core's modules.
+  {
+    const BatchSequence& q = batch.front();
+    Interpolator I(*q.setup, q.key_times, q.keyframes, q.options, make_core(*q.setup));
+    I.sequence(std::vector<double>(q.times.begin(), q.times.begin() + std::min<size_t>(3, q.times.size())));
+  }
+
+  std::vector<Row> rows;
+  if (!skip_single) {
+    Row row;
+    row.path = "one at a time";
+    row.workers = 1;
+    const auto t0 = Clock::now();
+    for (const BatchSequence& q : batch) {
+      const auto ts = Clock::now();
+      Interpolator I(*q.setup, q.key_times, q.keyframes, q.options, make_core(*q.setup));
+      row.set_up_s += s_since(ts);
+      ++row.cores;
+      count(row, I.sequence(q.times));
+      std::fprintf(stderr, "\r[one at a time] %zu/%zu frames   ", row.frames, total);
+    }
+    row.seconds = s_since(t0);
+    row.runs = static_cast<int>(batch.size());
+    std::fprintf(stderr, "\n");
+    rows.push_back(row);
+  }
+  std::vector<BatchSequenceResult> first;
+  for (int W : worker_counts) {
+    BatchOptions o;
+    o.workers = W;
+    o.threads_per_worker = threads_per_worker;
+    o.make_core = make_core;
+    const BatchResult r = solve_batch(batch, o, [&](const FrameResult&, int, int, size_t done, size_t all) {
+      if (done % 100 == 0 || done == all) std::fprintf(stderr, "\r[batch W = %d] %zu/%zu frames   ", W, done, all);
+      return true;
+    });
+    std::fprintf(stderr, "\n");
+    Row row;
+    row.path = "batch";
+    row.workers = r.stats.workers;
+    row.seconds = r.stats.seconds;
+    row.set_up_s = r.stats.set_up_s;
+    row.cores = r.stats.cores_made;
+    row.runs = r.stats.runs;
+    for (const BatchSequenceResult& s : r.sequences) {
+      count(row, s.frames);
+      if (!s.error.empty()) {
+        ++row.failed;
+        std::fprintf(stderr, "bench_batch: W = %d: %s\n", W, s.error.c_str());
+      }
+    }
+    if (first.empty()) {
+      first = r.sequences;
+      row.same = "(first)";
+    } else {
+      row.same = same_frames(first, r.sequences) ? "yes" : "NO";
+    }
+    rows.push_back(row);
+  }
+
+  const double base = skip_single ? 0 : static_cast<double>(rows.front().frames) / rows.front().seconds;
+  std::printf("| path | W | frames | s | frames/s | speed-up | set-up s (summed) | cores made | runs | certified | converged | same frames as first batch row |\n");
+  std::printf("|---|---|---|---|---|---|---|---|---|---|---|---|\n");
+  bool all_certified = true;
+  for (const Row& r : rows) {
+    const double fps = static_cast<double>(r.frames) / std::max(r.seconds, 1e-12);
+    const bool every = r.certified == total && r.failed == 0;
+    all_certified = all_certified && every;
+    char speed[32] = "";
+    if (base > 0) std::snprintf(speed, sizeof speed, "%.2fx", fps / base);
+    std::printf("| %s | %d | %zu | %.2f | %.0f | %s | %.2f | %d | %d | %zu%s | %zu | %s |\n", r.path.c_str(), r.workers, r.frames, r.seconds,
+                fps, speed, r.set_up_s, r.cores, r.runs, r.certified, every ? "" : " (NOT ALL CERTIFIED)", r.converged,
+                r.same.empty() ? "-" : r.same.c_str());
+  }
+  std::printf("\n%s\n", all_certified ? "every frame of every path certified" : "SOME FRAMES NOT CERTIFIED (or sequences failed): see the table");
+  return all_certified ? 0 : 3;
+}

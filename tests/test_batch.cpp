@@ -1,0 +1,217 @@
+// Batched solving (hsi/batch.h): the runs between keyframe frames are independent, so a
+// pool of workers gives every sequence's frames bit-identical to Interpolator::sequence;
+// a sequence that fails is named while the others finish.
+#include <catch2/catch.hpp>
+#include <map>
+
+#ifdef _OPENMP
+#include <omp.h>
+#endif
+
+#include "bench_scenes.h"
+#include "hsi/batch.h"
+#include "hsi/keyframes.h"
+#include "hsi/runtime/backend.h"
+
+using namespace hsi;
+using Catch::Matchers::Contains;
+
+namespace {
+
+// A bundled scene at |G| = 1000, its keyframes certified (the benchmarks' loader).
+bench::Loaded& bundled(const std::string& name) {
+  static std::map<std::string, bench::Loaded> cache;
+  auto it = cache.find(name);
+  if (it == cache.end()) it = cache.emplace(name, bench::load(std::string(HSI_ASSETS_DIR) + "/" + name + ".json", 1000, 0.2)).first;
+  return it->second;
+}
+
+BatchSequence sequence_of(const std::string& name, const std::vector<KeyTiming>& timing, std::vector<double> times) {
+  bench::Loaded& S = bundled(name);
+  BatchSequence q;
+  q.name = name;
+  q.setup = S.setup.get();
+  q.key_times = S.times;
+  q.keyframes = S.maps;
+  q.options.timing = timing;
+  q.times = std::move(times);
+  return q;
+}
+
+// One OpenMP thread on this thread while alive: the CPU core's energy is an OpenMP sum,
+// whose rounding follows the thread count (BatchOptions::threads_per_worker = 1).
+struct OneThread {
+#ifdef _OPENMP
+  int before = omp_get_max_threads();
+  OneThread() { omp_set_num_threads(1); }
+  ~OneThread() { omp_set_num_threads(before); }
+#endif
+};
+
+// Every field a frame reports, compared exactly (the time it took aside).
+void require_same(const FrameResult& a, const FrameResult& b) {
+  INFO("t = " << a.t);
+  REQUIRE(a.t == b.t);
+  REQUIRE(a.keyframe == b.keyframe);
+  REQUIRE(a.held == b.held);
+  REQUIRE(a.certified == b.certified);
+  REQUIRE(a.converged == b.converged);
+  REQUIRE(a.iterations == b.iterations);
+  REQUIRE(a.energy == b.energy);
+  REQUIRE(a.x == b.x);
+  REQUIRE(a.map.phi == b.map.phi);
+  REQUIRE(a.map.psi == b.map.psi);
+  REQUIRE(a.certificate.certified == b.certificate.certified);
+  REQUIRE(a.certificate.sigma1_max == b.certificate.sigma1_max);
+  REQUIRE(a.distortion.conformal_max == b.distortion.conformal_max);
+  REQUIRE(a.overlap.crossings == b.overlap.crossings);
+  REQUIRE(a.message == b.message);
+}
+
+}  // namespace
+
+TEST_CASE("independent runs start at every frame that is a keyframe itself", "[batch]") {
+  const std::vector<double> keys{0.0, 1.0, 2.0};
+  // 5 uniform frames over [0, 2]: 0, 0.5, 1 (keyframe 1), 1.5, 2 (keyframe 2).
+  CHECK(independent_runs(keys, {}, sequence_times(keys, 5)) == std::vector<std::pair<int, int>>{{0, 2}, {2, 4}, {4, 5}});
+  // 4 uniform frames miss keyframe 1: the sequence crosses it warm-started, one run until t = 2.
+  CHECK(independent_runs(keys, {}, sequence_times(keys, 4)) == std::vector<std::pair<int, int>>{{0, 3}, {3, 4}});
+  // Hold from keyframe 0: every frame of the first interval is keyframe 0 itself.
+  CHECK(independent_runs(keys, {KeyTiming::Hold, KeyTiming::Linear, KeyTiming::Linear}, sequence_times(keys, 5)) ==
+        std::vector<std::pair<int, int>>{{0, 1}, {1, 2}, {2, 4}, {4, 5}});
+}
+
+TEST_CASE("a batch gives every sequence's frames bit-identical to Interpolator::sequence, for 1, 3 and 64 workers", "[batch]") {
+  std::vector<BatchSequence> sequences;
+  sequences.push_back(sequence_of("annulus", {KeyTiming::Linear, KeyTiming::Hold, KeyTiming::Linear}, frame_times({0, 1, 2}, 4)));
+  sequences.push_back(sequence_of("glyph_8", {KeyTiming::Smooth}, frame_times({0, 1, 2}, 5)));
+  sequences.push_back(sequence_of("arm", {}, sequence_times({0, 3}, 8)));      // misses keyframes 1 and 2
+  sequences.push_back(sequence_of("annulus", {}, sequence_times({0, 2}, 7)));  // same setup as the first: a worker's core is reused
+  REQUIRE(bundled("arm").times.size() == 4);
+
+  std::vector<std::vector<FrameResult>> reference;
+  {
+    const OneThread one;
+    for (const BatchSequence& q : sequences) {
+      Interpolator I(*q.setup, q.key_times, q.keyframes, q.options);
+      reference.push_back(I.sequence(q.times));
+      for (const FrameResult& f : reference.back()) CHECK(I.keyframe_itself(f.t) == (f.keyframe || f.held));
+    }
+  }
+  int held = 0, smooth_solved = 0;
+  for (const FrameResult& f : reference[0]) held += f.held;
+  for (const FrameResult& f : reference[1]) smooth_solved += !f.keyframe;
+  REQUIRE(held > 0);
+  REQUIRE(smooth_solved > 0);
+
+  for (int workers : {1, 3, 64}) {  // 64: more workers than runs
+    INFO("workers = " << workers);
+    BatchOptions o;
+    o.workers = workers;
+    size_t calls = 0, last_total = 0;
+    std::vector<std::vector<char>> seen(sequences.size());
+    for (size_t s = 0; s < sequences.size(); ++s) seen[s].assign(sequences[s].times.size(), 0);
+    const BatchResult r = solve_batch(sequences, o, [&](const FrameResult&, int s, int i, size_t, size_t total) {
+      ++calls;
+      last_total = total;
+      ++seen[static_cast<size_t>(s)][static_cast<size_t>(i)];
+      return true;
+    });
+    REQUIRE(r.failed() == 0);
+    CHECK(r.stats.workers == std::min(workers, r.stats.runs));
+    CHECK(r.stats.runs > static_cast<int>(sequences.size()));  // the frame_times sequences split at their keyframes
+    size_t frames = 0;
+    for (size_t s = 0; s < sequences.size(); ++s) {
+      REQUIRE(r.sequences[s].frames.size() == reference[s].size());
+      for (size_t i = 0; i < reference[s].size(); ++i) require_same(r.sequences[s].frames[i], reference[s][i]);
+      for (char c : seen[s]) CHECK(c == 1);  // every frame reported once
+      frames += reference[s].size();
+    }
+    CHECK(calls == frames);
+    CHECK(last_total == frames);
+  }
+}
+
+TEST_CASE("a sequence that fails is named while the others finish", "[batch]") {
+  std::vector<BatchSequence> sequences;
+  sequences.push_back(sequence_of("two_holes", {}, sequence_times({0, 2}, 5)));
+  BatchSequence folded = sequence_of("two_holes", {}, sequence_times({0, 2}, 5));
+  folded.name = "folded.json";
+  folded.keyframes[1] = affine_map(folded.setup->cage, 1.0, 1.3, 0.0);  // |f_zbar| > |f_z|: folds everywhere
+  sequences.push_back(folded);
+  BatchSequence late = sequence_of("annulus", {}, {0.0, 0.5, 2.5});
+  late.name = "late.json";
+  sequences.push_back(late);
+  sequences.push_back(sequence_of("annulus", {}, sequence_times({0, 2}, 5)));
+  for (int workers : {1, 3}) {
+    BatchOptions o;
+    o.workers = workers;
+    const BatchResult r = solve_batch(sequences, o);
+    CHECK(r.failed() == 2);
+    CHECK(r.sequences[0].error.empty());
+    CHECK(r.sequences[0].frames.size() == 5);
+    CHECK_THAT(r.sequences[1].error, Contains("folded.json") && Contains("keyframe 1 is not locally injective"));
+    CHECK(r.sequences[1].frames.empty());
+    CHECK_THROWS_AS(std::rethrow_exception(r.sequences[1].exception), InputError);  // callers sort errors by type
+    CHECK_FALSE(r.sequences[1].cancelled);
+    CHECK_THAT(r.sequences[2].error, Contains("late.json") && Contains("time 2 is 2.5"));
+    CHECK(r.sequences[3].error.empty());
+    for (const FrameResult& f : r.sequences[3].frames) CHECK(f.certified);
+  }
+  BatchOptions none;
+  none.workers = 0;
+  CHECK_THROWS_WITH(solve_batch(sequences, none), Contains("at least 1 worker"));
+}
+
+TEST_CASE("a batch cancelled by its progress callback reports its unfinished sequences", "[batch]") {
+  std::vector<BatchSequence> sequences;
+  for (int k = 0; k < 3; ++k) sequences.push_back(sequence_of("two_holes", {}, sequence_times({0, 2}, 6)));
+  int calls = 0;
+  const BatchResult r = solve_batch(sequences, BatchOptions{}, [&](const FrameResult&, int, int, size_t, size_t) {
+    return ++calls < 3;
+  });
+  CHECK(r.stats.cancelled);
+  CHECK(calls == 3);
+  CHECK(r.failed() == 3);  // one worker: the first sequence was stopped in its first run
+  CHECK_THAT(r.sequences[0].error, Contains("cancelled"));
+  CHECK(r.sequences[0].cancelled);
+  CHECK_FALSE(r.sequences[0].exception);
+}
+
+TEST_CASE("a batch on CUDA cores gives the frames of Interpolator::sequence on a CUDA core (skips without a GPU)", "[batch][cuda]") {
+  const runtime::CudaStatus cuda = runtime::cuda_status();
+  if (!cuda.available) {
+    WARN("no CUDA core here: " << cuda.detail);
+    return;
+  }
+  const BatchCoreFactory make_core = [cuda](const ShapeSetup& setup) {
+    return runtime::make_newton_core(setup, runtime::Backend::Cuda, cuda).core;
+  };
+  std::vector<BatchSequence> sequences;
+  sequences.push_back(sequence_of("annulus", {KeyTiming::Linear, KeyTiming::Hold, KeyTiming::Linear}, frame_times({0, 1, 2}, 4)));
+  sequences.push_back(sequence_of("glyph_8", {KeyTiming::Smooth}, frame_times({0, 1, 2}, 5)));
+  sequences.push_back(sequence_of("two_holes", {}, sequence_times({0, 2}, 9)));
+  std::vector<std::vector<FrameResult>> reference;
+  {
+    const OneThread one;
+    for (const BatchSequence& q : sequences) {
+      Interpolator I(*q.setup, q.key_times, q.keyframes, q.options, make_core(*q.setup));
+      reference.push_back(I.sequence(q.times));
+    }
+  }
+  for (int workers : {1, 4}) {
+    INFO("workers = " << workers);
+    BatchOptions o;
+    o.workers = workers;
+    o.make_core = make_core;
+    const BatchResult r = solve_batch(sequences, o);
+    REQUIRE(r.failed() == 0);
+    for (size_t s = 0; s < sequences.size(); ++s) {
+      REQUIRE(r.sequences[s].frames.size() == reference[s].size());
+      for (size_t i = 0; i < reference[s].size(); ++i) {
+        CHECK(r.sequences[s].frames[i].certified);
+        require_same(r.sequences[s].frames[i], reference[s][i]);
+      }
+    }
+  }
+}
