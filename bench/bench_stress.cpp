@@ -126,6 +126,41 @@ void print_row(const RunKey& k, const Stats& s) {
               s.quantile(0.99), s.max(), s.at_cap, s.certified, s.not_converged, s.ms_per_frame());
 }
 
+// The frames of a run solved as Interpolator::frame solves them (the blended metric,
+// newton_solve warm-started from the previous frame), each Newton iteration printed.
+void trace_run(Interpolator& interp, const ShapeSetup& setup, const std::vector<double>& key_times, int frames,
+               const std::string& what) {
+  const InterpolationOptions& io = interp.options();
+  NewtonOptions no;
+  no.tolerance = io.tolerance;
+  no.max_iterations = io.max_iterations;
+  no.projection = io.projection;
+  no.exact_hessian_when_definite = io.exact_hessian_when_definite;
+  no.free_rotation = io.free_rotation;
+  const std::vector<double> times = sequence_times({interp.t_begin(), interp.t_end()}, frames);
+  Eigen::VectorXd x;
+  std::string out = "trace " + what + "\n";
+  for (size_t i = 0; i < times.size(); ++i) {
+    if (std::count(key_times.begin(), key_times.end(), times[i])) {  // a keyframe: the frame is the keyframe itself
+      x = interp.frame(times[i]).x;
+      continue;
+    }
+    interp.core().set_targets(interp.blended_metric(times[i]));
+    const NewtonResult r = newton_solve(interp.core(), setup.metric_space, &setup.certifier, nullptr, x, no);
+    char b[300];
+    std::snprintf(b, sizeof b, "  t %.4f: %d it, %s\n", times[i], r.iterations, r.message.c_str());
+    out += b;
+    for (const NewtonIteration& k : r.log) {
+      std::snprintf(b, sizeof b, "    E %.12f step %.3g %s dec2 %.3g |g| %.3g smax %.3g bt %d rej %d\n", k.energy, k.step,
+                    k.exact_hessian ? "exact" : "proj ", k.decrement2, k.gradient_norm, k.max_safe_step, k.backtracks,
+                    k.certificate_rejections);
+      out += b;
+    }
+    if (r.certified) x = r.x;
+  }
+  std::fputs(out.c_str(), stderr);
+}
+
 // The benchmark's worker pool: tasks 0..count-1 (in the given order) on `workers`
 // threads, each thread running its OpenMP regions on `omp_threads` threads. A task is
 // started only while keep_going() says so. Deliberately small and local: the engine's
@@ -154,7 +189,7 @@ int main(int argc, char** argv) {
   std::string frames_opt = "60,100,500", projections_opt = "delete,fullproj,partproj", backend = "cpu", json_file, export_dir;
   std::string cache_file;
   int limit = 0, samples = 0, max_iterations = 100, jobs = 1, threads = 0;
-  bool paper_newton = false, author_only = false;
+  bool paper_newton = false, author_only = false, trace = false;
   double time_limit = 0;
   app.add_option("--corpus", corpus_file, "The corpus file")->capture_default_str();
   app.add_option("--shapes", shapes_opt, "Only these shapes (comma-separated names)");
@@ -189,6 +224,10 @@ int main(int argc, char** argv) {
                  "Start no new authoring or run after this many seconds (0: none); the output then says PARTIAL and "
                  "covers what ran")
       ->capture_default_str();
+  app.add_flag("--trace", trace,
+               "Print every frame's Newton iterations (energy, step, exact or projected system, decrement, backtracks, "
+               "certificate rejections) to stderr, solving the frames as the interpolator does (warm-started); with "
+               "--jobs 1 for readable output");
   app.add_option("--json", json_file, "Also write every number to this JSON file");
   app.add_option("--export", export_dir, "Write the selected sequences as scene files (handles + targets) into this folder and stop");
   CLI11_PARSE(app, argc, argv);
@@ -463,6 +502,7 @@ int main(int argc, char** argv) {
       }
       Interpolator interp(setup, it.a.times, it.a.maps, o, std::move(core.core));
       const int intervals = static_cast<int>(it.a.times.size()) - 1;
+      if (trace) trace_run(interp, setup, it.a.times, run.F * intervals + 1, it.q->id + " F=" + std::to_string(run.F) + " " + projection_label(run.p));
       for (const FrameResult& f : interp.sequence(run.F * intervals + 1))
         if (!f.keyframe) run.s.add(f, max_iterations);
     } catch (const std::exception& e) {
