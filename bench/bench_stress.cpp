@@ -5,15 +5,21 @@
 // frame; then the whole corpus, the cost per frame against the number of holes (grid
 // shapes) and a summary line against the targets. Keyframes are authored from the
 // sequences' handles and targets by solve_scene_keyframes (the authoring path), once per
-// sequence; keyframes whose drag would fold (the closest certified map is kept) are
-// counted. Progress on stderr; --json FILE writes every number. Not a test.
+// sequence (or read from --keyframes-cache, stress_cache.h); keyframes whose drag would
+// fold (the closest certified map is kept) are counted. Authoring and runs (sequence x
+// frames x projection) are spread over --jobs workers, each with its own Newton core;
+// results are gathered by run, so the tables do not depend on the number of workers.
+// Progress on stderr; --json FILE writes every number. Not a test.
 #include <CLI/CLI.hpp>
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <atomic>
+#include <functional>
 #include <map>
+#include <mutex>
 #include <omp.h>
 #include <set>
 #include <sstream>
@@ -23,6 +29,7 @@
 #include "hsi/interpolation.h"
 #include "hsi/keyframes.h"
 #include "hsi/runtime/backend.h"
+#include "stress_cache.h"
 #include "stress_corpus.h"
 
 using namespace hsi;
@@ -119,14 +126,70 @@ void print_row(const RunKey& k, const Stats& s) {
               s.quantile(0.99), s.max(), s.at_cap, s.certified, s.not_converged, s.ms_per_frame());
 }
 
+// The frames of a run solved as Interpolator::frame solves them (the blended metric,
+// newton_solve warm-started from the previous frame), each Newton iteration printed.
+void trace_run(Interpolator& interp, const ShapeSetup& setup, const std::vector<double>& key_times, int frames,
+               const std::string& what) {
+  const InterpolationOptions& io = interp.options();
+  NewtonOptions no;
+  no.tolerance = io.tolerance;
+  no.max_iterations = io.max_iterations;
+  no.projection = io.projection;
+  no.exact_hessian_when_definite = io.exact_hessian_when_definite;
+  no.free_rotation = io.free_rotation;
+  const std::vector<double> times = sequence_times({interp.t_begin(), interp.t_end()}, frames);
+  Eigen::VectorXd x;
+  std::string out = "trace " + what + "\n";
+  for (size_t i = 0; i < times.size(); ++i) {
+    if (std::count(key_times.begin(), key_times.end(), times[i])) {  // a keyframe: the frame is the keyframe itself
+      x = interp.frame(times[i]).x;
+      continue;
+    }
+    interp.core().set_targets(interp.blended_metric(times[i]));
+    const NewtonResult r = newton_solve(interp.core(), setup.metric_space, &setup.certifier, nullptr, x, no);
+    char b[300];
+    std::snprintf(b, sizeof b, "  t %.4f: %d it, %s\n", times[i], r.iterations, r.message.c_str());
+    out += b;
+    for (const NewtonIteration& k : r.log) {
+      std::snprintf(b, sizeof b, "    E %.12f step %.3g %s dec2 %.3g |g| %.3g smax %.3g bt %d rej %d\n", k.energy, k.step,
+                    k.exact_hessian ? "exact" : "proj ", k.decrement2, k.gradient_norm, k.max_safe_step, k.backtracks,
+                    k.certificate_rejections);
+      out += b;
+    }
+    if (r.certified) x = r.x;
+  }
+  std::fputs(out.c_str(), stderr);
+}
+
+// The benchmark's worker pool: tasks 0..count-1 (in the given order) on `workers`
+// threads, each thread running its OpenMP regions on `omp_threads` threads. A task is
+// started only while keep_going() says so. Deliberately small and local: the engine's
+// batch solver (branch batch) can take its place.
+void run_pool(const std::vector<int>& order, int workers, int omp_threads, const std::function<bool()>& keep_going,
+              const std::function<void(int task)>& fn) {
+  std::atomic<size_t> next{0};
+  auto work = [&] {
+    omp_set_num_threads(omp_threads);  // this thread's OpenMP teams
+    for (size_t i = next++; i < order.size(); i = next++) {
+      if (!keep_going()) continue;
+      fn(order[i]);
+    }
+  };
+  std::vector<std::thread> pool;
+  for (int w = 1; w < std::min<int>(workers, static_cast<int>(order.size())); ++w) pool.emplace_back(work);
+  work();
+  for (std::thread& t : pool) t.join();
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
   CLI::App app{"hsi Newton stress benchmark: runs the stress corpus (bench/stress/) and prints Markdown tables"};
   std::string corpus_file = HSI_STRESS_DIR "/corpus.json", shapes_opt, families_opt, kinds_opt, ids_opt;
   std::string frames_opt = "60,100,500", projections_opt = "delete,fullproj,partproj", backend = "cpu", json_file, export_dir;
-  int limit = 0, samples = 0, max_iterations = 100;
-  bool paper_newton = false;
+  std::string cache_file;
+  int limit = 0, samples = 0, max_iterations = 100, jobs = 1, threads = 0;
+  bool paper_newton = false, author_only = false, trace = false;
   double time_limit = 0;
   app.add_option("--corpus", corpus_file, "The corpus file")->capture_default_str();
   app.add_option("--shapes", shapes_opt, "Only these shapes (comma-separated names)");
@@ -143,9 +206,28 @@ int main(int argc, char** argv) {
   app.add_option("--backend", backend, runtime::kBackendHelp)
       ->capture_default_str()
       ->check(CLI::IsMember(runtime::backend_names()));
+  app.add_option("--jobs", jobs,
+                 "Workers: sequences are authored and runs (sequence x frames x projection) solved on this many threads, "
+                 "each with its own Newton core (CUDA cores own their streams, so they run concurrently on one GPU)")
+      ->capture_default_str()
+      ->check(CLI::Range(1, 256));
+  app.add_option("--threads", threads,
+                 "OpenMP threads per worker (0: the OpenMP threads / jobs, at least 1); on the CPU backend the round-off "
+                 "of the sums over samples depends on it, the order and set of results never")
+      ->capture_default_str()
+      ->check(CLI::Range(0, 1024));
+  app.add_option("--keyframes-cache", cache_file,
+                 "Read authored keyframes from this file where their inputs are unchanged, author the others and write "
+                 "them back (created if absent)");
+  app.add_flag("--author-only", author_only, "Author the selection's keyframes (filling --keyframes-cache) and stop");
   app.add_option("--time-limit", time_limit,
-                 "Start no new sequence after this many seconds (0: none); the tables cover what ran")
+                 "Start no new authoring or run after this many seconds (0: none); the output then says PARTIAL and "
+                 "covers what ran")
       ->capture_default_str();
+  app.add_flag("--trace", trace,
+               "Print every frame's Newton iterations (energy, step, exact or projected system, decrement, backtracks, "
+               "certificate rejections) to stderr, solving the frames as the interpolator does (warm-started); with "
+               "--jobs 1 for readable output");
   app.add_option("--json", json_file, "Also write every number to this JSON file");
   app.add_option("--export", export_dir, "Write the selected sequences as scene files (handles + targets) into this folder and stop");
   CLI11_PARSE(app, argc, argv);
@@ -157,6 +239,10 @@ int main(int argc, char** argv) {
     for (const std::string& p : split(projections_opt)) projections.push_back(projection_from(p));
   } catch (const std::exception& e) {
     std::fprintf(stderr, "bench_stress: %s\n", e.what());
+    return 2;
+  }
+  if (author_only && cache_file.empty()) {
+    std::fprintf(stderr, "bench_stress: --author-only needs --keyframes-cache FILE to keep what it authors\n");
     return 2;
   }
   const stress::Corpus corpus = stress::load_corpus(corpus_file);
@@ -200,26 +286,250 @@ int main(int argc, char** argv) {
     return 0;
   }
 
+  const int omp_threads = threads > 0 ? threads : std::max(1, omp_get_max_threads() / jobs);
   const Machine machine = this_machine();
   std::printf("# hsi Newton stress benchmark\n\n");
-  std::printf("Machine: %s, %d logical cores, %d OpenMP threads; backend %s\n", machine.cpu.c_str(), machine.cores,
-              omp_get_max_threads(), backend.c_str());
+  std::printf("Machine: %s, %d logical cores; backend %s; %d workers x %d OpenMP threads\n", machine.cpu.c_str(), machine.cores,
+              backend.c_str(), jobs, omp_threads);
   std::printf("Corpus: %s (seed %d): %d of %zu sequences on %zu shapes; |G| %s; frames per interval %s; projections %s; "
-              "iteration cap %d\n\n",
+              "iteration cap %d%s\n\n",
               corpus_file.c_str(), corpus.seed, total_sequences, corpus.sequences.size(), plan.size(),
               samples > 0 ? std::to_string(samples).c_str() : "per sequence", frames_opt.c_str(), projections_opt.c_str(),
-              max_iterations);
+              max_iterations, paper_newton ? "; the paper's plain Newton (--paper-newton)" : "");
   std::printf("Per run: F frames per keyframe interval, F x (keyframes - 1) + 1 frames in all, warm-started; the\n"
               "keyframes themselves are not counted. at cap: iterations >= cap or not converged. it: Newton\n"
               "iterations per frame. ms/frame: the solve (Newton + certificate) per frame.\n");
   std::fflush(stdout);
+  const auto t_start = Clock::now();
+  auto in_time = [&] { return !(time_limit > 0 && s_since(t_start) > time_limit); };
 
+  // Shapes and setups (one per shape and |G|), made once on first use by any worker.
+  struct ShapeSlot {
+    std::once_flag once;
+    Scene scene;
+    std::string contents, error;  // the scene file's bytes (the cache key), why it could not be loaded
+  };
+  struct SetupSlot {
+    std::once_flag once;
+    std::unique_ptr<ShapeSetup> setup;
+    std::string error;
+  };
+  std::vector<ShapeSlot> shape_slots(plan.size());
+  std::map<std::pair<size_t, int>, SetupSlot> setup_slots;
+  // One item per sequence, in plan order.
+  struct Item {
+    size_t shape = 0;
+    const stress::Sequence* q = nullptr;
+    int samples = 0;
+    uint64_t hash = 0;
+    bool cached = false, stale = false, authored = false;  // authored: keyframes in hand (from the cache or made now)
+    int n = 0;
+    std::string error;  // authoring failed
+    stress::Authored a;
+  };
+  std::vector<Item> items;
+  for (size_t s = 0; s < plan.size(); ++s) {
+    try {
+      shape_slots[s].contents = stress::read_file_bytes(corpus.dir / plan[s].first->scene);
+    } catch (const std::exception& e) {
+      shape_slots[s].error = e.what();
+    }
+    for (const stress::Sequence* q : plan[s].second) {
+      Item it;
+      it.shape = s;
+      it.q = q;
+      it.samples = samples > 0 ? samples : q->samples;
+      it.hash = stress::keyframes_hash(shape_slots[s].contents, *q, it.samples);
+      (void)setup_slots[{s, it.samples}];
+      items.push_back(std::move(it));
+    }
+  }
+  auto shape_of = [&](size_t s) -> const Scene& {
+    ShapeSlot& slot = shape_slots[s];
+    std::call_once(slot.once, [&] {
+      if (!slot.error.empty()) return;
+      try {
+        slot.scene = stress::load_shape(corpus, *plan[s].first);
+      } catch (const std::exception& e) {
+        slot.error = std::string("cannot load the shape: ") + e.what();
+      }
+    });
+    if (!slot.error.empty()) throw std::runtime_error(slot.error);
+    return slot.scene;
+  };
+  auto setup_of = [&](const Item& it) -> const ShapeSetup& {
+    SetupSlot& slot = setup_slots.at({it.shape, it.samples});
+    std::call_once(slot.once, [&] {
+      try {
+        const Scene scene = stress::sequence_scene(shape_of(it.shape), *it.q, it.samples);
+        slot.setup = make_shape_setup(scene, scene.samples);
+      } catch (const std::exception& e) {
+        slot.error = e.what();
+      }
+    });
+    if (!slot.setup) throw std::runtime_error(slot.error);
+    return *slot.setup;
+  };
+
+  // 1. Keyframes: from the cache where the key matches, else authored (in parallel over
+  //    sequences, the costliest first; the cache is saved every few seconds and at the end).
+  stress::KeyframeCache cache;
+  if (!cache_file.empty()) {
+    try {
+      cache.load(cache_file);
+    } catch (const std::exception& e) {
+      std::fprintf(stderr, "bench_stress: %s\n", e.what());
+      return 2;
+    }
+  }
+  std::vector<int> to_author;
+  for (size_t i = 0; i < items.size(); ++i) {
+    Item& it = items[i];
+    if (const stress::CacheEntry* c = cache.find(it.q->id, it.samples, it.hash)) {
+      it.a = stress::from_entry(*c);
+      it.cached = it.authored = true;
+    } else {
+      it.stale = cache.has_stale(it.q->id, it.samples, it.hash);
+      to_author.push_back(static_cast<int>(i));
+    }
+  }
+  std::stable_sort(to_author.begin(), to_author.end(), [&](int x, int y) {
+    auto cost = [&](int i) { return static_cast<double>(items[static_cast<size_t>(i)].samples) * static_cast<double>(items[static_cast<size_t>(i)].q->targets.size()); };
+    return cost(x) > cost(y);
+  });
+  std::mutex mutex;  // the cache, progress lines, the core's name
+  std::atomic<int> authored_count{0};
+  auto last_save = Clock::now();
+  bool cache_dirty = false;
+  const auto t_author = Clock::now();
+  run_pool(to_author, jobs, omp_threads, in_time, [&](int i) {
+    Item& it = items[static_cast<size_t>(i)];
+    const auto t0 = Clock::now();
+    try {
+      const ShapeSetup& setup = setup_of(it);
+      Scene scene = stress::sequence_scene(shape_of(it.shape), *it.q, it.samples);
+      it.a = stress::author(scene, setup);
+      it.authored = true;
+    } catch (const std::exception& e) {
+      it.error = e.what();
+    }
+    const std::lock_guard<std::mutex> lock(mutex);
+    const int k = ++authored_count;
+    if (!it.error.empty()) {
+      std::fprintf(stderr, "[author %d/%zu] %s: authoring failed: %s\n", k, to_author.size(), it.q->id.c_str(), it.error.c_str());
+      return;
+    }
+    std::fprintf(stderr, "[author %d/%zu] %s (|G| %d, %zu keyframes%s): authored in %.1f s\n", k, to_author.size(), it.q->id.c_str(),
+                 it.samples, it.a.maps.size(), it.a.unreached ? (", " + std::to_string(it.a.unreached) + " unreached: fold").c_str() : "",
+                 s_since(t0));
+    if (!cache_file.empty()) {
+      cache.put(stress::to_entry(it.q->id, it.samples, it.hash, it.a));
+      cache_dirty = true;
+      if (s_since(last_save) > 10) {
+        cache.save(cache_file);
+        last_save = Clock::now();
+        cache_dirty = false;
+      }
+    }
+  });
+  if (cache_dirty) cache.save(cache_file);
+  int n_cached = 0, n_stale = 0, n_authored = 0, n_author_failed = 0, n_not_authored = 0;
+  for (const Item& it : items) {
+    n_cached += it.cached;
+    n_stale += it.stale;
+    n_authored += it.authored && !it.cached;
+    n_author_failed += !it.error.empty();
+    n_not_authored += !it.authored && it.error.empty();  // --time-limit
+  }
+  std::printf("\nKeyframes: %d sequences from the cache%s, %d authored now (%d of them stale in the cache) in %.0f s on %d workers, "
+              "%d could not be authored%s\n",
+              n_cached, cache_file.empty() ? " (none given)" : (" " + cache_file).c_str(), n_authored, n_stale, s_since(t_author),
+              jobs, n_author_failed,
+              n_not_authored ? (", PARTIAL: " + std::to_string(n_not_authored) + " not authored (--time-limit)").c_str() : "");
+  if (author_only) {
+    if (!cache_file.empty()) std::printf("Cache %s: %zu entries, %ju bytes\n", cache_file.c_str(), cache.size(),
+                                         static_cast<uintmax_t>(std::filesystem::file_size(cache_file)));
+    return n_not_authored ? 3 : 0;
+  }
+
+  // 2. The runs: sequence x frames x projection, each on a worker with its own core;
+  //    the costliest first, results kept by run index.
+  struct Run {
+    size_t item = 0;
+    int F = 0;
+    HessianProjection p = HessianProjection::PartProj;
+    bool ran = false;
+    Stats s;
+    std::string error;
+    double seconds = 0;
+  };
+  std::vector<Run> runs;
+  for (size_t i = 0; i < items.size(); ++i)
+    if (items[i].authored)
+      for (int F : frame_counts)
+        for (HessianProjection p : projections) runs.push_back({i, F, p, false, {}, {}, 0});
+  std::vector<int> run_order(runs.size());
+  for (size_t r = 0; r < runs.size(); ++r) run_order[r] = static_cast<int>(r);
+  auto run_cost = [&](int r) {
+    const Run& x = runs[static_cast<size_t>(r)];
+    const Item& it = items[x.item];
+    return static_cast<double>(x.F) * static_cast<double>(it.a.times.size() - 1) * (2000.0 + it.samples);
+  };
+  std::stable_sort(run_order.begin(), run_order.end(), [&](int x, int y) { return run_cost(x) > run_cost(y); });
+  const runtime::CudaStatus cuda = runtime::cuda_status();
+  std::string core_name, core_description;
+  std::atomic<int> runs_done{0};
+  run_pool(run_order, jobs, omp_threads, in_time, [&](int r) {
+    Run& run = runs[static_cast<size_t>(r)];
+    Item& it = items[run.item];
+    const auto t1 = Clock::now();
+    run.ran = true;
+    run.s.runs = 1;
+    try {
+      const ShapeSetup& setup = setup_of(it);
+      InterpolationOptions o;
+      o.exact_hessian_when_definite = o.free_rotation = !paper_newton;
+      o.projection = run.p;
+      o.max_iterations = max_iterations;
+      runtime::NewtonCoreChoice core = runtime::make_newton_core(setup, runtime::parse_backend(backend), cuda);
+      {
+        const std::lock_guard<std::mutex> lock(mutex);
+        it.n = setup.map_space.n();
+        if (core_name.empty()) {
+          core_name = core.core->name();
+          core_description = runtime::describe(core.choice);
+        }
+      }
+      Interpolator interp(setup, it.a.times, it.a.maps, o, std::move(core.core));
+      const int intervals = static_cast<int>(it.a.times.size()) - 1;
+      if (trace) trace_run(interp, setup, it.a.times, run.F * intervals + 1, it.q->id + " F=" + std::to_string(run.F) + " " + projection_label(run.p));
+      for (const FrameResult& f : interp.sequence(run.F * intervals + 1))
+        if (!f.keyframe) run.s.add(f, max_iterations);
+    } catch (const std::exception& e) {
+      run.error = e.what();
+      run.s.failed_runs = 1;
+    }
+    run.seconds = s_since(t1);
+    const std::lock_guard<std::mutex> lock(mutex);
+    const int k = ++runs_done;
+    if (!run.error.empty())
+      std::fprintf(stderr, "[run %d/%zu] %s F=%d %s: failed: %s\n", k, runs.size(), it.q->id.c_str(), run.F, projection_label(run.p),
+                   run.error.c_str());
+    else
+      std::fprintf(stderr, "[run %d/%zu] %s F=%d %-8s %4ld frames: mean %.2f it, max %d, at cap %ld, uncertified %ld  (%.1f s)\n", k,
+                   runs.size(), it.q->id.c_str(), run.F, projection_label(run.p), run.s.frames(), run.s.mean(), run.s.max(),
+                   run.s.at_cap, run.s.frames() - run.s.certified, run.seconds);
+  });
+  if (!core_description.empty()) std::printf("Newton core: %s\n", core_description.c_str());
+
+  // 3. Tables, in plan order: the same whatever the number of workers.
   json out;
-  out["machine"] = {{"cpu", machine.cpu}, {"cores", machine.cores}, {"omp_threads", omp_get_max_threads()}, {"backend", backend}};
-  out["options"] = {{"corpus", corpus_file}, {"seed", corpus.seed}, {"samples", samples}, {"frames", frame_counts},
-                    {"projections", split(projections_opt)}, {"max_iterations", max_iterations}, {"limit", limit}};
+  out["machine"] = {{"cpu", machine.cpu}, {"cores", machine.cores}, {"workers", jobs}, {"omp_threads_per_worker", omp_threads},
+                    {"backend", backend}};
+  out["options"] = {{"corpus", corpus_file},     {"seed", corpus.seed},         {"samples", samples},
+                    {"frames", frame_counts},    {"projections", split(projections_opt)}, {"max_iterations", max_iterations},
+                    {"limit", limit},            {"paper_newton", paper_newton}, {"time_limit", time_limit}};
   json runs_json = json::array(), shapes_json = json::array();
-
   std::map<RunKey, Stats> total;
   std::map<std::string, std::map<RunKey, Stats>> by_shape;
   struct GridRow {
@@ -229,116 +539,86 @@ int main(int argc, char** argv) {
   };
   std::map<int, GridRow> grid_rows;  // by holes
   long keyframes_total = 0, keyframes_unreached = 0;
-  int authoring_failed = 0, done = 0, skipped = 0;
-  std::string core_name;
-  const auto t_start = Clock::now();
-
-  for (const auto& [sh, seqs] : plan) {
-    Scene shape;
-    try {
-      shape = stress::load_shape(corpus, *sh);
-    } catch (const std::exception& e) {
-      std::fprintf(stderr, "%s: cannot load the shape: %s\n", sh->name.c_str(), e.what());
-      authoring_failed += static_cast<int>(seqs.size());
-      done += static_cast<int>(seqs.size());
-      continue;
-    }
-    const int holes = static_cast<int>(shape.shape.holes.size());
-    std::map<int, std::unique_ptr<ShapeSetup>> setups;  // by |G|
+  int runs_not_run = 0, sequences_not_run = 0;
+  for (const Run& r : runs) runs_not_run += !r.ran;
+  const int runs_planned = static_cast<int>(runs.size()) + n_not_authored * static_cast<int>(frame_counts.size() * projections.size());
+  runs_not_run += n_not_authored * static_cast<int>(frame_counts.size() * projections.size());
+  size_t next_run = 0;
+  for (size_t s = 0; s < plan.size(); ++s) {
+    const stress::ShapeEntry* sh = plan[s].first;
     std::map<RunKey, Stats>& mine = by_shape[sh->name];
     long shape_keyframes = 0, shape_unreached = 0;
-    int shape_failed = 0, n = 0;
-    for (const stress::Sequence* q : seqs) {
-      if (time_limit > 0 && s_since(t_start) > time_limit) {
-        ++skipped;
-        continue;
-      }
-      ++done;
-      Scene scene = stress::sequence_scene(shape, *q, samples);
-      auto& setup = setups[scene.samples];
-      const auto t0 = Clock::now();
-      stress::Authored a;
-      try {
-        if (!setup) setup = make_shape_setup(scene, scene.samples);
-        n = setup->map_space.n();
-        a = stress::author(scene, *setup);
-      } catch (const std::exception& e) {
-        std::fprintf(stderr, "[%d/%d] %s: authoring failed: %s\n", done, total_sequences, q->id.c_str(), e.what());
-        ++shape_failed;
-        runs_json.push_back({{"id", q->id}, {"authoring_error", e.what()}});
-        continue;
-      }
-      shape_keyframes += static_cast<long>(a.maps.size());
-      shape_unreached += a.unreached;
-      std::fprintf(stderr, "[%d/%d] %s (|G| %d, n %d, %zu keyframes%s): authored in %.1f s\n", done, total_sequences, q->id.c_str(),
-                   scene.samples, n, a.maps.size(),
-                   a.unreached ? (", " + std::to_string(a.unreached) + " unreached: fold").c_str() : "", s_since(t0));
-      for (int F : frame_counts)
-        for (HessianProjection p : projections) {
-          const RunKey key{F, p};
-          Stats s;
-          s.runs = 1;
-          const auto t1 = Clock::now();
-          std::string error;
-          try {
-            InterpolationOptions o;
-            o.exact_hessian_when_definite = o.free_rotation = !paper_newton;
-            o.projection = p;
-            o.max_iterations = max_iterations;
-            runtime::NewtonCoreChoice core = runtime::make_newton_core(*setup, runtime::parse_backend(backend));
-            if (core_name.empty()) {
-              core_name = core.core->name();
-              std::printf("Newton core: %s\n", runtime::describe(core.choice).c_str());
-            }
-            Interpolator interp(*setup, a.times, a.maps, o, std::move(core.core));
-            const int intervals = static_cast<int>(a.times.size()) - 1;
-            for (const FrameResult& f : interp.sequence(F * intervals + 1))
-              if (!f.keyframe) s.add(f, max_iterations);
-          } catch (const std::exception& e) {
-            error = e.what();
-            s.failed_runs = 1;
-            std::fprintf(stderr, "    %s F=%d %s: failed: %s\n", q->id.c_str(), F, projection_label(p), e.what());
-          }
-          std::fprintf(stderr, "    F=%d %-8s %4ld frames: mean %.2f it, max %d, at cap %ld, uncertified %ld  (%.1f s)\n", F,
-                       projection_label(p), s.frames(), s.mean(), s.max(), s.at_cap, s.frames() - s.certified, s_since(t1));
-          json r = s.to_json();
-          r["id"] = q->id;
-          r["shape"] = q->shape;
-          r["kind"] = q->kind;
-          r["samples"] = scene.samples;
-          r["n"] = n;
-          r["keyframes"] = a.maps.size();
-          r["unreached_keyframes"] = a.unreached;
-          r["frames_per_interval"] = F;
-          r["projection"] = projection_label(p);
-          if (!error.empty()) r["error"] = error;
-          runs_json.push_back(r);
-          mine[key].add(s);
-          total[key].add(s);
-          if (sh->family == "grid") {
-            GridRow& g = grid_rows[holes];
-            g.holes = holes;
-            g.n = n;
-            g.samples.insert(scene.samples);
-            g.stats[key].add(s);
-          }
-        }
+    int shape_failed = 0, shape_not_run = 0, holes = 0;
+    try {
+      holes = static_cast<int>(shape_of(s).shape.holes.size());
+    } catch (const std::exception&) {  // counted below as sequences not authored
     }
-    if (mine.empty() && shape_failed == 0) continue;  // nothing ran (--time-limit)
+    for (size_t i = 0; i < items.size(); ++i) {
+      const Item& it = items[i];
+      if (it.shape != s) continue;
+      if (!it.error.empty()) {
+        ++shape_failed;
+        runs_json.push_back({{"id", it.q->id}, {"samples", it.samples}, {"authoring_error", it.error}});
+        continue;
+      }
+      if (!it.authored) {
+        shape_not_run += static_cast<int>(frame_counts.size() * projections.size());
+        ++sequences_not_run;
+        continue;
+      }
+      shape_keyframes += static_cast<long>(it.a.maps.size());
+      shape_unreached += it.a.unreached;
+      bool any_ran = false;
+      for (; next_run < runs.size() && runs[next_run].item == i; ++next_run) {
+        const Run& run = runs[next_run];
+        if (!run.ran) {
+          ++shape_not_run;
+          continue;
+        }
+        any_ran = true;
+        const RunKey key{run.F, run.p};
+        json r = run.s.to_json();
+        r["id"] = it.q->id;
+        r["shape"] = it.q->shape;
+        r["kind"] = it.q->kind;
+        r["samples"] = it.samples;
+        r["n"] = it.n;
+        r["keyframes"] = it.a.maps.size();
+        r["unreached_keyframes"] = it.a.unreached;
+        r["max_target_error"] = it.a.max_target_error;
+        r["keyframes_cached"] = it.cached;
+        r["frames_per_interval"] = run.F;
+        r["projection"] = projection_label(run.p);
+        if (!run.error.empty()) r["error"] = run.error;
+        runs_json.push_back(r);
+        mine[key].add(run.s);
+        total[key].add(run.s);
+        if (sh->family == "grid") {
+          GridRow& g = grid_rows[holes];
+          g.holes = holes;
+          g.n = it.n;
+          g.samples.insert(it.samples);
+          g.stats[key].add(run.s);
+        }
+      }
+      if (!any_ran) ++sequences_not_run;
+    }
     keyframes_total += shape_keyframes;
     keyframes_unreached += shape_unreached;
-    authoring_failed += shape_failed;
-    std::printf("\n## %s (%s, %d holes, %zu sequences; keyframes: %ld, %ld unreached (drag would fold)%s)\n\n", sh->name.c_str(),
-                sh->family.c_str(), holes, seqs.size(), shape_keyframes, shape_unreached,
-                shape_failed ? (", " + std::to_string(shape_failed) + " sequences not authored").c_str() : "");
+    if (mine.empty() && shape_failed == 0) continue;  // nothing ran (--time-limit)
+    std::printf("\n## %s (%s, %d holes, %zu sequences; keyframes: %ld, %ld unreached (drag would fold)%s)%s\n\n", sh->name.c_str(),
+                sh->family.c_str(), holes, plan[s].second.size(), shape_keyframes, shape_unreached,
+                shape_failed ? (", " + std::to_string(shape_failed) + " sequences not authored").c_str() : "",
+                shape_not_run ? (" PARTIAL: " + std::to_string(shape_not_run) + " runs not run (--time-limit)").c_str() : "");
     print_header();
-    for (const auto& [k, s] : mine) print_row(k, s);
+    for (const auto& [k, st] : mine) print_row(k, st);
     std::fflush(stdout);
-    json sj = {{"shape", sh->name}, {"family", sh->family}, {"holes", holes}, {"sequences", seqs.size()},
-               {"keyframes", shape_keyframes}, {"unreached_keyframes", shape_unreached}, {"authoring_failed", shape_failed}};
+    json sj = {{"shape", sh->name},         {"family", sh->family},        {"holes", holes},
+               {"sequences", plan[s].second.size()}, {"keyframes", shape_keyframes}, {"unreached_keyframes", shape_unreached},
+               {"authoring_failed", shape_failed},   {"runs_not_run", shape_not_run}};
     json rows = json::array();
-    for (const auto& [k, s] : mine) {
-      json r = s.to_json();
+    for (const auto& [k, st] : mine) {
+      json r = st.to_json();
       r["frames_per_interval"] = k.first;
       r["projection"] = projection_label(k.second);
       rows.push_back(r);
@@ -347,14 +627,23 @@ int main(int argc, char** argv) {
     shapes_json.push_back(sj);
   }
 
-  if (skipped) std::printf("\n--time-limit %.0f s reached: %d sequences not run.\n", time_limit, skipped);
-  std::printf("\n## Whole selection (%d sequences, %ld keyframes, %ld unreached: drag would fold; %d sequences not authored)\n\n",
-              total_sequences - skipped, keyframes_total, keyframes_unreached, authoring_failed);
+  const bool partial = runs_not_run > 0;
+  std::string partial_note;
+  if (partial) {
+    char b[240];
+    std::snprintf(b, sizeof b, "PARTIAL RUN (--time-limit %.0f s): %d of %d runs not run, %d of %d sequences not run", time_limit,
+                  runs_not_run, runs_planned, sequences_not_run, total_sequences - n_author_failed);
+    partial_note = b;
+    std::printf("\n%s.\n", partial_note.c_str());
+  }
+  std::printf("\n## Whole selection (%d sequences, %ld keyframes, %ld unreached: drag would fold; %d sequences not authored)%s\n\n",
+              total_sequences - sequences_not_run - n_author_failed, keyframes_total, keyframes_unreached, n_author_failed,
+              partial ? " PARTIAL" : "");
   print_header();
   for (const auto& [k, s] : total) print_row(k, s);
 
   if (!grid_rows.empty()) {
-    std::printf("\n## Cost per frame against the number of holes (grid shapes)\n\n");
+    std::printf("\n## Cost per frame against the number of holes (grid shapes)%s\n\n", partial ? " PARTIAL" : "");
     std::printf("| holes | n | samples | frames/interval | projection | frames | mean it | ms/frame | ms/iteration |\n"
                 "|---:|---:|---|---:|---|---:|---:|---:|---:|\n");
     for (const auto& [h, g] : grid_rows) {
@@ -383,7 +672,8 @@ int main(int argc, char** argv) {
   const bool have_both = std::count(projections.begin(), projections.end(), HessianProjection::PartProj) &&
                          std::count(projections.begin(), projections.end(), HessianProjection::Delete);
   const double m100 = mean_at(100), m500 = mean_at(500);
-  std::string summary = "targets: frames at cap " + std::to_string(cap) + (cap == 0 ? " (ok)" : " (FAIL: want 0)");
+  std::string summary = partial ? partial_note + ", targets judged on the runs that finished only: " : "";
+  summary += "targets: frames at cap " + std::to_string(cap) + (cap == 0 ? " (ok)" : " (FAIL: want 0)");
   if (have_both) {
     std::string w;
     for (const std::string& s : worse) w += (w.empty() ? "" : ",") + s;
@@ -414,9 +704,18 @@ int main(int argc, char** argv) {
       tot.push_back(r);
     }
     out["total"] = tot;
-    out["sequences_run"] = total_sequences - skipped;
-    out["keyframes"] = {{"total", keyframes_total}, {"unreached", keyframes_unreached}, {"sequences_not_authored", authoring_failed}};
-    out["targets"] = {{"at_cap", cap},
+    out["partial"] = partial;
+    out["runs_planned"] = runs_planned;
+    out["runs_not_run"] = runs_not_run;
+    out["sequences_run"] = total_sequences - sequences_not_run - n_author_failed;
+    out["keyframes"] = {{"total", keyframes_total},
+                        {"unreached", keyframes_unreached},
+                        {"sequences_not_authored", n_author_failed},
+                        {"sequences_from_cache", n_cached},
+                        {"sequences_authored_now", n_authored},
+                        {"stale_cache_entries", n_stale}};
+    out["targets"] = {{"partial", partial},
+                      {"at_cap", cap},
                       {"partproj_worse_than_delete", worse},
                       {"partproj_mean_100", std::isnan(m100) ? json(nullptr) : json(m100)},
                       {"partproj_mean_500", std::isnan(m500) ? json(nullptr) : json(m500)},

@@ -6,6 +6,7 @@
 // keyframes are made by solve_scene_keyframes, the authoring path.
 #pragma once
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <map>
@@ -103,22 +104,30 @@ inline Scene sequence_scene(const Scene& shape, const Sequence& q, int samples =
 struct Authored {
   std::vector<double> times;
   std::vector<HarmonicMap> maps;
-  int unreached = 0;  // keyframes whose drag would fold: the closest certified map was kept
-  double max_target_error = 0;  // over the keyframes, relative to the shape's size
-  double ms = 0;
+  // Per keyframe: its targets were reached (else its drag would fold and the closest
+  // certified map was kept), and the largest handle-to-target distance relative to
+  // the shape's size.
+  std::vector<char> reached;
+  std::vector<double> target_error;
+  int unreached = 0;            // keyframes not reached
+  double max_target_error = 0;  // over the keyframes
+  double ms = 0;                // authoring time (solver), summed over the keyframes
 };
 
 inline Authored author(Scene& scene, const ShapeSetup& setup) {
   Authored a;
-  for (const SceneKeyframe& k : solve_scene_keyframes(scene, setup)) {
-    if (!k.solved) continue;
-    a.unreached += !k.result.reached;
-    a.max_target_error = std::max(a.max_target_error, k.result.max_target_error / setup.size);
-    a.ms += k.result.ms;
-  }
-  for (const Keyframe& k : scene.keyframes) {
-    a.times.push_back(k.time);
-    a.maps.push_back(*k.coefficients);
+  const std::vector<SceneKeyframe> solved = solve_scene_keyframes(scene, setup);
+  for (size_t k = 0; k < scene.keyframes.size(); ++k) {
+    const bool solved_now = k < solved.size() && solved[k].solved;
+    const bool reached = !solved_now || solved[k].result.reached;
+    const double error = solved_now ? solved[k].result.max_target_error / setup.size : 0.0;
+    a.times.push_back(scene.keyframes[k].time);
+    a.maps.push_back(*scene.keyframes[k].coefficients);
+    a.reached.push_back(reached);
+    a.target_error.push_back(error);
+    a.unreached += !reached;
+    a.max_target_error = std::max(a.max_target_error, error);
+    if (solved_now) a.ms += solved[k].result.ms;
   }
   return a;
 }

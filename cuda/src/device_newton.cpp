@@ -198,7 +198,41 @@ class DeviceStepper final : public NewtonStepper {
     if (quad_)  // m_ = dim here: the quadratic term never frees the rotation
       HSI_CUDA_CHECK(cublasDgeam(c_.blas_, CUBLAS_OP_N, CUBLAS_OP_N, dim, dim, &kOneD, S_.Hr0.get(), dim, &kOneD, S_.Q.get(), dim,
                                  S_.Hr0.get(), dim));
+    horizontal_ = rotation_ && choice.exact && !quad_;
+    if (horizontal_) {
+      // The exact system modulo the rotation (HessianChoice::free_rotation, newton.h): with
+      // a = Tᵀu (tmp), k = Tᵀ Hv u (column dim of Hr0), c = uᵀ Hv u, the system in d is
+      // K_TT − (a kᵀ + k aᵀ)/|u|² + c a aᵀ/|u|⁴ and the gradient g_T − (uᵀg/|u|²) a; row and
+      // column dim are cleared (their diagonal set to max|diag| below), so the (dim+1)
+      // system solves the dim one with d[dim] = 0, and solve() sets θ = −aᵀd/|u|².
+      HSI_CUDA_CHECK(cublasDgemv(c_.blas_, CUBLAS_OP_T, 4 * n, m_, &kOneD, S_.Ta.get(), 4 * n, S_.Ta.get() + sz(4 * n) * sz(dim), 1,
+                                 &kZeroD, S_.tmp.get(), 1));
+      HSI_CUDA_CHECK(cudaMemcpyAsync(S_.sc.get() + kQuad0, S_.tmp.get() + dim, sizeof(double), cudaMemcpyDeviceToDevice, st()));
+      HSI_CUDA_CHECK(cudaMemcpyAsync(S_.sc.get() + kQuad1, S_.Hr0.get() + sz(dim) * sz(m_) + sz(dim), sizeof(double),
+                                     cudaMemcpyDeviceToDevice, st()));
+      HSI_CUDA_CHECK(cudaMemcpyAsync(S_.sc.get() + kQuad2, S_.g.get() + dim, sizeof(double), cudaMemcpyDeviceToDevice, st()));
+      HSI_CUDA_CHECK(cudaMemcpyAsync(S_.sc_down.get() + kQuad0, S_.sc.get() + kQuad0, 3 * sizeof(double), cudaMemcpyDeviceToHost, st()));
+      HSI_CUDA_CHECK(cudaStreamSynchronize(st()));
+      uu_ = S_.sc_down[kQuad0];
+      const double c = S_.sc_down[kQuad1], gu = S_.sc_down[kQuad2];
+      const double minus_inv_uu = -1 / uu_, c_uu2 = c / (uu_ * uu_), minus_gu_uu = -gu / uu_, zero = 0;
+      double* k = S_.Hr0.get() + sz(dim) * sz(m_);
+      // Rank-1 updates A += α x yᵀ of the leading dim × dim block as GEMMs with k = 1.
+      auto rank1 = [&](const double* alpha, const double* x, const double* y) {
+        HSI_CUDA_CHECK(cublasDgemm(c_.blas_, CUBLAS_OP_N, CUBLAS_OP_T, dim, dim, 1, alpha, x, dim, y, dim, &kOneD, S_.Hr0.get(), m_));
+      };
+      rank1(&minus_inv_uu, S_.tmp.get(), k);
+      rank1(&minus_inv_uu, k, S_.tmp.get());
+      rank1(&c_uu2, S_.tmp.get(), S_.tmp.get());
+      HSI_CUDA_CHECK(cublasDaxpy(c_.blas_, dim, &minus_gu_uu, S_.tmp.get(), 1, S_.g.get(), 1));
+      HSI_CUDA_CHECK(cublasDscal(c_.blas_, m_, &zero, k, 1));                       // column dim
+      HSI_CUDA_CHECK(cublasDscal(c_.blas_, m_, &zero, S_.Hr0.get() + dim, m_));    // row dim
+      HSI_CUDA_CHECK(cublasDscal(c_.blas_, 1, &zero, S_.g.get() + dim, 1));
+    }
     HSI_CUDA_CHECK(kernels::diag_abs_max(m_, S_.Hr0.get(), S_.sc.get() + kDiagMax, st()));
+    if (horizontal_)
+      HSI_CUDA_CHECK(cudaMemcpyAsync(S_.Hr0.get() + sz(dim) * sz(m_) + sz(dim), S_.sc.get() + kDiagMax, sizeof(double),
+                                     cudaMemcpyDeviceToDevice, st()));
     HSI_CUDA_CHECK(cudaMemcpyAsync(S_.sc_down.get() + kDiagMax, S_.sc.get() + kDiagMax, sizeof(double), cudaMemcpyDeviceToHost, st()));
     HSI_CUDA_CHECK(cudaStreamSynchronize(st()));  // also attributes the work to this call in the host's timing
     return S_.sc_down[kDiagMax];
@@ -212,6 +246,14 @@ class DeviceStepper final : public NewtonStepper {
     HSI_CUDA_CHECK(cudaMemcpyAsync(S_.d.get(), S_.g.get(), sz(m) * sizeof(double), cudaMemcpyDeviceToDevice, st()));
     HSI_CUDA_CHECK(cublasDscal(c_.blas_, m, &kMinusOneD, S_.d.get(), 1));
     HSI_CUDA_CHECK(cusolverDnDpotrs(c_.solver_, CUBLAS_FILL_MODE_LOWER, m, 1, S_.Hr.get(), m, S_.d.get(), m, S_.info.get()));
+    if (horizontal_) {  // θ = −aᵀd / |u|² into d[dim] (0 from the decoupled solve)
+      HSI_CUDA_CHECK(kernels::dot(dim, S_.tmp.get(), S_.d.get(), S_.sc.get() + kScratch, st()));
+      HSI_CUDA_CHECK(cudaMemcpyAsync(S_.sc_down.get() + kScratch, S_.sc.get() + kScratch, sizeof(double), cudaMemcpyDeviceToHost, st()));
+      HSI_CUDA_CHECK(cudaStreamSynchronize(st()));
+      S_.sc_down[kScratch] = -S_.sc_down[kScratch] / uu_;
+      HSI_CUDA_CHECK(cudaMemcpyAsync(S_.d.get() + dim, S_.sc_down.get() + kScratch, sizeof(double), cudaMemcpyHostToDevice, st()));
+      HSI_CUDA_CHECK(cudaStreamSynchronize(st()));  // the pinned slot is reused below
+    }
     HSI_CUDA_CHECK(kernels::dot(m, S_.g.get(), S_.d.get(), S_.sc.get() + kSlope, st()));
     HSI_CUDA_CHECK(kernels::dot(dim, S_.g.get(), S_.g.get(), S_.sc.get() + kGradNorm2, st()));
     if (quad_) {  // the quadratic term along d: q(x + s d) = q0 + s q1 + ½ s² q2
@@ -327,6 +369,8 @@ class DeviceStepper final : public NewtonStepper {
   bool certify_;
   int m_ = 0;
   bool rotation_ = false;
+  bool horizontal_ = false;  // the exact system modulo the rotation (linearize)
+  double uu_ = 1;            // |u|² of that system
   double trial_step_ = std::numeric_limits<double>::quiet_NaN();  // the step xna holds
   double q0_ = 0, q1_ = 0, q2_ = 0;
 };

@@ -212,6 +212,24 @@ class HostStepper final : public NewtonStepper {
       g.conservativeResize(m + 1);
       g(m) = u_.dot(gv);
     }
+    horizontal_ = rotation_ && choice.exact;
+    if (horizontal_) {
+      // The exact Hessian on the quotient by the rotation (HessianChoice::free_rotation):
+      // steps dv = T d + θ u kept orthogonal to u (θ = −aᵀd/|u|², a = Tᵀu). The energy is
+      // rotation invariant, so H u = J g and uᵀHu = gᵀv: away from the solution the
+      // gauged slice mixes that orbit curvature into its system, which then stays
+      // indefinite for more iterations than this one.
+      const Eigen::Index m = H.rows() - 1;
+      a_ = T_.transpose() * u_;
+      uu_ = u_.squaredNorm();
+      const Eigen::VectorXd k = H.col(m).head(m);
+      const double c = H(m, m);
+      Eigen::MatrixXd M = H.topLeftCorner(m, m);
+      M.noalias() -= (a_ * k.transpose() + k * a_.transpose()) / uu_;
+      M.noalias() += (c / (uu_ * uu_)) * a_ * a_.transpose();
+      gh_ = g.head(m) - (g(m) / uu_) * a_;
+      H = (M + M.transpose()) / 2;
+    }
     g_ = std::move(g);
     H_ = std::move(H);
     return H_.diagonal().cwiseAbs().maxCoeff();
@@ -220,10 +238,16 @@ class HostStepper final : public NewtonStepper {
   NewtonSystem solve(double ridge) override {
     NewtonSystem sys;
     sys.diagonal_max = H_.diagonal().cwiseAbs().maxCoeff();
-    sys.gradient_norm = g_.head(space_.dim()).norm();
+    sys.gradient_norm = horizontal_ ? gh_.norm() : g_.head(space_.dim()).norm();
     Eigen::LLT<Eigen::MatrixXd> llt(H_ + ridge * Eigen::MatrixXd::Identity(H_.rows(), H_.cols()));
     if (llt.info() != Eigen::Success) return sys;
-    d_ = llt.solve(-g_);
+    if (horizontal_) {
+      const Eigen::VectorXd dm = llt.solve(-gh_);
+      d_.resize(dm.size() + 1);
+      d_ << dm, -a_.dot(dm) / uu_;
+    } else {
+      d_ = llt.solve(-g_);
+    }
     if (!d_.allFinite()) return sys;
     sys.factored = true;
     sys.slope = g_.dot(d_);
@@ -268,7 +292,9 @@ class HostStepper final : public NewtonStepper {
   const Certifier* certifier_;
   const QuadraticTerm* quad_;
   const Eigen::SparseMatrix<double>& T_;
-  Eigen::VectorXd x_, g_, d_, dv_, u_, gv_;
+  Eigen::VectorXd x_, g_, d_, dv_, u_, gv_, a_, gh_;
+  double uu_ = 1;
+  bool horizontal_ = false;  // the system is the exact one on the quotient by the rotation (H_ is m × m)
   Eigen::MatrixXd H_;
   bool rotation_ = false;
   bool gradient_valid_ = false;  // gv_ is the core's gradient at x_
@@ -347,7 +373,7 @@ NewtonResult newton_run(NewtonStepper& st, bool certify, bool rotation_invariant
     // The exact Hessian is tried once Newton takes full steps (near the solution, where
     // it is definite and converges quadratically); a first iteration seldom gets there.
     if (opt.exact_hessian_when_definite && !res.log.empty() && res.log.back().step == 1.0) {
-      factor(opt.exact_ridge * build({true, opt.projection, false}));
+      factor(opt.exact_ridge * build({true, opt.projection, rotation_invariant && opt.exact_modulo_rotation}));
       log.exact_hessian = sys.factored;
     }
     if (!sys.factored) {

@@ -69,6 +69,11 @@ struct HessianChoice {
   // turned back into the rotation gauge exactly (MapSpace::regauge). The energy and the
   // certificate do not change under that rotation. Only for the ModuloRigid space
   // without a quadratic term (newton_solve decides).
+  // With exact: the exact Hessian on the shapes modulo rotation. The step T d + θ u is
+  // kept orthogonal to u (θ = −(Tᵀu)ᵀd / |u|²), so the system in d is
+  // Eᵀ K E with K the system in (d, θ) and E = [I; −(Tᵀu)ᵀ/|u|²]: a rank-2 change of
+  // the gauged exact system, which is the energy's Hessian along the gauge slice, not
+  // across the orbits of the rotation; the step is then taken and regauged as above.
   bool free_rotation = false;
 };
 
@@ -141,6 +146,13 @@ struct NewtonOptions {
   // round-off alone would decide whether a bare Cholesky succeeds; with the ridge only
   // a clearly indefinite system falls back to the projection, and CPU and GPU agree.
   double exact_ridge = 1e-12;
+  // Solve the exact system modulo the global rotation (HessianChoice::free_rotation with
+  // exact) where the energy is rotation invariant. The gauged exact system (the energy
+  // restricted to the slice Re φ_r = 0) is indefinite over many more iterations of a
+  // frame than the one modulo rotation (bench_stress --trace, issue #20: annulus/
+  // hinge_posed, one negative eigenvalue in iterations 2-8 of a frame), so the loop fell
+  // back to the projection there and converged only linearly.
+  bool exact_modulo_rotation = true;
   // Free the global rotation in projected systems (HessianChoice::free_rotation): a PSD
   // projection gives the rotation, along which the energy is flat, a curvature that the
   // rotation gauge Re φ_r = 0 otherwise spreads over every other direction, and Newton
