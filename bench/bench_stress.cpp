@@ -190,6 +190,7 @@ int main(int argc, char** argv) {
   std::string cache_file;
   int limit = 0, samples = 0, max_iterations = 100, jobs = 1, threads = 0;
   bool paper_newton = false, author_only = false, trace = false;
+  double hessian_ratio = 0;
   double time_limit = 0;
   app.add_option("--corpus", corpus_file, "The corpus file")->capture_default_str();
   app.add_option("--shapes", shapes_opt, "Only these shapes (comma-separated names)");
@@ -201,6 +202,10 @@ int main(int argc, char** argv) {
   app.add_option("--projections", projections_opt, "Hessian projections (comma-separated)")->capture_default_str();
   app.add_option("--samples", samples, "|G| for every sequence (0: each sequence's own, 2,000 to 40,000)")->capture_default_str();
   app.add_option("--max-iterations", max_iterations, "Newton iteration cap per frame")->capture_default_str();
+  app.add_option("--hessian-ratio", hessian_ratio,
+                 "The Hessian's share r of the samples G in the runs (0: each scene's own, default 0.2); authoring keeps the "
+                 "scene's")
+      ->check(CLI::Range(0.0, 1.0));
   app.add_flag("--paper-newton", paper_newton,
                "The paper's plain projected Newton (rotation gauged, no exact Hessian): the reference the fix is measured against");
   app.add_option("--backend", backend, runtime::kBackendHelp)
@@ -315,7 +320,7 @@ int main(int argc, char** argv) {
     std::string error;
   };
   std::vector<ShapeSlot> shape_slots(plan.size());
-  std::map<std::pair<size_t, int>, SetupSlot> setup_slots;
+  std::map<std::tuple<size_t, int, bool>, SetupSlot> setup_slots;  // (shape, |G|, for the runs)
   // One item per sequence, in plan order.
   struct Item {
     size_t shape = 0;
@@ -340,7 +345,8 @@ int main(int argc, char** argv) {
       it.q = q;
       it.samples = samples > 0 ? samples : q->samples;
       it.hash = stress::keyframes_hash(shape_slots[s].contents, *q, it.samples);
-      (void)setup_slots[{s, it.samples}];
+      (void)setup_slots[{s, it.samples, false}];
+      (void)setup_slots[{s, it.samples, true}];
       items.push_back(std::move(it));
     }
   }
@@ -357,12 +363,14 @@ int main(int argc, char** argv) {
     if (!slot.error.empty()) throw std::runtime_error(slot.error);
     return slot.scene;
   };
-  auto setup_of = [&](const Item& it) -> const ShapeSetup& {
-    SetupSlot& slot = setup_slots.at({it.shape, it.samples});
+  // Authoring always uses the scene's Hessian ratio (the cache's keyframes do not depend
+  // on --hessian-ratio); the runs use --hessian-ratio where given (the same setup otherwise).
+  auto setup_of = [&](const Item& it, bool for_runs) -> const ShapeSetup& {
+    SetupSlot& slot = setup_slots.at({it.shape, it.samples, for_runs && hessian_ratio > 0});
     std::call_once(slot.once, [&] {
       try {
         const Scene scene = stress::sequence_scene(shape_of(it.shape), *it.q, it.samples);
-        slot.setup = make_shape_setup(scene, scene.samples);
+        slot.setup = make_shape_setup(scene, scene.samples, for_runs ? hessian_ratio : 0.0);
       } catch (const std::exception& e) {
         slot.error = e.what();
       }
@@ -402,13 +410,20 @@ int main(int argc, char** argv) {
   auto last_save = Clock::now();
   bool cache_dirty = false;
   const auto t_author = Clock::now();
+  // Authoring runs on --backend's core too (the drag's solves are the same loop; the
+  // maps agree with the CPU core's to round-off, and the cache key does not say which).
+  const runtime::CudaStatus cuda = runtime::cuda_status();
+  KeyframeOptions authoring;
+  authoring.make_core = [&](const ShapeSetup& s) {
+    return std::move(runtime::make_newton_core(s, runtime::parse_backend(backend), cuda).core);
+  };
   run_pool(to_author, jobs, omp_threads, in_time, [&](int i) {
     Item& it = items[static_cast<size_t>(i)];
     const auto t0 = Clock::now();
     try {
-      const ShapeSetup& setup = setup_of(it);
+      const ShapeSetup& setup = setup_of(it, false);
       Scene scene = stress::sequence_scene(shape_of(it.shape), *it.q, it.samples);
-      it.a = stress::author(scene, setup);
+      it.a = stress::author(scene, setup, authoring);
       it.authored = true;
     } catch (const std::exception& e) {
       it.error = e.what();
@@ -476,7 +491,6 @@ int main(int argc, char** argv) {
     return static_cast<double>(x.F) * static_cast<double>(it.a.times.size() - 1) * (2000.0 + it.samples);
   };
   std::stable_sort(run_order.begin(), run_order.end(), [&](int x, int y) { return run_cost(x) > run_cost(y); });
-  const runtime::CudaStatus cuda = runtime::cuda_status();
   std::string core_name, core_description;
   std::atomic<int> runs_done{0};
   run_pool(run_order, jobs, omp_threads, in_time, [&](int r) {
@@ -486,7 +500,7 @@ int main(int argc, char** argv) {
     run.ran = true;
     run.s.runs = 1;
     try {
-      const ShapeSetup& setup = setup_of(it);
+      const ShapeSetup& setup = setup_of(it, true);
       InterpolationOptions o;
       o.exact_hessian_when_definite = o.free_rotation = !paper_newton;
       o.projection = run.p;

@@ -114,9 +114,9 @@ struct Authored {
   double ms = 0;                // authoring time (solver), summed over the keyframes
 };
 
-inline Authored author(Scene& scene, const ShapeSetup& setup) {
+inline Authored author(Scene& scene, const ShapeSetup& setup, const KeyframeOptions& options = {}) {
   Authored a;
-  const std::vector<SceneKeyframe> solved = solve_scene_keyframes(scene, setup);
+  const std::vector<SceneKeyframe> solved = solve_scene_keyframes(scene, setup, options);
   for (size_t k = 0; k < scene.keyframes.size(); ++k) {
     const bool solved_now = k < solved.size() && solved[k].solved;
     const bool reached = !solved_now || solved[k].result.reached;

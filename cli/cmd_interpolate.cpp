@@ -73,7 +73,9 @@ void register_interpolate(CLI::App& app) {
     const std::shared_ptr<const ShapeSetup> setup = scene_setup(scene, o->samples, o->ratio);
     std::printf("scene %s: %d loops, cage %d vertices, n = %d, |G| = %zu, |H| = %zu\n", scene.name.c_str(),
                 scene.shape.loop_count(), setup->cage.vertex_count(), setup->map_space.n(), setup->G.size(), setup->H.size());
-    solve_scene_keyframes(scene, *setup, {}, false, [&](const SceneKeyframe& k) {
+    KeyframeOptions ko;  // keyframes given by targets are authored on the same backend
+    ko.make_core = [&](const ShapeSetup& s) { return std::move(runtime::make_newton_core(s, runtime::parse_backend(o->backend)).core); };
+    solve_scene_keyframes(scene, *setup, ko, false, [&](const SceneKeyframe& k) {
       if (k.solved)
         std::printf("keyframe %d solved from targets: %s\n", k.index, k.result.message.c_str());
       else

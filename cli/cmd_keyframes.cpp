@@ -16,6 +16,7 @@
 #include "hsi/scene_sequence.h"
 #include "hsi/scene_texture.h"
 #include "hsi/draw/plot.h"
+#include "hsi/runtime/backend.h"
 
 namespace hsi::cli {
 
@@ -77,6 +78,7 @@ void register_keyframes(CLI::App& app) {
     double lambda = 1e5;
     int stages = 8;
     int max_iterations = KeyframeOptions{}.newton.max_iterations;
+    std::string backend = "auto";
   };
   auto o = std::make_shared<Opts>();
   CLI::App* cmd = app.add_subcommand(
@@ -109,6 +111,9 @@ void register_keyframes(CLI::App& app) {
   cmd->add_option("--max-iterations", o->max_iterations, "Newton iterations of the last step at most")
       ->capture_default_str()
       ->check(CLI::Range(1, 100000));
+  cmd->add_option("--backend", o->backend, std::string(runtime::kBackendHelp) + " (the drag's Newton solves)")
+      ->capture_default_str()
+      ->check(CLI::IsMember(runtime::backend_names()));
   cmd->callback([o] {
     std::error_code ec;
     if (!o->out.empty() && std::filesystem::equivalent(o->scene, o->out, ec))
@@ -140,6 +145,14 @@ void register_keyframes(CLI::App& app) {
     ko.lambda = o->lambda;
     ko.stages = o->stages;
     ko.newton.max_iterations = o->max_iterations;
+    const runtime::Backend backend = runtime::parse_backend(o->backend);
+    bool said_core = false;
+    ko.make_core = [&](const ShapeSetup& s) {
+      runtime::NewtonCoreChoice c = runtime::make_newton_core(s, backend);
+      if (!said_core) std::printf("Newton core: %s\n", runtime::describe(c.choice).c_str());
+      said_core = true;
+      return std::move(c.core);
+    };
     std::optional<SceneTexture> tex;  // the keyframe pictures draw the sprite through each map
     if (!o->png_dir.empty()) {
       std::filesystem::create_directories(o->png_dir);

@@ -44,7 +44,8 @@ KeyframeResult author_keyframe(const ShapeSetup& setup, std::span<const cd> hand
   const double lam = o.lambda / (setup.size * setup.size);
   const std::vector<cd> from = map_points(setup.cage, start, handles);
 
-  auto core = make_cpu_newton_core(setup.D_G, setup.H);  // identity target metric: symmetric Dirichlet
+  // Identity target metric: the symmetric Dirichlet energy.
+  std::unique_ptr<NewtonCore> core = o.make_core ? o.make_core(setup) : make_cpu_newton_core(setup.D_G, setup.H);
   KeyframeResult r;
   const int stages = std::max(1, o.stages);
   NewtonResult last;

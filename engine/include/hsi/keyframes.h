@@ -24,6 +24,10 @@ struct KeyframeOptions {
     return o;
   }();
   double reach_tolerance = 1e-3;  // a target counts as reached within this fraction of the size
+  // The Newton core the drag's solves run on (e.g. runtime::make_newton_core's CUDA
+  // core); empty: the CPU core. The loop's decisions are the same on either; the
+  // maps agree to round-off.
+  std::function<std::unique_ptr<NewtonCore>(const ShapeSetup&)> make_core;
 };
 
 struct KeyframeResult {
