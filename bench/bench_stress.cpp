@@ -151,8 +151,8 @@ void trace_run(Interpolator& interp, const ShapeSetup& setup, const std::vector<
     std::snprintf(b, sizeof b, "  t %.4f: %d it, %s\n", times[i], r.iterations, r.message.c_str());
     out += b;
     for (const NewtonIteration& k : r.log) {
-      std::snprintf(b, sizeof b, "    E %.12f step %.3g %s dec2 %.3g |g| %.3g smax %.3g bt %d rej %d\n", k.energy, k.step,
-                    k.exact_hessian ? "exact" : "proj ", k.decrement2, k.gradient_norm, k.max_safe_step, k.backtracks,
+      std::snprintf(b, sizeof b, "    E %.12f step %.3g %s %s dec2 %.3g |g| %.3g smax %.3g bt %d rej %d\n", k.energy, k.step,
+                    k.exact_hessian ? "exact" : "proj ", k.all_samples ? "G" : "H", k.decrement2, k.gradient_norm, k.max_safe_step, k.backtracks,
                     k.certificate_rejections);
       out += b;
     }

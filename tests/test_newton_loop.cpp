@@ -36,6 +36,10 @@ struct FakeStepper : NewtonStepper {
     return 2 + 0.5 * (x - a).dot(A * (x - a));
   };
   bool exact_now = false;
+  // The subset H's projected model: a Hessian this many times too soft (1: exact),
+  // unless the system is built over all of G (HessianChoice::all_samples) or is exact.
+  double subset_softness = 1;
+  bool all_now = false;
 
   double start(const Eigen::VectorXd& x0) override {
     x_ = x0;
@@ -44,6 +48,7 @@ struct FakeStepper : NewtonStepper {
   double linearize(const HessianChoice& c) override {
     choices.push_back(c);
     exact_now = c.exact;
+    all_now = c.all_samples;
     return A.diagonal().cwiseAbs().maxCoeff();
   }
   NewtonSystem solve(double ridge) override {
@@ -52,7 +57,8 @@ struct FakeStepper : NewtonStepper {
     s.diagonal_max = A.diagonal().cwiseAbs().maxCoeff();
     if ((exact_now && !exact_definite) || (ridge == 0 && fail_factorisations-- > 0)) return s;
     const Eigen::Vector2d g = A * (x_ - a);
-    d_ = -(A + ridge * Eigen::Matrix2d::Identity()).inverse() * g;
+    const double model = all_now || exact_now ? 1.0 : 1.0 / subset_softness;
+    d_ = -(model * A + ridge * Eigen::Matrix2d::Identity()).inverse() * g;
     s.factored = true;
     s.slope = g.dot(d_);
     s.gradient_norm = g.norm();
@@ -398,4 +404,60 @@ TEST_CASE("the exact system modulo the rotation converges in fewer iterations th
   CHECK(quotient.exact > gauged.exact);
   CHECK(quotient.iterations < gauged.iterations);
   for (size_t i = 0; i < gauged.energies.size(); ++i) CHECK(std::abs(quotient.energies[i] - gauged.energies[i]) < 1e-6);
+}
+
+TEST_CASE("newton_run: a subset Hessian whose steps Armijo keeps cutting is replaced by the Hessian over all samples",
+          "[newton][loop]") {
+  // The subset's model 20x too soft: each step overshoots ~20x, Armijo cuts it to 1/16
+  // or 1/32 (issue #20: ceferino_levels at |G| 2,000, 64 iterations per frame); over
+  // all of G the model is right and a full step lands.
+  int iterations[2] = {0, 0};
+  for (const int cuts : {2, 0}) {
+    FakeStepper f;
+    f.subset_softness = 20;
+    f.energy = [&f](const Eigen::Vector2d& x) { return 2 + 0.5 * (x - f.a).dot(f.A * (x - f.a)) + 0.1 * std::pow((x - f.a).norm(), 3); };
+    NewtonOptions o;
+    o.escalate_after_cuts = cuts;
+    const NewtonResult r = newton_run(f, true, true, Eigen::Vector2d(0, 0), o);
+    CHECK(r.converged);
+    REQUIRE(!r.log.empty());
+    CHECK_FALSE(r.log.front().all_samples);  // every solve starts on the subset
+    CHECK(r.log.front().backtracks >= 2);
+    int on_all = 0;
+    for (size_t k = 0; k < r.log.size(); ++k) {
+      on_all += r.log[k].all_samples;
+      if (k > 0 && r.log[k - 1].all_samples) CHECK(r.log[k].all_samples);  // once escalated, for the rest of the solve
+    }
+    if (cuts) {
+      CHECK(r.log[1].all_samples);  // right after the first cut-down step
+      CHECK(r.iterations <= 4);
+    } else {
+      CHECK(on_all == 0);
+    }
+    iterations[cuts ? 0 : 1] = r.iterations;
+  }
+  CHECK(2 * iterations[0] <= iterations[1]);  // without it: a crawl of cut-down steps
+}
+
+TEST_CASE("newton_run: the exact system's ridge leaves soft modes alone (no linear crawl along them)", "[newton][loop]") {
+  // A mode 1e-14 as stiff as the other (issue #20: grid_2/halves_180 crawled at 0.93 per
+  // step with a ridge of 1e-12): the default ridge converges in a few steps, a ridge
+  // far above the mode's curvature crawls.
+  for (const double ridge : {NewtonOptions{}.exact_ridge, 1e-12}) {
+    FakeStepper f;
+    f.A << 1, 0, 0, 1e-14;
+    f.a << 1, 1e6;  // the soft mode carries a decrease of ½·1e-14·1e12 = 5e-3
+    f.subset_softness = 0.5;  // the projected first step goes half way, the exact ones follow
+    NewtonOptions o;
+    o.escalate_after_cuts = 0;
+    o.exact_ridge = ridge;
+    o.max_iterations = 60;
+    const NewtonResult r = newton_run(f, true, true, Eigen::Vector2d(0, 0), o);
+    if (ridge < 1e-14) {
+      CHECK(r.converged);
+      CHECK(r.iterations <= 5);
+    } else {
+      CHECK((r.stagnated || r.iterations >= 20));
+    }
+  }
 }

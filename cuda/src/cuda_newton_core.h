@@ -154,15 +154,9 @@ class CudaNewtonCore final : public NewtonCore {
     return out;
   }
 
-  Eigen::MatrixXd hessian(HessianProjection projection, bool exact) override {
-    // Σ_H B_sᵀ K_s B_s in complex form is one GEMM D_Hᴴ [α_aa∘D, β_aa∘D̄, α_ab∘D, β_ab∘D̄,
-    // α_bb∘D, β_bb∘D̄] (newton.cpp), then mapped to the real 4n × 4n matrix on the device.
+  Eigen::MatrixXd hessian(HessianProjection projection, bool exact, bool all_samples) override {
     const cudaStream_t s = stream_;
-    HSI_CUDA_CHECK(kernels::weighted_rows(G_, h_, n_, H_.get(), g_.get(), ab_.get(), to_device(projection), exact, DH_.get(),
-                                          W_.get(), Wt_.get(), s));
-    HSI_CUDA_CHECK(cublasZgemm(blas_, CUBLAS_OP_C, CUBLAS_OP_N, n_, 6 * n_, h_, &kOne, DH_.get(), h_, Wt_.get(), h_, &kZero,
-                               R_.get(), n_));
-    HSI_CUDA_CHECK(kernels::real_hessian(n_, R_.get(), static_cast<double>(h_), Hv_.get(), s));
+    build_hessian(projection, exact, all_samples);
     const Eigen::Index N = 4 * static_cast<Eigen::Index>(n_);
     Eigen::MatrixXd out(N, N);
     HSI_CUDA_CHECK(cudaMemcpyAsync(out.data(), Hv_.get(), Hv_.bytes(), cudaMemcpyDeviceToHost, s));
@@ -199,6 +193,32 @@ class CudaNewtonCore final : public NewtonCore {
     HSI_CUDA_CHECK(cublasZgemm(blas_, CUBLAS_OP_N, CUBLAS_OP_N, G_, 2, n_, &kOne, D_.get(), G_, coef_.get(), n_, &kZero, out, G_));
   }
 
+  // Hv_ ← the real Hessian (4n × 4n), mean over H or, with all_samples, over all of G, on
+  // the stream. Σ_H B_sᵀ K_s B_s in complex form is one GEMM D_Hᴴ [α_aa∘D, β_aa∘D̄,
+  // α_ab∘D, β_ab∘D̄, α_bb∘D, β_bb∘D̄] (newton.cpp), then mapped to the real matrix on the
+  // device. The all-samples buffers (|G| × 6n complex: 1.9 GB at |G| 40,000, n 500) are
+  // made on the first escalation only (NewtonOptions::escalate_after_cuts).
+  void build_hessian(HessianProjection projection, bool exact, bool all_samples) {
+    const cudaStream_t s = stream_;
+    if (all_samples && !all_index_.get()) {
+      std::vector<int> iota(sz(G_));
+      for (size_t i = 0; i < iota.size(); ++i) iota[i] = static_cast<int>(i);
+      all_index_ = DeviceArray<int>(sz(G_));
+      W_all_ = DeviceArray<double2>(6 * sz(G_));
+      Wt_all_ = DeviceArray<double2>(sz(G_) * 6 * sz(n_));
+      HSI_CUDA_CHECK(cudaMemcpyAsync(all_index_.get(), iota.data(), all_index_.bytes(), cudaMemcpyHostToDevice, s));
+      HSI_CUDA_CHECK(cudaStreamSynchronize(s));  // iota is pageable host memory
+    }
+    const int rows = all_samples ? G_ : h_;
+    const double2* DH = all_samples ? D_.get() : DH_.get();
+    double2* Wt = all_samples ? Wt_all_.get() : Wt_.get();
+    HSI_CUDA_CHECK(kernels::weighted_rows(G_, rows, n_, all_samples ? all_index_.get() : H_.get(), g_.get(), ab_.get(),
+                                          to_device(projection), exact, DH, all_samples ? W_all_.get() : W_.get(), Wt, s));
+    HSI_CUDA_CHECK(cublasZgemm(blas_, CUBLAS_OP_C, CUBLAS_OP_N, n_, 6 * n_, rows, &kOne, DH, rows, Wt, rows, &kZero, R_.get(),
+                               n_));
+    HSI_CUDA_CHECK(kernels::real_hessian(n_, R_.get(), static_cast<double>(rows), Hv_.get(), s));
+  }
+
   double mean_energy(double s) {
     HSI_CUDA_CHECK(kernels::mean_energy(G_, g_.get(), ab_.get(), dab_.get(), s, part_sum_.get(), part_bad_.get(), scalar_.get(),
                                         stream_));
@@ -226,6 +246,8 @@ class CudaNewtonCore final : public NewtonCore {
   DeviceArray<double2> Wt_;       // the weighted rows, |H| × 6n
   DeviceArray<double2> R_;        // D_Hᴴ Wt, n × 6n
   DeviceArray<double> Hv_;        // the real Hessian, 4n × 4n
+  DeviceArray<int> all_index_;    // 0 … |G|−1, and the all-samples weights and rows: build_hessian()
+  DeviceArray<double2> W_all_, Wt_all_;
   DeviceArray<double> part_sum_;  // reduction partials (sums or minima)
   DeviceArray<int> part_bad_;
   DeviceArray<double> scalar_;

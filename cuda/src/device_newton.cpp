@@ -186,11 +186,7 @@ class DeviceStepper final : public NewtonStepper {
       HSI_CUDA_CHECK(cublasDaxpy(c_.blas_, dim, &kOneD, S_.c.get(), 1, S_.g.get(), 1));
     }
     // Hessian: Hv (4n × 4n) as CudaNewtonCore::hessian(), then Hr = Taᵀ Hv Ta (+ Q).
-    HSI_CUDA_CHECK(kernels::weighted_rows(c_.G_, c_.h_, n, c_.H_.get(), c_.g_.get(), c_.ab_.get(), to_device(choice.projection),
-                                          choice.exact, c_.DH_.get(), c_.W_.get(), c_.Wt_.get(), st()));
-    HSI_CUDA_CHECK(cublasZgemm(c_.blas_, CUBLAS_OP_C, CUBLAS_OP_N, n, 6 * n, c_.h_, &CudaNewtonCore::kOne, c_.DH_.get(), c_.h_,
-                               c_.Wt_.get(), c_.h_, &CudaNewtonCore::kZero, c_.R_.get(), n));
-    HSI_CUDA_CHECK(kernels::real_hessian(n, c_.R_.get(), static_cast<double>(c_.h_), c_.Hv_.get(), st()));
+    c_.build_hessian(choice.projection, choice.exact, choice.all_samples);
     HSI_CUDA_CHECK(cublasDgemm(c_.blas_, CUBLAS_OP_N, CUBLAS_OP_N, 4 * n, m_, 4 * n, &kOneD, c_.Hv_.get(), 4 * n, S_.Ta.get(),
                                4 * n, &kZeroD, S_.Y.get(), 4 * n));
     HSI_CUDA_CHECK(cublasDgemm(c_.blas_, CUBLAS_OP_T, CUBLAS_OP_N, m_, m_, 4 * n, &kOneD, S_.Ta.get(), 4 * n, S_.Y.get(), 4 * n,
@@ -382,7 +378,7 @@ void CudaNewtonCore::warm_up() {
   set_coefficients(zero);
   (void)energy();
   (void)gradient();
-  (void)hessian(HessianProjection::PartProj, false);
+  (void)hessian(HessianProjection::PartProj, false, false);
   set_direction(zero);
   (void)max_safe_step();
   (void)energy_at(0.5);

@@ -49,7 +49,9 @@ class BorrowedCore final : public NewtonCore {
   void set_coefficients(const Eigen::VectorXd& v) override { core_.set_coefficients(v); }
   double energy() override { return core_.energy(); }
   Eigen::VectorXd gradient() override { return core_.gradient(); }
-  Eigen::MatrixXd hessian(HessianProjection projection, bool exact) override { return core_.hessian(projection, exact); }
+  Eigen::MatrixXd hessian(HessianProjection projection, bool exact, bool all_samples) override {
+    return core_.hessian(projection, exact, all_samples);
+  }
   void set_direction(const Eigen::VectorXd& dv) override { core_.set_direction(dv); }
   double max_safe_step() override { return core_.max_safe_step(); }
   double energy_at(double s) override { return core_.energy_at(s); }

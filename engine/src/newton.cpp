@@ -71,15 +71,17 @@ class CpuNewtonCore final : public NewtonCore {
     return out;
   }
 
-  Eigen::MatrixXd hessian(HessianProjection projection, bool exact) override {
+  Eigen::MatrixXd hessian(HessianProjection projection, bool exact, bool all_samples) override {
     // Σ_H B_sᵀ K_s B_s with B_s = diag(𝐃_s, 𝐃_s) (paper Eq. 13, 20): written in complex
     // form, every block is Dᴴ diag(w) D or Dᴴ diag(w) conj(D), so the whole Hessian is
     // one complex GEMM Dᴴ [α_aa∘D, β_aa∘D̄, α_ab∘D, β_ab∘D̄, α_bb∘D, β_bb∘D̄].
-    const Eigen::Index h = DH_.rows(), n = D_.cols();
+    // The subset H's rows, or with all_samples every row of G.
+    const MatrixXcd& DH = all_samples ? D_ : DH_;
+    const Eigen::Index h = DH.rows(), n = D_.cols();
     MatrixXcd Wt(h, 6 * n);
 #pragma omp parallel for schedule(static)
     for (Eigen::Index k = 0; k < h; ++k) {
-      const Eigen::Index s = H_[static_cast<size_t>(k)];
+      const Eigen::Index s = all_samples ? k : H_[static_cast<size_t>(k)];
       const SampleDerivatives d = isometric_derivatives(g_[static_cast<size_t>(s)], a_(s), b_(s), projection, exact);
       const Eigen::Matrix4d& K = d.hess;
       cd w[6];
@@ -88,16 +90,16 @@ class CpuNewtonCore final : public NewtonCore {
       complex_form(K(2, 2), K(2, 3), K(3, 2), K(3, 3), w[4], w[5]);
       for (int q = 0; q < 6; ++q) {
         if (q % 2 == 0)
-          Wt.row(k).segment(q * n, n) = w[q] * DH_.row(k);
+          Wt.row(k).segment(q * n, n) = w[q] * DH.row(k);
         else
-          Wt.row(k).segment(q * n, n) = w[q] * DH_.row(k).conjugate();
+          Wt.row(k).segment(q * n, n) = w[q] * DH.row(k).conjugate();
       }
     }
     // The GEMM, split by column blocks over the threads (Eigen does not parallelise
     // a product this thin on its own).
     MatrixXcd R(n, 6 * n);
 #pragma omp parallel for schedule(static)
-    for (int q = 0; q < 6; ++q) R.middleCols(q * n, n).noalias() = DH_.adjoint() * Wt.middleCols(q * n, n);
+    for (int q = 0; q < 6; ++q) R.middleCols(q * n, n).noalias() = DH.adjoint() * Wt.middleCols(q * n, n);
     R /= static_cast<double>(h);
     Eigen::MatrixXd Hv(4 * n, 4 * n);
     real_block(R.middleCols(0, n), R.middleCols(n, n), Hv.block(0, 0, 2 * n, 2 * n));
@@ -193,7 +195,7 @@ class HostStepper final : public NewtonStepper {
       gradient_valid_ = true;
     }
     const Eigen::VectorXd& gv = gv_;
-    const Eigen::MatrixXd Hv = core_.hessian(choice.projection, choice.exact);
+    const Eigen::MatrixXd Hv = core_.hessian(choice.projection, choice.exact, choice.all_samples);
     Eigen::VectorXd g = T_.transpose() * gv;
     Eigen::MatrixXd H = T_.transpose() * Hv * T_;
     if (quad_) {
@@ -351,6 +353,7 @@ NewtonResult newton_run(NewtonStepper& st, bool certify, bool rotation_invariant
   // on the accepted step is the final map's full certificate: res.certificate follows x.
   double dE_prev = -1;  // the previous step's decrease (none yet)
   int crawling = 0;     // accepted steps in a row at a linear rate ≥ stagnation_rate
+  bool all_samples = false;  // the subset H's model failed: Hessians over all of G from now on
 
   for (int it = 0; it < opt.max_iterations; ++it) {
     const auto t_it = Clock::now();
@@ -373,11 +376,12 @@ NewtonResult newton_run(NewtonStepper& st, bool certify, bool rotation_invariant
     // The exact Hessian is tried once Newton takes full steps (near the solution, where
     // it is definite and converges quadratically); a first iteration seldom gets there.
     if (opt.exact_hessian_when_definite && !res.log.empty() && res.log.back().step == 1.0) {
-      factor(opt.exact_ridge * build({true, opt.projection, rotation_invariant && opt.exact_modulo_rotation}));
+      factor(opt.exact_ridge * build({true, opt.projection, rotation_invariant && opt.exact_modulo_rotation, all_samples}));
       log.exact_hessian = sys.factored;
     }
     if (!sys.factored) {
-      build({false, opt.projection, rotation_invariant && opt.free_rotation && opt.projection != HessianProjection::Delete});
+      build({false, opt.projection, rotation_invariant && opt.free_rotation && opt.projection != HessianProjection::Delete,
+             all_samples});
       double ridge = 0;
       for (int attempt = 0; attempt < opt.max_ridge_attempts; ++attempt) {
         factor(ridge);
@@ -410,6 +414,7 @@ NewtonResult newton_run(NewtonStepper& st, bool certify, bool rotation_invariant
     // 2. Armijo backtracking from min(1, safe_fraction · s_max); a step is taken only if
     //    the certificate passes at the new map.
     t0 = Clock::now();
+    log.all_samples = all_samples;
     double s = std::min(1.0, opt.safe_fraction * sys.max_safe_step);
     double E_new = E;
     bool accepted = false;
@@ -459,6 +464,10 @@ NewtonResult newton_run(NewtonStepper& st, bool certify, bool rotation_invariant
     log.ms = ms_since(t_it);
     res.log.push_back(log);
     res.iterations++;
+    // The model overshot: the subset's Hessian is wrong (or the step is near a fold,
+    // where all of G is the better model too).
+    if (!all_samples && opt.escalate_after_cuts > 0 && log.backtracks - log.certificate_rejections >= opt.escalate_after_cuts)
+      all_samples = true;
 
     // 3. Stopping: a small decrease that is not a slow linear crawl (the decrease still
     //    to come at rate ρ is ΔE ρ/(1 − ρ)); a long crawl is stagnation.

@@ -45,8 +45,9 @@ class NewtonCore {
   virtual void set_coefficients(const Eigen::VectorXd& v) = 0;
   virtual double energy() = 0;                     // mean over G; +inf if a sample folds
   virtual Eigen::VectorXd gradient() = 0;          // ∂E/∂v, mean over G
-  // PSD Hessian (mean over H), or with exact = true the unprojected one (tests).
-  virtual Eigen::MatrixXd hessian(HessianProjection projection, bool exact = false) = 0;
+  // PSD Hessian (mean over H; with all_samples, over all of G), or with exact = true the
+  // unprojected one.
+  virtual Eigen::MatrixXd hessian(HessianProjection projection, bool exact = false, bool all_samples = false) = 0;
   virtual void set_direction(const Eigen::VectorXd& dv) = 0;
   virtual double max_safe_step() = 0;              // first s > 0 with |a + s da| = |b + s db| at a sample
   virtual double energy_at(double s) = 0;          // energy at v + s dv
@@ -75,6 +76,10 @@ struct HessianChoice {
   // the gauged exact system, which is the energy's Hessian along the gauge slice, not
   // across the orbits of the rotation; the step is then taken and regauged as above.
   bool free_rotation = false;
+  // The Hessian over all of G instead of the subset H (a Hessian |G|/|H| times dearer;
+  // newton_solve escalates to it when the subset's model fails, NewtonOptions::
+  // escalate_after_cuts).
+  bool all_samples = false;
 };
 
 // What a stepper reports about the system it solved: (H + ridge I) d = −g.
@@ -140,12 +145,17 @@ struct NewtonOptions {
   // is positive definite (quadratic convergence near the solution), and the projection
   // above otherwise (and always in a solve's first iteration).
   bool exact_hessian_when_definite = true;
-  // The exact system is factored with this ridge (relative to max |diag H|; 1e-9 would
-  // already damp real soft modes, whose eigenvalues reach ~4e-13 of the largest): its
+  // The exact system is factored with this ridge (relative to max |diag H|): its
   // smallest eigenvalues lie near 0 (cage modes that barely move the boundary), where
   // round-off alone would decide whether a bare Cholesky succeeds; with the ridge only
-  // a clearly indefinite system falls back to the projection, and CPU and GPU agree.
-  double exact_ridge = 1e-12;
+  // a clearly indefinite system falls back to the projection. The ridge damps every mode
+  // softer than itself: Newton then converges along it only linearly, at the rate
+  // ridge / (ridge + eigenvalue). Soft modes reach ~1e-14 of the largest eigenvalue
+  // (bench_stress --trace, issue #20: grid_2/halves_180, full exact steps lowering the
+  // energy at a rate of 0.93 per step to the iteration cap with 1e-12; 5 frames: 51.3
+  // iterations per frame with 1e-12, 28.5 with 1e-13, 12.0 with 1e-14, 11.0 with 1e-15
+  // and with 0), so the ridge sits at round-off level.
+  double exact_ridge = 1e-15;
   // Solve the exact system modulo the global rotation (HessianChoice::free_rotation with
   // exact) where the energy is rotation invariant. The gauged exact system (the energy
   // restricted to the slice Re φ_r = 0) is indefinite over many more iterations of a
@@ -168,6 +178,16 @@ struct NewtonOptions {
   // 10·tolerance·|E| at a linear rate ρ ≥ stagnation_rate, stop the solve as not converged.
   int stagnation_steps = 12;
   double stagnation_rate = 0.9;
+  // The Hessian comes from the subset H of the samples (r|G|, the paper's speed-up); the
+  // gradient and the energy from all of G. Where a few samples carry most of the
+  // curvature (thin parts, a cage close to the boundary, few samples for many unknowns)
+  // the subset's model is wrong: its Newton step overshoots and Armijo cuts it again and
+  // again though the certificate allows a full step (bench_stress --trace, issue #20:
+  // ceferino_levels at |G| 2,000, n = 85, steps of 1/32 for 100 iterations; with H = G
+  // 2 iterations). After an iteration whose step Armijo cut this many times (the
+  // certificate's rejections not counted), the rest of the solve builds its Hessians
+  // over all of G (HessianChoice::all_samples). 0: never.
+  int escalate_after_cuts = 2;
   bool certify = true;            // accept a step only if the certificate passes
   // The certificate of x0's map when the caller has it already (a warm start from the
   // previous frame's solution): not computed again. Must be of space.expand(x0) exactly.
@@ -178,6 +198,7 @@ struct NewtonIteration {
   double energy = 0, gradient_norm = 0, step = 0, max_safe_step = 0;
   double decrement2 = 0;          // −gᵀd: the squared Newton decrement (predicted decrease of a full step ×2)
   bool exact_hessian = false;     // the system used the unprojected Hessian
+  bool all_samples = false;       // the Hessian was built over all of G (escalated), not the subset H
   int backtracks = 0, certificate_rejections = 0;
   double ms = 0;
 };
