@@ -10,6 +10,7 @@
 #include "hsi/interpolation.h"
 #include "hsi/keyframes.h"
 #include "hsi/overlap.h"
+#include "hsi/scene_sequence.h"
 #include "test_shapes.h"
 
 using namespace hsi;
@@ -238,4 +239,170 @@ TEST_CASE("overlap search: a checker's image checks equal the reference's, one w
     bad.pop_back();
     CHECK_THROWS_WITH(checker.check_points(bad, w), Catch::Matchers::Contains("image points for"));
   }
+}
+
+namespace {
+
+std::filesystem::path bent_bar_path() { return std::filesystem::path(HSI_TESTS_DIR) / "scenes" / "bent_bar.json"; }
+
+bool same_number(double a, double b) { return a == b || (std::isnan(a) && std::isnan(b)); }
+
+void require_same(const Distortion& a, const Distortion& b) {
+  CHECK(same_number(a.sigma1_max, b.sigma1_max));
+  CHECK(same_number(a.sigma2_min, b.sigma2_min));
+  CHECK(same_number(a.conformal_max, b.conformal_max));
+  CHECK(same_number(a.isometric_max, b.isometric_max));
+}
+
+// Every field a frame has but its timings.
+void require_same(const FrameResult& a, const FrameResult& b) {
+  INFO("t = " << b.t);
+  CHECK(a.t == b.t);
+  CHECK(a.map.phi == b.map.phi);
+  CHECK(a.map.psi == b.map.psi);
+  CHECK(a.x == b.x);
+  CHECK(a.keyframe == b.keyframe);
+  CHECK(a.held == b.held);
+  CHECK(a.certified == b.certified);
+  CHECK(a.converged == b.converged);
+  CHECK(a.certificate.certified == b.certificate.certified);
+  CHECK(a.certificate.reason == b.certificate.reason);
+  CHECK(a.certificate.winding == b.certificate.winding);
+  CHECK(a.certificate.sigma1_max == b.certificate.sigma1_max);
+  CHECK(a.certificate.sigma2_min == b.certificate.sigma2_min);
+  CHECK(a.certificate.observed_isometric_max == b.certificate.observed_isometric_max);
+  CHECK(a.certificate.segments == b.certificate.segments);
+  CHECK(a.certificate.subdivisions == b.certificate.subdivisions);
+  CHECK(a.iterations == b.iterations);
+  CHECK(a.energy == b.energy);
+  require_same(a.distortion, b.distortion);
+  require_same(a.distortion_certified, b.distortion_certified);
+  require_same(a.bound, b.bound);
+  require_same(a.certified_bound, b.certified_bound);
+  CHECK(same_number(a.bound_excess, b.bound_excess));
+  CHECK(same_number(a.certified_bound_excess, b.certified_bound_excess));
+  CHECK(a.message == b.message);
+  require_same(a.overlap, b.overlap);
+}
+
+struct BentBar {
+  Scene scene = load_scene(bent_bar_path());
+  std::shared_ptr<const ShapeSetup> setup = scene_setup(scene);
+  std::vector<double> times;
+  std::vector<HarmonicMap> maps;
+  BentBar() {
+    for (const Keyframe& k : scene.keyframes) {
+      times.push_back(k.time);
+      maps.push_back(*k.coefficients);
+    }
+  }
+};
+
+BentBar& bent_bar() {
+  static BentBar b;
+  return b;
+}
+
+// Each progress call: its index, count and a copy of the frame it was given.
+struct Calls {
+  std::vector<int> index;
+  std::vector<FrameResult> frames;
+  std::function<void(const FrameResult&, int, int)> callback() {
+    return [this](const FrameResult& f, int i, int n) {
+      index.push_back(i);
+      CHECK(n == expected);
+      frames.push_back(f);
+    };
+  }
+  int expected = 0;
+};
+
+// The setup's CPU image of the breakpoints, one point short from call `fail_at` on (a
+// backend's evaluator gone wrong): the crossing search refuses such an image.
+class ShortImage final : public MeshEvaluator {
+ public:
+  ShortImage(const ShapeSetup& setup, int fail_at)
+      : inner_(make_cpu_mesh_evaluator(setup.cage, setup.overlap.breakpoints().points)), fail_at_(fail_at) {}
+  const char* name() const override { return "short"; }
+  std::size_t size() const override { return inner_->size(); }
+  bool derivatives() const override { return false; }
+  void evaluate(const HarmonicMap& map, MapValues& out) override {
+    inner_->evaluate(map, out);
+    if (++calls_ >= fail_at_) out.f.conservativeResize(out.f.size() - 1);
+  }
+
+ private:
+  std::unique_ptr<MeshEvaluator> inner_;
+  int fail_at_, calls_ = 0;
+};
+
+}  // namespace
+
+TEST_CASE("pipelined sequence: the frames and progress calls of the sequence in series, overlapping frames included",
+          "[overlap][interpolation]") {
+  BentBar& B = bent_bar();
+  // Keyframe times exactly (keyframe 1 overlaps itself) and solved frames between.
+  const std::vector<double> times = sequence_times(B.times, 0, 3);
+  InterpolationOptions series;
+  series.pipelined_overlap = false;
+  InterpolationOptions pipelined;
+  REQUIRE(pipelined.pipelined_overlap);  // the default
+  Interpolator a(*B.setup, B.times, B.maps, series), b(*B.setup, B.times, B.maps, pipelined);
+  Calls ca, cb;
+  ca.expected = cb.expected = static_cast<int>(times.size());
+  const std::vector<FrameResult> fa = a.sequence(times, ca.callback());
+  const std::vector<FrameResult> fb = b.sequence(times, cb.callback());
+  REQUIRE(fa.size() == times.size());
+  REQUIRE(fb.size() == times.size());
+  int solved_overlapping = 0;
+  for (size_t i = 0; i < fa.size(); ++i) {
+    require_same(fb[i], fa[i]);
+    solved_overlapping += !fa[i].keyframe && fa[i].overlap.overlaps();
+    if (!fa[i].keyframe) {
+      CHECK(fa[i].overlap.checked);
+      CHECK(fb[i].parts.crossings > 0);
+      CHECK(fb[i].parts.crossings_wait >= 0);
+      CHECK(fa[i].parts.crossings_wait == fa[i].parts.crossings);
+    }
+  }
+  INFO(solved_overlapping << " solved frames overlap");
+  CHECK(solved_overlapping > 0);     // the search's result travels through the thread
+  CHECK(fa.back().overlap.overlaps());  // keyframe 1
+  // Progress: once per frame, in order, with the complete frame (the one returned).
+  std::vector<int> in_order(times.size());
+  for (size_t i = 0; i < in_order.size(); ++i) in_order[i] = static_cast<int>(i);
+  CHECK(ca.index == in_order);
+  CHECK(cb.index == in_order);
+  for (size_t i = 0; i < cb.frames.size() && i < fb.size(); ++i) {
+    require_same(cb.frames[i], fb[i]);
+    CHECK(cb.frames[i].parts.crossings == fb[i].parts.crossings);
+    CHECK(cb.frames[i].ms == fb[i].ms);
+  }
+  // Again on the same interpolator (its thread made afresh, its buffers reused): the same.
+  const std::vector<FrameResult> again = b.sequence({times[0], times[1]});
+  require_same(again[0], fa[0]);
+  require_same(again[1], fa[1]);
+}
+
+TEST_CASE("pipelined sequence: an exception of the crossing search reaches the caller, after the frames before it",
+          "[overlap][interpolation]") {
+  // A disc turned and moved: every frame is the identity's shape, solved in an iteration or two.
+  const Shape shape = test::disc(1.0, 32);
+  const ShapeSetup setup(shape, build_cage(shape), 400, 0.2);
+  const HarmonicMap id = identity_map(setup.cage);
+  const std::vector<double> key_times{0, 1};
+  const std::vector<HarmonicMap> keys{id, transform_image(setup.cage, id, std::polar(1.0, 0.8), cd(0.5, -0.2))};
+  const std::vector<double> times = sequence_times(key_times, 6);  // keyframe, 4 solved, keyframe
+  const int set_up = static_cast<int>(key_times.size());           // set-up evaluates each keyframe's image once
+  for (bool pipelined : {false, true})
+    for (int failing : {2, 4}) {  // a solved frame in the middle, the last solved frame
+      InterpolationOptions o;
+      o.pipelined_overlap = pipelined;
+      INFO((pipelined ? "pipelined" : "in series") << ", frame " << failing << "'s image short");
+      Interpolator I(setup, key_times, keys, o, nullptr, std::make_unique<ShortImage>(setup, set_up + failing));
+      Calls c;
+      c.expected = static_cast<int>(times.size());
+      CHECK_THROWS_WITH(I.sequence(times, c.callback()), Catch::Matchers::Contains("image points for"));
+      CHECK(c.index.size() == static_cast<size_t>(failing));  // frames 0 .. failing − 1, complete
+    }
 }
