@@ -273,7 +273,7 @@ LoopHierarchy::LoopHierarchy(std::span<const int> loop_slots) {
 int LoopHierarchy::build_loops(std::span<const int> bounds, int l0, int l1) {
   if (l1 - l0 == 1) return build_run(bounds[static_cast<size_t>(l0)], bounds[static_cast<size_t>(l1)]);
   const int id = static_cast<int>(nodes_.size());
-  nodes_.push_back({bounds[static_cast<size_t>(l0)], bounds[static_cast<size_t>(l1)], -1});
+  nodes_.push_back({bounds[static_cast<size_t>(l0)], bounds[static_cast<size_t>(l1)], -1, false});
   // Split between loops, at the loop boundary nearest the middle slot.
   const int mid = bounds[static_cast<size_t>(l0)] + (bounds[static_cast<size_t>(l1)] - bounds[static_cast<size_t>(l0)]) / 2;
   int m = l0 + 1;
@@ -287,7 +287,7 @@ int LoopHierarchy::build_loops(std::span<const int> bounds, int l0, int l1) {
 
 int LoopHierarchy::build_run(int lo, int hi) {
   const int id = static_cast<int>(nodes_.size());
-  nodes_.push_back({lo, hi, -1});
+  nodes_.push_back({lo, hi, -1, true});
   if (hi - lo <= kLeafSlots) return id;
   const int mid = lo + (hi - lo) / 2;
   build_run(lo, mid);
@@ -303,13 +303,14 @@ class Traversal {
  public:
   using Box = LoopHierarchy::Box;
   Traversal(std::span<const LoopHierarchy::Node> nodes, std::span<const cd> points, std::span<const int> next,
-            std::span<const Box> slot_box, std::span<const Box> node_box)
-      : nodes_(nodes), z_(points), next_(next), slot_box_(slot_box), node_box_(node_box) {}
+            std::span<const Box> slot_box, std::span<const Box> node_box, std::span<const unsigned char> node_runs)
+      : nodes_(nodes), z_(points), next_(next), slot_box_(slot_box), node_box_(node_box), node_runs_(node_runs) {}
 
   LoopHierarchy::Crossings found;
 
-  // Pairs within one node.
+  // Pairs within one node (none in a chain running strictly one way).
   void self(int id) {
+    if (node_runs_[static_cast<size_t>(id)]) return;
     const LoopHierarchy::Node& n = nodes_[static_cast<size_t>(id)];
     if (n.right < 0) {
       for (int i = n.lo; i < n.hi; ++i)
@@ -364,7 +365,14 @@ class Traversal {
   std::span<const cd> z_;
   std::span<const int> next_;
   std::span<const Box> slot_box_, node_box_;
+  std::span<const unsigned char> node_runs_;
 };
+
+// The directions edge a → b runs strictly in: bit 0 +x, 1 −x, 2 +y, 3 −y (exact).
+unsigned char runs(cd a, cd b) {
+  return static_cast<unsigned char>((b.real() > a.real() ? 1 : 0) | (b.real() < a.real() ? 2 : 0) | (b.imag() > a.imag() ? 4 : 0) |
+                                    (b.imag() < a.imag() ? 8 : 0));
+}
 
 }  // namespace
 
@@ -376,16 +384,22 @@ LoopHierarchy::Crossings LoopHierarchy::search(std::span<const cd> points, std::
   if (nodes_.empty()) return {};
   std::vector<Box>& sb = workspace.slot_box;
   std::vector<Box>& nb = workspace.node_box;
+  std::vector<unsigned char>& sr = workspace.slot_runs;
+  std::vector<unsigned char>& nr = workspace.node_runs;
   sb.resize(static_cast<size_t>(slots_));  // no allocation once sized
   nb.resize(nodes_.size());
+  sr.resize(sb.size());
+  nr.resize(nb.size());
   for (size_t i = 0; i < sb.size(); ++i) {
     const int j = next[i];
     if (j < 0) {
       sb[i] = {kInf, -kInf, kInf, -kInf};  // meets no box
+      sr[i] = 15;                          // and runs every way
       continue;
     }
     const cd a = points[i], b = points[static_cast<size_t>(j)];
     sb[i] = {std::min(a.real(), b.real()), std::max(a.real(), b.real()), std::min(a.imag(), b.imag()), std::max(a.imag(), b.imag())};
+    sr[i] = runs(a, b);
   }
   const auto join = [](const Box& p, const Box& q) -> Box {
     return {std::min(p.x0, q.x0), std::max(p.x1, q.x1), std::min(p.y0, q.y0), std::max(p.y1, q.y1)};
@@ -394,13 +408,19 @@ LoopHierarchy::Crossings LoopHierarchy::search(std::span<const cd> points, std::
     const Node& n = nodes_[id];
     if (n.right < 0) {
       Box b = sb[static_cast<size_t>(n.lo)];
-      for (int i = n.lo + 1; i < n.hi; ++i) b = join(b, sb[static_cast<size_t>(i)]);
+      unsigned char r = sr[static_cast<size_t>(n.lo)];
+      for (int i = n.lo + 1; i < n.hi; ++i) {
+        b = join(b, sb[static_cast<size_t>(i)]);
+        r &= sr[static_cast<size_t>(i)];
+      }
       nb[id] = b;
+      nr[id] = r;
     } else {
       nb[id] = join(nb[id + 1], nb[static_cast<size_t>(n.right)]);
+      nr[id] = n.chain ? static_cast<unsigned char>(nr[id + 1] & nr[static_cast<size_t>(n.right)]) : 0;
     }
   }
-  Traversal t(nodes_, points, next, sb, nb);
+  Traversal t(nodes_, points, next, sb, nb, nr);
   t.self(0);
   return t.found;
 }

@@ -33,7 +33,10 @@ std::vector<std::pair<EdgeRef, EdgeRef>> intersecting_edges_box_sweep(const std:
 // then a balanced tree over the loops, stored flat. Per search only the boxes are
 // refit bottom-up (O(slots)) from that search's points and edges, then the tree is
 // traversed: a node's pairs are its children's own and the pairs between its two
-// children, a pair of nodes dismissed by one closed box test. Each candidate pair of
+// children, a pair of nodes dismissed by one closed box test, and a node within one
+// loop whose edges all run strictly one way in x (or all in y) has none of its own: its
+// chain is the graph of a function over disjoint intervals, so only neighbours meet,
+// at their shared point, without folding back. Each candidate pair of
 // edges is decided exactly, as edges_meet in intersecting_edges decides it (a static
 // floating-point filter on each orientation, CGAL's exact predicate where it cannot
 // tell). Slots are numbered loop by loop.
@@ -48,11 +51,14 @@ class LoopHierarchy {
   struct Node {
     int lo, hi;  // the slots [lo, hi)
     int right;   // the right child (the left one is this node + 1); −1: a leaf
+    bool chain;  // its slots lie on one loop (one run of consecutive edges)
   };
-  // Scratch of one search (the boxes of the slots and nodes), sized on first use and
-  // reused after: one per thread.
+  // Scratch of one search (the boxes of the slots and nodes, and the directions every
+  // edge of a node runs strictly in: bits +x, −x, +y, −y), sized on first use and reused
+  // after: one per thread.
   struct Workspace {
     std::vector<Box> slot_box, node_box;
+    std::vector<unsigned char> slot_runs, node_runs;
   };
   // Intersecting pairs of edges: how many, and the first in slot order (a < b).
   struct Crossings {

@@ -82,26 +82,44 @@ double merge_distance(std::span<const cd> image) {
 
 // Whether z is merged into `kept`, the last point kept on its loop (or a loop's last
 // point into its first).
-bool merged(cd kept, cd z, double merge) { return kept == z || std::abs(kept - z) <= merge; }
+// |kept − z| is never below its larger coordinate difference (nor is its rounding: that
+// difference is a double), so past `merge` there the distance is not computed: the same
+// decision, without a hypot per point.
+bool merged(cd kept, cd z, double merge) {
+  const cd d = kept - z;
+  if (std::max(std::abs(d.real()), std::abs(d.imag())) > merge) return false;
+  return kept == z || std::abs(d) <= merge;
+}
 
 void push_point(Polylines& p, size_t loop, cd z, int origin, double merge) {
   Loop& l = p.loops[loop];
-  if (!l.empty() && merged(l.back(), z, merge)) return;
+  if (!l.empty() && (l.back() == z || std::abs(l.back() - z) <= merge)) return;  // merged(), as it was written before
+
   l.push_back(z);
   p.origin[loop].push_back(origin);
 }
 
 void close_loop(Polylines& p, size_t loop, double merge) {
   Loop& l = p.loops[loop];
-  while (l.size() > 1 && merged(l.back(), l.front(), merge)) {
+  while (l.size() > 1 && (l.back() == l.front() || std::abs(l.back() - l.front()) <= merge)) {
     l.pop_back();
     p.origin[loop].pop_back();
   }
 }
 
-bool finite(std::span<const cd> image) {
-  for (const cd& z : image)
+// Whether every point is finite, and if so merge_distance(image) in `merge`: one pass.
+bool finite_merge_distance(std::span<const cd> image, double& merge) {
+  merge = 0;
+  if (image.empty()) return true;
+  double x0 = image[0].real(), x1 = x0, y0 = image[0].imag(), y1 = y0;
+  for (const cd& z : image) {
     if (!std::isfinite(z.real()) || !std::isfinite(z.imag())) return false;
+    x0 = std::min(x0, z.real());
+    x1 = std::max(x1, z.real());
+    y0 = std::min(y0, z.imag());
+    y1 = std::max(y1, z.imag());
+  }
+  merge = kMergeFraction * std::hypot(x1 - x0, y1 - y0);
   return true;
 }
 
@@ -165,10 +183,10 @@ namespace {
 // intersecting_edges does, and the first pair in slot order is (loop, segment) order.
 OverlapResult find_crossings(const detail::OverlapLayout& L, std::span<const cd> image, detail::OverlapScratch& s) {
   OverlapResult r;
-  if (!finite(image)) return r;  // a map that is not finite on the boundary: nothing to decide
+  double merge = 0;
+  if (!finite_merge_distance(image, merge)) return r;  // a map that is not finite on the boundary: nothing to decide
   r.checked = true;
   r.points = static_cast<int>(image.size());
-  const double merge = merge_distance(image);
   std::span<const cd> z = image;
   if (!L.point.empty()) {
     s.z.resize(image.size());
@@ -183,7 +201,8 @@ OverlapResult find_crossings(const detail::OverlapLayout& L, std::span<const cd>
     while (s.kept.size() > 1 && merged(z[static_cast<size_t>(s.kept.back())], z[static_cast<size_t>(s.kept.front())], merge))
       s.kept.pop_back();
     if (s.kept.size() < 3) continue;  // no segments to cross
-    for (size_t k = 0; k < s.kept.size(); ++k) s.next[static_cast<size_t>(s.kept[k])] = s.kept[(k + 1) % s.kept.size()];
+    for (size_t k = 0; k + 1 < s.kept.size(); ++k) s.next[static_cast<size_t>(s.kept[k])] = s.kept[k + 1];
+    s.next[static_cast<size_t>(s.kept.back())] = s.kept.front();
   }
   const detail::LoopHierarchy::Crossings c = L.tree.search(z, s.next, s.tree);
   if (c.count == 0) return r;
