@@ -59,7 +59,8 @@ int main(int argc, char** argv) {
   std::string crossing_table =
       "\n## The crossing search alone (ms per call, one thread; images of the sequence's frames: kept = the hierarchy kept "
       "by the checker and refit, check_points; reference = the polylines and hierarchy made per call, "
-      "check_points_reference)\n\n"
+      "check_points_reference; on few cores run with OMP_WAIT_POLICY=passive: OpenMP threads left spinning after the "
+      "sequence take cores from it)\n\n"
       "| scene | breakpoints | images (overlapping) | kept ms | reference ms | reference / kept | same results |\n"
       "|---|---|---|---|---|---|---|\n";
   for (const std::string& path : scenes) {
