@@ -155,12 +155,17 @@ struct SequenceStats {
   double scratch_ms = 0;  // the frame midway between the first two keyframes, started from the first
   int scratch_iterations = 0;
   bench::FrameParts parts;  // where the frames' time went (FrameResult::parts)
+  bench::CrossingSearchTimes crossing;  // the crossing search alone on these frames' images (when asked)
 };
 
 // gpu_boundary: the overlap check's image (f at its breakpoints) by the CUDA mesh
-// evaluator, as runtime's make_newton_core gives with the CUDA core; else the setup's CPU one.
+// evaluator, as runtime's make_newton_core gives with the CUDA core; else the setup's CPU
+// one. pipelined: InterpolationOptions::pipelined_overlap (the crossing search beside the
+// next solve; off: in series). crossing_reps > 0: the crossing search alone timed on
+// the frames' images too.
 template <class MakeCore>
-SequenceStats run_sequence(const Loaded& L, MakeCore&& make_core, int frames, bool gpu_boundary) {
+SequenceStats run_sequence(const Loaded& L, MakeCore&& make_core, int frames, bool gpu_boundary, bool pipelined = true,
+                           int crossing_reps = 0) {
   SequenceStats s;
   auto t0 = Clock::now();
   std::unique_ptr<NewtonCore> core = make_core();
@@ -168,10 +173,14 @@ SequenceStats run_sequence(const Loaded& L, MakeCore&& make_core, int frames, bo
   if (gpu_boundary) boundary = std::make_unique<hc::MeshEvaluator>(L.setup->cage, L.setup->overlap.breakpoints().points);
   s.setup_ms = ms_since(t0);
   t0 = Clock::now();
-  Interpolator interp(*L.setup, L.times, L.maps, {}, std::move(core), std::move(boundary));
+  InterpolationOptions o;
+  o.pipelined_overlap = pipelined;
+  Interpolator interp(*L.setup, L.times, L.maps, o, std::move(core), std::move(boundary));
   s.interpolator_ms = ms_since(t0);
+  t0 = Clock::now();
   const auto seq = interp.sequence(frames);
-  s.parts = bench::frame_parts(seq);
+  s.parts = bench::frame_parts(seq, ms_since(t0));
+  if (crossing_reps > 0) s.crossing = bench::time_crossing_search(*L.setup, seq, 20, crossing_reps);
   s.ran = true;
   int solved = 0;
   double its = 0;
@@ -341,7 +350,7 @@ int main(int argc, char** argv) {
     return 0;
   }
 
-  std::ostringstream calls, floors, seqs, parts;
+  std::ostringstream calls, floors, seqs, parts, crossing;
   calls << "## Core calls (ms per call, mean of " << reps << "; CUDA/CPU < 1: CUDA faster)\n\n"
         << "| scene | |G| | n | |H| | E+∇ CPU | E+∇ CUDA | ratio | Hessian CPU | Hessian CUDA | ratio | "
            "safe step+E(s) CPU | safe step+E(s) CUDA | ratio |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
@@ -362,9 +371,18 @@ int main(int argc, char** argv) {
 
   parts << "## Where a frame's time goes (ms, wall clock; FrameResult::parts: the first solved frame, then means over the "
            "warm frames; image: f at the overlap check's breakpoints, by the CUDA mesh evaluator in the cuda rows, the "
-           "setup's CPU one otherwise; crossings: the exact crossing search on the host; rest: the frame outside its parts)\n\n"
-        << "| scene | |G| | backend | first frame | first: solve | first: image + crossings | warm frame | targets | solve | "
-           "pose | image | crossings | distortion | rest |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
+           "setup's CPU one otherwise; crossings: the exact crossing search on the host, its own time, on the sequence's "
+           "crossing thread beside the next solve (cuda-series: in series, InterpolationOptions::pipelined_overlap off); "
+           "crossings wait: what the sequence waited for it (counted in the warm frame); wall / frame: the sequence's "
+           "wall clock over its solved frames; rest: the warm frame outside its parts, crossings counted by the wait)\n\n"
+        << "| scene | |G| | backend | first frame | first: solve | first: image + crossings | warm frame | wall / frame | "
+           "targets | solve | pose | image | crossings | crossings wait | distortion | rest |\n"
+           "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
+  crossing << "## The overlap check's crossing search alone (ms per call, one host thread, over 20 images of the cuda "
+              "sequence's frames, each searched " << std::max(reps, 1) << " times: kept = the hierarchy kept by the checker "
+              "and refit, check_points; reference = the polylines and hierarchy made per call, check_points_reference)\n\n"
+           << "| scene | |G| | breakpoints | images (overlapping) | kept ms | reference ms | reference / kept | same results |\n"
+              "|---|---|---|---|---|---|---|---|\n";
   for (const std::string& path : scenes) {
     for (int samples : sample_counts) {
       std::fprintf(stderr, "%s, |G| = %d: setting up\n", path.c_str(), samples);
@@ -405,16 +423,26 @@ int main(int argc, char** argv) {
       if (skip_sequence) continue;
       cpu.reset();  // the sequences make their own cores
       gpu.reset();
-      SequenceStats sc, sh, sg;
+      SequenceStats sc, sh, sg, ss;
       std::fprintf(stderr, "  sequence (CUDA, device loop)\n");
-      sg = run_sequence(L, [&] { return hc::make_newton_core(*L.setup); }, frames, true);
+      sg = run_sequence(L, [&] { return hc::make_newton_core(*L.setup); }, frames, true, true, std::max(reps, 1));
+      std::fprintf(stderr, "  sequence (CUDA, device loop, crossing search in series)\n");
+      ss = run_sequence(L, [&] { return hc::make_newton_core(*L.setup); }, frames, true, false);
+      {
+        const bench::CrossingSearchTimes& c = sg.crossing;
+        std::snprintf(row, sizeof row, "| %s | %d | %d | %d (%d) | %.3f | %.3f | %.1f | %s |\n", L.name.c_str(), G, c.points,
+                      c.images, c.overlapping, c.kept_ms, c.reference_ms, c.reference_ms / c.kept_ms, c.same ? "yes" : "NO");
+        crossing << row;
+        std::fprintf(stderr, "  %s", row);
+      }
       if (samples <= cpu_sequence_max) {
         std::fprintf(stderr, "  sequence (CUDA, host loop)\n");
         sh = run_sequence(L, [&] { return hc::make_newton_core(L.setup->D_G, L.setup->H); }, frames, false);
         std::fprintf(stderr, "  sequence (CPU)\n");
         sc = run_sequence(L, [&] { return make_cpu_newton_core(L.setup->D_G, L.setup->H); }, frames, false);
       }
-      const std::pair<const char*, const SequenceStats*> rows[] = {{"cpu", &sc}, {"cuda-host", &sh}, {"cuda", &sg}};
+      const std::pair<const char*, const SequenceStats*> rows[] = {
+          {"cpu", &sc}, {"cuda-host", &sh}, {"cuda", &sg}, {"cuda-series", &ss}};
       for (const auto& [label, s] : rows) {
         if (!s->ran) {
           std::snprintf(row, sizeof row, "| %s | %d | %s | skipped (--cpu-sequence-max-samples) | | | | | | | | | | | | | | |\n",
@@ -434,16 +462,18 @@ int main(int argc, char** argv) {
         if (s->ran) {
           const bench::FrameParts& p = s->parts;
           std::snprintf(row, sizeof row,
-                        "| %s | %d | %s | %.3f | %.3f | %.3f | %.3f | %.3f | %.3f | %.3f | %.3f | %.3f | %.3f | %.3f |\n",
+                        "| %s | %d | %s | %.3f | %.3f | %.3f | %.3f | %.3f | %.3f | %.3f | %.3f | %.3f | %.3f | %.3f | %.3f | "
+                        "%.3f |\n",
                         L.name.c_str(), G, label, p.first_ms, p.first.solve, p.first.image + p.first.crossings, p.mean_ms,
-                        p.mean.targets, p.mean.solve, p.mean.pose, p.mean.image, p.mean.crossings, p.mean.distortion, p.rest());
+                        p.wall_ms, p.mean.targets, p.mean.solve, p.mean.pose, p.mean.image, p.mean.crossings,
+                        p.mean.crossings_wait, p.mean.distortion, p.rest());
           parts << row;
         }
       }
     }
   }
   std::printf("\n---\n\n%s\n%s\n%s\n", mesh_eval.str().c_str(), calls.str().c_str(), floors.str().c_str());
-  if (!skip_sequence) std::printf("%s\n%s\n", seqs.str().c_str(), parts.str().c_str());
+  if (!skip_sequence) std::printf("%s\n%s\n%s\n", seqs.str().c_str(), parts.str().c_str(), crossing.str().c_str());
   std::printf("GPU clocks at the end: %s\n", hc::clocks().describe().c_str());
   return 0;
 }

@@ -3,12 +3,14 @@
 #pragma once
 
 #include <algorithm>
+#include <chrono>
 #include <memory>
 #include <string>
 #include <vector>
 
 #include "hsi/interpolation.h"
 #include "hsi/keyframes.h"
+#include "hsi/overlap.h"
 
 namespace hsi::bench {
 
@@ -36,21 +38,25 @@ inline Loaded load(const std::string& path, int samples, double ratio) {
 
 // Where the frames' time went (FrameResult::parts): the first solved frame apart (what
 // set-up left to it) and the mean of each part over the warm frames (every solved frame
-// but the first; keyframes and held frames are not solved).
+// but the first; keyframes and held frames are not solved). wall_ms: the sequence's
+// wall clock over its solved frames, when the caller timed it (what a frame costs with
+// the crossing search beside the next solve).
 struct FrameParts {
-  int warm = 0;
-  double first_ms = 0, mean_ms = 0;
+  int warm = 0, solved = 0;
+  double first_ms = 0, mean_ms = 0, wall_ms = 0;
   FrameResult::Parts first, mean;
-  double rest() const {  // mean ms outside the parts
-    return mean_ms - (mean.targets + mean.solve + mean.pose + mean.image + mean.crossings + mean.distortion);
+  double rest() const {  // mean ms outside the parts (the crossing search counted by the caller's wait for it)
+    return mean_ms - (mean.targets + mean.solve + mean.pose + mean.image + mean.crossings_wait + mean.distortion);
   }
 };
 
-inline FrameParts frame_parts(const std::vector<FrameResult>& frames) {
+// sequence_ms: the wall clock of the Interpolator::sequence call that made `frames` (0: not timed).
+inline FrameParts frame_parts(const std::vector<FrameResult>& frames, double sequence_ms = 0) {
   FrameParts p;
   bool first = true;
   for (const FrameResult& f : frames) {
     if (f.keyframe || f.held) continue;
+    ++p.solved;
     if (first) {
       first = false;
       p.first_ms = f.ms;
@@ -64,12 +70,58 @@ inline FrameParts frame_parts(const std::vector<FrameResult>& frames) {
     p.mean.pose += f.parts.pose;
     p.mean.image += f.parts.image;
     p.mean.crossings += f.parts.crossings;
+    p.mean.crossings_wait += f.parts.crossings_wait;
     p.mean.distortion += f.parts.distortion;
   }
   const double w = std::max(p.warm, 1);
   p.mean_ms /= w;
-  for (double* d : {&p.mean.targets, &p.mean.solve, &p.mean.pose, &p.mean.image, &p.mean.crossings, &p.mean.distortion}) *d /= w;
+  for (double* d : {&p.mean.targets, &p.mean.solve, &p.mean.pose, &p.mean.image, &p.mean.crossings, &p.mean.crossings_wait,
+                    &p.mean.distortion})
+    *d /= w;
+  p.wall_ms = sequence_ms / std::max(p.solved, 1);
   return p;
+}
+
+// The overlap check's crossing search alone (issue #23), ms per call, on the images of
+// `frames`' maps (at most `images` of them, spread over the sequence): the hierarchy kept
+// by the checker (check_points with one workspace) and the reference search made per
+// call (check_points_reference), each image searched `reps` times after one untimed
+// call; `same`: every result equal.
+struct CrossingSearchTimes {
+  int images = 0, points = 0, overlapping = 0;
+  double kept_ms = 0, reference_ms = 0;
+  bool same = true;
+};
+
+inline CrossingSearchTimes time_crossing_search(const ShapeSetup& setup, const std::vector<FrameResult>& frames, int images,
+                                                int reps) {
+  using Clock = std::chrono::steady_clock;
+  CrossingSearchTimes t;
+  std::vector<VectorXcd> f;
+  const size_t step = std::max<size_t>(1, frames.size() / static_cast<size_t>(std::max(images, 1)));
+  for (size_t i = 0; i < frames.size() && static_cast<int>(f.size()) < images; i += step) f.push_back(setup.overlap.image(frames[i].map));
+  if (f.empty()) return t;
+  t.images = static_cast<int>(f.size());
+  t.points = static_cast<int>(f.front().size());
+  OverlapChecker::Workspace w;
+  const auto span_of = [](const VectorXcd& v) { return std::span<const cd>(v.data(), static_cast<size_t>(v.size())); };
+  for (const VectorXcd& v : f) {
+    const OverlapResult a = setup.overlap.check_points(span_of(v), w), b = setup.overlap.check_points_reference(span_of(v));
+    t.same = t.same && a.checked == b.checked && a.crossings == b.crossings && a.loop_a == b.loop_a && a.edge_a == b.edge_a &&
+             a.loop_b == b.loop_b && a.edge_b == b.edge_b && a.point == b.point;
+    t.overlapping += b.overlaps();
+  }
+  int sink = 0;
+  auto t0 = Clock::now();
+  for (int r = 0; r < reps; ++r)
+    for (const VectorXcd& v : f) sink += setup.overlap.check_points(span_of(v), w).crossings;
+  t.kept_ms = std::chrono::duration<double, std::milli>(Clock::now() - t0).count() / (reps * t.images);
+  t0 = Clock::now();
+  for (int r = 0; r < reps; ++r)
+    for (const VectorXcd& v : f) sink += setup.overlap.check_points_reference(span_of(v)).crossings;
+  t.reference_ms = std::chrono::duration<double, std::milli>(Clock::now() - t0).count() / (reps * t.images);
+  if (sink < 0) t.same = false;  // keeps the calls observable
+  return t;
 }
 
 }  // namespace hsi::bench

@@ -4,9 +4,15 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <condition_variable>
+#include <exception>
 #include <limits>
+#include <mutex>
 #include <numbers>
+#include <optional>
 #include <sstream>
+#include <thread>
+#include <utility>
 
 #include "hsi/stopwatch.h"
 
@@ -53,7 +59,7 @@ Interpolator::Interpolator(const ShapeSetup& setup, std::vector<double> times, s
     key_distortion_.push_back(measure(c));
     key_certified_.push_back(certified_distortion(c));
     key_certificate_.push_back(c);
-    key_overlap_.push_back(overlap_of(keys_[k], nullptr));
+    key_overlap_.push_back(overlap_of(keys_[k]));
     key_x_.push_back(setup_.metric_space.reduce(keys_[k]).x);
     const MapValues v = evaluate_map(D, keys_[k]);
     std::vector<Metric> m(static_cast<size_t>(v.f_z.size()));
@@ -154,6 +160,8 @@ Distortion certified_distortion(const CertificateResult& c) {
 }
 
 namespace {
+std::span<const cd> points_of(const MapValues& v) { return {v.f.data(), static_cast<size_t>(v.f.size())}; }
+
 // The two keyframes' envelope: the larger σ1, κ, E; the smaller σ2.
 Distortion envelope(const Distortion& a, const Distortion& b) {
   return {std::max(a.sigma1_max, b.sigma1_max), std::min(a.sigma2_min, b.sigma2_min), std::max(a.conformal_max, b.conformal_max),
@@ -167,25 +175,117 @@ double excess(const Distortion& d, const Distortion& b) {
 }
 }  // namespace
 
-OverlapResult Interpolator::overlap_of(const HarmonicMap& map, FrameResult::Parts* parts) {
-  // The posed map is checked (a crossing is invariant under its rigid motion, so the
-  // canonical map would do as well, but the point reported is where the frame is drawn).
-  auto tp = Clock::now();
+void Interpolator::boundary_image(const HarmonicMap& map, MapValues& out) {
   if (boundary_) {
-    boundary_->evaluate(map, boundary_values_);
+    boundary_->evaluate(map, out);
   } else {
-    boundary_values_.f = setup_.overlap.image(map);
+    setup_.overlap.image(map, out);
   }
-  const VectorXcd& f = boundary_values_.f;
-  if (parts) parts->image = ms_since(tp);
-  tp = Clock::now();
-  OverlapResult o = setup_.overlap.check_points(std::span<const cd>(f.data(), static_cast<size_t>(f.size())));
-  if (parts) parts->crossings = ms_since(tp);
-  return o;
 }
+
+OverlapResult Interpolator::overlap_of(const HarmonicMap& map) {
+  boundary_image(map, boundary_values_[0]);
+  return setup_.overlap.check_points(points_of(boundary_values_[0]), crossing_workspace_);
+}
+
+namespace {
+
+// The crossing search of one frame at a time on a thread of its own, kept for one
+// sequence: the sequence hands it a frame's image and solves the next frame while it
+// searches. What the search throws is rethrown to the sequence by wait().
+class CrossingThread {
+ public:
+  CrossingThread(const OverlapChecker& checker, OverlapChecker::Workspace& workspace)
+      : checker_(checker), workspace_(workspace), thread_([this] { run(); }) {}
+  CrossingThread(const CrossingThread&) = delete;
+  CrossingThread& operator=(const CrossingThread&) = delete;
+  ~CrossingThread() {  // a search under way is finished (its image outlives this), its result dropped
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      stop_ = true;
+    }
+    wake_.notify_all();
+    thread_.join();
+  }
+
+  // Starts the search of `image`, which must stay unchanged until wait() returns.
+  void submit(std::span<const cd> image) {
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      image_ = image;
+      submitted_ = true;
+    }
+    wake_.notify_all();
+  }
+
+  // The submitted search's result, and its own time in ms.
+  OverlapResult wait(double& search_ms) {
+    std::unique_lock<std::mutex> lock(mutex_);
+    wake_.wait(lock, [&] { return done_; });
+    done_ = false;
+    search_ms = ms_;
+    if (error_) std::rethrow_exception(std::exchange(error_, nullptr));
+    return result_;
+  }
+
+ private:
+  void run() {
+    std::unique_lock<std::mutex> lock(mutex_);
+    for (;;) {
+      wake_.wait(lock, [&] { return stop_ || submitted_; });
+      if (stop_) return;
+      submitted_ = false;
+      const std::span<const cd> image = image_;
+      lock.unlock();
+      OverlapResult r;
+      std::exception_ptr error;
+      const auto t0 = Clock::now();
+      try {
+        r = checker_.check_points(image, workspace_);
+      } catch (...) {
+        error = std::current_exception();
+      }
+      const double ms = ms_since(t0);
+      lock.lock();
+      result_ = r;
+      error_ = error;
+      ms_ = ms;
+      done_ = true;
+      wake_.notify_all();
+    }
+  }
+
+  const OverlapChecker& checker_;
+  OverlapChecker::Workspace& workspace_;
+  std::mutex mutex_;
+  std::condition_variable wake_;  // both ways: a search submitted or stop (to the thread), a search done (to the caller)
+  std::span<const cd> image_;
+  bool submitted_ = false, done_ = false, stop_ = false;
+  OverlapResult result_;
+  std::exception_ptr error_;
+  double ms_ = 0;
+  std::thread thread_;  // last: started once the rest is made
+};
+
+}  // namespace
 
 FrameResult Interpolator::frame(double t, const Eigen::VectorXd& warm_start, const CertificateResult* warm_certificate) {
   const auto t0 = Clock::now();
+  bool search = false;
+  FrameResult r = frame_before_crossings(t, warm_start, warm_certificate, boundary_values_[0], search);
+  if (search) {
+    const auto tp = Clock::now();
+    r.overlap = setup_.overlap.check_points(points_of(boundary_values_[0]), crossing_workspace_);
+    r.parts.crossings = r.parts.crossings_wait = ms_since(tp);
+    r.ms = ms_since(t0);
+  }
+  return r;
+}
+
+FrameResult Interpolator::frame_before_crossings(double t, const Eigen::VectorXd& warm_start,
+                                                 const CertificateResult* warm_certificate, MapValues& image, bool& search) {
+  const auto t0 = Clock::now();
+  search = false;
   FrameResult r;
   r.t = t;
   const int k = segment(t);
@@ -250,7 +350,12 @@ FrameResult Interpolator::frame(double t, const Eigen::VectorXd& warm_start, con
   const cd rot = std::polar(1.0, want.angle - have.angle);
   r.map = transform_image(setup_.cage, canon, rot, want.centroid - rot * have.centroid);
   r.parts.pose = ms_since(tp);
-  r.overlap = overlap_of(r.map, &r.parts);
+  // The posed map is checked (a crossing is invariant under its rigid motion, so the
+  // canonical map would do as well, but the point reported is where the frame is drawn).
+  tp = Clock::now();
+  boundary_image(r.map, image);
+  r.parts.image = ms_since(tp);
+  search = true;
   tp = Clock::now();
   r.distortion = measure(n.certificate);
   r.distortion_certified = certified_distortion(n.certificate);
@@ -276,19 +381,51 @@ std::vector<FrameResult> Interpolator::sequence(const std::vector<double>& times
   out.reserve(times.size());
   Eigen::VectorXd warm;
   CertificateResult warm_certificate;
+  // Pipelined: solved frame i's crossing search runs on `crossings` while frame i + 1 is
+  // solved and its image made (into the other of the two image buffers); then the
+  // sequence waits for frame i's search, completes frame i and calls progress for it.
+  std::optional<CrossingThread> crossings;
+  int pending = -1;  // the solved frame whose search is under way
+  int buffer = 0;    // the image buffer the next solved frame's image goes to
+  const auto complete = [&](int p) {
+    const auto tw = Clock::now();
+    double search_ms = 0;
+    const OverlapResult o = crossings->wait(search_ms);
+    const double waited = ms_since(tw);
+    FrameResult& f = out[static_cast<size_t>(p)];
+    f.overlap = o;
+    f.parts.crossings = search_ms;
+    f.parts.crossings_wait = waited;
+    f.ms += waited;
+    if (progress) progress(f, p, frames);
+  };
   for (int i = 0; i < frames; ++i) {
     const double t = times[static_cast<size_t>(i)];
     // Crossing into a new keyframe segment keeps the warm start: frames are continuous.
     // A solved frame's certificate is of its canonical map expand(x): reusable as the
     // next solve's start (a keyframe's, or a held one's, is of the posed map: frame()
     // takes the keyframe's start certificate made at set-up instead).
-    out.push_back(frame(t, warm, out.empty() || out.back().keyframe || out.back().held ? nullptr : &warm_certificate));
+    const CertificateResult* start = out.empty() || out.back().keyframe || out.back().held ? nullptr : &warm_certificate;
+    bool search = false;
+    if (options_.pipelined_overlap)
+      out.push_back(frame_before_crossings(t, warm, start, boundary_values_[static_cast<size_t>(buffer)], search));
+    else
+      out.push_back(frame(t, warm, start));
     if (out.back().certified) {
       warm = out.back().x;
       warm_certificate = out.back().certificate;
     }
-    if (progress) progress(out.back(), i, frames);
+    if (pending >= 0) complete(std::exchange(pending, -1));
+    if (search) {
+      if (!crossings) crossings.emplace(setup_.overlap, crossing_workspace_);
+      crossings->submit(points_of(boundary_values_[static_cast<size_t>(buffer)]));
+      buffer ^= 1;
+      pending = i;
+    } else if (progress) {
+      progress(out.back(), i, frames);
+    }
   }
+  if (pending >= 0) complete(pending);
   return out;
 }
 

@@ -5,6 +5,7 @@
 #pragma once
 
 #include <algorithm>
+#include <array>
 #include <functional>
 #include <memory>
 #include <string>
@@ -29,6 +30,13 @@ struct InterpolationOptions {
   // leaving it; the last is unused), or one for all; empty: Linear everywhere (the
   // paper's linear blend of the metrics and the pose).
   std::vector<KeyTiming> timing;
+  // Interpolator::sequence runs each solved frame's crossing search (the overlap check's
+  // exact search, overlap.h) on a thread of its own while it solves the next frame, and
+  // waits for it only once that frame's image is made (issue #23: on the CUDA core the
+  // search took as long as the solve, in series). Every frame and every field is the
+  // same as in series (false: as frame() does); FrameResult::parts.crossings_wait says
+  // what the search still cost the caller.
+  bool pipelined_overlap = true;
 };
 
 // Pose of a map: the centroid of the boundary's image (by arc length) and the
@@ -59,16 +67,27 @@ struct FrameResult {
   CertificateResult certificate;
   int iterations = 0;
   double energy = 0;         // mean isometric energy against the blended metric (2 = exact)
-  double ms = 0;             // wall clock of the whole frame (Interpolator::frame), parts included
-  // Where `ms` went, wall clock in ms, each part timed apart (their sum ≤ ms; the rest
-  // is bookkeeping: copies, messages). A keyframe or held frame is the keyframe itself,
-  // its certificate and overlap made at set-up: every part 0.
+  // The caller's wall clock of the frame (Interpolator::frame, or its turn in
+  // Interpolator::sequence): its parts, the crossing search counted by what the caller
+  // waited for it (parts.crossings_wait: all of it in series, what the next solve did not
+  // hide when pipelined), so that a pipelined sequence's wall clock is about the sum of
+  // its frames' ms.
+  double ms = 0;
+  // Where `ms` went, wall clock in ms, each part timed apart (their sum, with
+  // crossings_wait in place of crossings, ≤ ms; the rest is bookkeeping: copies,
+  // messages). A keyframe or held frame is the keyframe itself, its certificate and
+  // overlap made at set-up: every part 0.
   struct Parts {
     double targets = 0;     // the blended metric at G (blended_metric) and its upload (NewtonCore::set_targets)
     double solve = 0;       // newton_solve: the iterations, certificates included (`timing` splits them)
     double pose = 0;        // expand(x), pose_of, interpolated_pose and transform_image
     double image = 0;       // f at the overlap check's breakpoints (the boundary's image)
-    double crossings = 0;   // the crossing search over the image polylines (OverlapChecker::check_points)
+    double crossings = 0;   // the crossing search over the image polylines (OverlapChecker::check_points), its own time wherever it ran
+    // What the caller waited for that search: in series (frame(), or pipelined_overlap
+    // off) the same as crossings; in a pipelined sequence the search runs on a thread of
+    // its own while the next frame is solved, and this is only the time the sequence then
+    // waited for it (~0 when the solve hid it; counted in this frame's ms).
+    double crossings_wait = 0;
     double distortion = 0;  // sampled and certified distortion from the certificate
   } parts;
   Distortion distortion;     // sampled at the certificate's breakpoints (observed values, not bounds)
@@ -142,9 +161,12 @@ class Interpolator {
   // certificate made at set-up.
   FrameResult frame(double t, const Eigen::VectorXd& warm_start = {}, const CertificateResult* warm_certificate = nullptr);
   // F frames uniform over [t_begin, t_end], each warm-started from the previous one.
+  // progress(frame, i, F) is called once per frame, in order, with the complete frame;
+  // with options().pipelined_overlap, a solved frame's call comes once its crossing
+  // search is done, during the next frame. The frames are frame()'s, in series or not.
   std::vector<FrameResult> sequence(int frames, const std::function<void(const FrameResult&, int, int)>& progress = {});
   // Frames at the given times (increasing, within [t_begin, t_end]; e.g. frame_times()),
-  // each warm-started from the previous one.
+  // each warm-started from the previous one; progress as above.
   std::vector<FrameResult> sequence(const std::vector<double>& times,
                                     const std::function<void(const FrameResult&, int, int)>& progress = {});
 
@@ -161,9 +183,15 @@ class Interpolator {
  private:
   int segment(double t) const;
   Distortion measure(const CertificateResult& c) const;
-  // The overlap check of a frame's map: f at the breakpoints by boundary_ (or the
-  // setup's), then the crossing search; their times into parts when given.
-  OverlapResult overlap_of(const HarmonicMap& map, FrameResult::Parts* parts);
+  // The overlap check of a keyframe's map: f at the breakpoints, then the crossing search.
+  OverlapResult overlap_of(const HarmonicMap& map);
+  // f at the overlap check's breakpoints by boundary_ (or the setup's), into out.f.
+  void boundary_image(const HarmonicMap& map, MapValues& out);
+  // frame() but for the crossing search: the image it is to search is left in `image`
+  // and `search` set (a keyframe or held frame has its overlap from set-up: not set);
+  // ms does not count it.
+  FrameResult frame_before_crossings(double t, const Eigen::VectorXd& warm_start, const CertificateResult* warm_certificate,
+                                     MapValues& image, bool& search);
 
   const ShapeSetup& setup_;
   std::vector<double> times_;
@@ -182,7 +210,12 @@ class Interpolator {
   InterpolationOptions options_;
   std::unique_ptr<NewtonCore> core_;
   std::unique_ptr<MeshEvaluator> boundary_;  // null: setup_.overlap's own
-  MapValues boundary_values_;                // its output, reused frame to frame
+  // Its output, reused frame to frame: two, so that a pipelined sequence makes frame
+  // i + 1's image while frame i's is searched.
+  std::array<MapValues, 2> boundary_values_;
+  // The crossing search's scratch: one search at a time uses it (frame(), set-up, or a
+  // sequence's crossing thread while the sequence runs).
+  OverlapChecker::Workspace crossing_workspace_;
   // Poses are linear in the coefficients: centroid = c_mean·φ + conj(c_mean·ψ) and the
   // Procrustes sum Σ f_i conj(w_i − w̄) = c_rot·φ + conj(c_rot_bar·ψ), with these rows
   // (sums over G of the basis rows C), so a pose costs O(m), not O(|G| m).

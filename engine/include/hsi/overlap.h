@@ -19,10 +19,14 @@
 // sample a hair's width from a polygon vertex gives a segment whose image round-off
 // can fold back on its neighbours (seen on bar_holes: one "crossing" of two edges at
 // their shared corner in a certified frame), and nothing visible is that small. Candidate pairs come from a hierarchy of bounding
-// boxes over each polyline's segments in their order (exact coordinate extremes,
+// boxes over each loop's segments in their order (exact coordinate extremes,
 // compared closed, so no intersecting pair is missed), each decided by the exact
-// predicates: about O(B log B) for B breakpoints on a boundary's image. f at the
-// breakpoints comes from basis rows cached once (mesh_evaluator.h).
+// predicates: about O(B log B) for B breakpoints on a boundary's image. The hierarchy's
+// shape is built once per checker over the breakpoints' fixed order along their loops;
+// a check only refits its boxes to the image (O(B)) and walks it, allocating nothing
+// (issue #23: in a CUDA frame the search runs on a thread of its own, beside the next
+// frame's solve, interpolation.h). f at the breakpoints comes from basis rows cached
+// once (mesh_evaluator.h).
 //
 // What is NOT checked: the curve f(∂Ω) between two breakpoints is replaced by the
 // chord. A crossing of the true curves that the chords miss (two image arcs that
@@ -61,19 +65,50 @@ struct OverlapResult {
 // 11234 breakpoints)"; "not checked".
 std::string describe(const OverlapResult& result);
 
+namespace detail {
+struct OverlapLayout;   // the loops' slots and their box hierarchy (overlap.cpp)
+struct OverlapScratch;  // one search's polylines and boxes (overlap.cpp)
+}  // namespace detail
+
 // Precomputed per shape and cage: the breakpoints and f there from basis rows cached
 // once (the CPU MeshEvaluator, mesh_evaluator.h), so that a check costs one product of
-// the cached rows with the map's coefficients plus the crossing search.
+// the cached rows with the map's coefficients plus the crossing search; and the box
+// hierarchy over the breakpoints' loops, built once here and only refit per check
+// (issue #23: the breakpoints keep their order along their loops from frame to frame).
 class OverlapChecker {
  public:
+  // Scratch space of check_points (the search's polylines and boxes), sized on its first
+  // use and reused after, so that a check allocates nothing. check_points is const and
+  // runs on several threads at once (the batch's workers, a sequence's crossing thread),
+  // so the workspace is the caller's: one per thread, never shared by two at a time.
+  class Workspace {
+   public:
+    Workspace();
+    ~Workspace();
+    Workspace(Workspace&&) noexcept;
+    Workspace& operator=(Workspace&&) noexcept;
+    detail::OverlapScratch& scratch() { return *scratch_; }
+
+   private:
+    std::unique_ptr<detail::OverlapScratch> scratch_;
+  };
+
   OverlapChecker(const Cage& cage, const CertificateSegments& breakpoints);
   // Needs the map's full coefficients (basis_size(cage) each); throws InputError otherwise.
   OverlapResult check(const HarmonicMap& map) const;
   // f at the breakpoints, loop by loop as breakpoints().points: the image check() tests.
   VectorXcd image(const HarmonicMap& map) const;
+  // The same into out.f, reusing its storage.
+  void image(const HarmonicMap& map, MapValues& out) const;
   // The same test on image points already evaluated at the breakpoints (loop by loop,
   // as breakpoints().points), e.g. by a MeshEvaluator of another backend made for them.
-  OverlapResult check_points(std::span<const cd> image) const;
+  OverlapResult check_points(std::span<const cd> image, Workspace& workspace) const;
+  OverlapResult check_points(std::span<const cd> image) const;  // with a workspace of its own (allocates)
+  // The search as it was before the hierarchy was kept (issue #23): the polylines and a
+  // box hierarchy over them made per call (detail::intersecting_edges, itself tested
+  // against CGAL's box sweep). The same result for every input; the reference the tests
+  // and bench_interpolation compare check_points against.
+  OverlapResult check_points_reference(std::span<const cd> image) const;
   const CertificateSegments& breakpoints() const { return seg_; }
 
  private:
@@ -81,11 +116,14 @@ class OverlapChecker {
   // f at the breakpoints. The CPU evaluator keeps no state between calls (evaluate only
   // writes its output), so check() stays const and safe to call from several threads.
   std::shared_ptr<MeshEvaluator> f_;
+  std::shared_ptr<const detail::OverlapLayout> layout_;  // read only after construction
 };
 
 // The same test for image polylines given directly (closed, one per loop; edge i
 // joins vertex i to vertex i + 1): crossings counted as above, edges reported as
 // polyline segment indices. For tests and for maps evaluated elsewhere.
 OverlapResult polyline_overlap(const std::vector<Loop>& loops);
+// The same by the reference search (OverlapChecker::check_points_reference).
+OverlapResult polyline_overlap_reference(const std::vector<Loop>& loops);
 
 }  // namespace hsi
