@@ -55,12 +55,56 @@ std::vector<std::pair<EdgeRef, EdgeRef>> ordered(std::vector<std::pair<EdgeRef, 
   return found;
 }
 
-struct Box {
-  double x0, x1, y0, y1;
-  bool meets(const Box& o) const { return x0 <= o.x1 && o.x0 <= x1 && y0 <= o.y1 && o.y0 <= y1; }
-  Box operator|(const Box& o) const {
-    return {std::min(x0, o.x0), std::max(x1, o.x1), std::min(y0, o.y0), std::max(y1, o.y1)};
+using Box = LoopHierarchy::Box;
+
+// The pairs of items (i < j) of a binary hierarchy over index ranges that may meet: both
+// in one leaf, or in two nodes that `meet(a, b)` (node ids), the larger node split
+// first; a node whose own pairs `skip(id)` says need no look is not entered. Nodes have
+// lo, hi (the items [lo, hi)) and right (the right child; the left is id + 1; −1: a leaf).
+// The one walk of intersecting_edges' per-call search and of LoopHierarchy::search.
+template <class Node, class Skip, class Meet, class Candidate>
+class SelfPairs {
+ public:
+  SelfPairs(std::span<const Node> nodes, Skip skip, Meet meet, Candidate candidate)
+      : nodes_(nodes), skip_(skip), meet_(meet), candidate_(candidate) {}
+
+  // Pairs within node id.
+  void self(int id) {
+    if (skip_(id)) return;
+    const Node& n = nodes_[static_cast<size_t>(id)];
+    if (n.right < 0) {
+      for (int i = n.lo; i < n.hi; ++i)
+        for (int j = i + 1; j < n.hi; ++j) candidate_(i, j);
+      return;
+    }
+    self(id + 1);
+    self(n.right);
+    pair(id + 1, n.right);
   }
+
+ private:
+  // Pairs with one item in node a and one in node b (disjoint ranges, a's first).
+  void pair(int a, int b) {
+    if (!meet_(a, b)) return;
+    const Node& A = nodes_[static_cast<size_t>(a)];
+    const Node& B = nodes_[static_cast<size_t>(b)];
+    const bool a_leaf = A.right < 0, b_leaf = B.right < 0;
+    if (a_leaf && b_leaf) {
+      for (int i = A.lo; i < A.hi; ++i)
+        for (int j = B.lo; j < B.hi; ++j) candidate_(i, j);
+    } else if (b_leaf || (!a_leaf && A.hi - A.lo >= B.hi - B.lo)) {
+      pair(a + 1, b);
+      pair(A.right, b);
+    } else {
+      pair(a, b + 1);
+      pair(a, B.right);
+    }
+  }
+
+  std::span<const Node> nodes_;
+  Skip skip_;
+  Meet meet_;
+  Candidate candidate_;
 };
 
 // A node covers the edges [lo, hi) of the flattened list; its children split the range
@@ -88,7 +132,12 @@ class Search {
     if (!refs_.empty()) {
       nodes_.reserve(2 * refs_.size() / kLeaf + 2);
       build(0, static_cast<int>(refs_.size()));
-      self(0);
+      SelfPairs walk(std::span<const Node>(nodes_), [this](int) { return full(); },
+                     [this](int a, int b) {
+                       return !full() && nodes_[static_cast<size_t>(a)].box.meets(nodes_[static_cast<size_t>(b)].box);
+                     },
+                     [this](int i, int j) { candidate(i, j); });
+      walk.self(0);
     }
   }
 
@@ -113,38 +162,6 @@ class Search {
   }
 
   bool full() const { return found.size() >= max_; }
-
-  // Pairs within one node.
-  void self(int id) {
-    const Node& n = nodes_[static_cast<size_t>(id)];
-    if (full()) return;
-    if (n.right < 0) {
-      for (int i = n.lo; i < n.hi; ++i)
-        for (int j = i + 1; j < n.hi; ++j) candidate(i, j);
-      return;
-    }
-    self(id + 1);
-    self(n.right);
-    pair(id + 1, n.right);
-  }
-
-  // Pairs with one edge in node a and one in node b (disjoint ranges, a's first).
-  void pair(int a, int b) {
-    const Node& A = nodes_[static_cast<size_t>(a)];
-    const Node& B = nodes_[static_cast<size_t>(b)];
-    if (full() || !A.box.meets(B.box)) return;
-    const bool a_leaf = A.right < 0, b_leaf = B.right < 0;
-    if (a_leaf && b_leaf) {
-      for (int i = A.lo; i < A.hi; ++i)
-        for (int j = B.lo; j < B.hi; ++j) candidate(i, j);
-    } else if (b_leaf || (!a_leaf && A.hi - A.lo >= B.hi - B.lo)) {
-      pair(a + 1, b);
-      pair(A.right, b);
-    } else {
-      pair(a, b + 1);
-      pair(a, B.right);
-    }
-  }
 
   void candidate(int i, int j) {
     if (full() || !boxes_[static_cast<size_t>(i)].meets(boxes_[static_cast<size_t>(j)])) return;
@@ -308,44 +325,18 @@ class Traversal {
 
   LoopHierarchy::Crossings found;
 
-  // Pairs within one node (none in a chain running strictly one way).
-  void self(int id) {
-    if (node_runs_[static_cast<size_t>(id)]) return;
-    const LoopHierarchy::Node& n = nodes_[static_cast<size_t>(id)];
-    if (n.right < 0) {
-      for (int i = n.lo; i < n.hi; ++i)
-        for (int j = i + 1; j < n.hi; ++j) candidate(i, j);
-      return;
-    }
-    self(id + 1);
-    self(n.right);
-    pair(id + 1, n.right);
+  // Every crossing pair; none inside a chain running strictly one way.
+  void run() {
+    SelfPairs walk(nodes_, [this](int id) { return node_runs_[static_cast<size_t>(id)] != 0; },
+                   [this](int a, int b) { return node_box_[static_cast<size_t>(a)].meets(node_box_[static_cast<size_t>(b)]); },
+                   [this](int i, int j) { candidate(i, j); });
+    walk.self(0);
   }
 
  private:
-  // Pairs with one edge in node a and one in node b (disjoint slot ranges, a's first).
-  void pair(int a, int b) {
-    if (!meets(node_box_[static_cast<size_t>(a)], node_box_[static_cast<size_t>(b)])) return;
-    const LoopHierarchy::Node& A = nodes_[static_cast<size_t>(a)];
-    const LoopHierarchy::Node& B = nodes_[static_cast<size_t>(b)];
-    const bool a_leaf = A.right < 0, b_leaf = B.right < 0;
-    if (a_leaf && b_leaf) {
-      for (int i = A.lo; i < A.hi; ++i)
-        for (int j = B.lo; j < B.hi; ++j) candidate(i, j);
-    } else if (b_leaf || (!a_leaf && A.hi - A.lo >= B.hi - B.lo)) {
-      pair(a + 1, b);
-      pair(A.right, b);
-    } else {
-      pair(a, b + 1);
-      pair(a, B.right);
-    }
-  }
-
-  static bool meets(const Box& p, const Box& q) { return p.x0 <= q.x1 && q.x0 <= p.x1 && p.y0 <= q.y1 && q.y0 <= p.y1; }
-
   // Edges i < j (slots); an empty slot's box meets nothing.
   void candidate(int i, int j) {
-    if (!meets(slot_box_[static_cast<size_t>(i)], slot_box_[static_cast<size_t>(j)])) return;
+    if (!slot_box_[static_cast<size_t>(i)].meets(slot_box_[static_cast<size_t>(j)])) return;
     const int ni = next_[static_cast<size_t>(i)], nj = next_[static_cast<size_t>(j)];
     const cd a0 = z_[static_cast<size_t>(i)], a1 = z_[static_cast<size_t>(ni)];
     const cd b0 = z_[static_cast<size_t>(j)], b1 = z_[static_cast<size_t>(nj)];
@@ -401,27 +392,24 @@ LoopHierarchy::Crossings LoopHierarchy::search(std::span<const cd> points, std::
     sb[i] = {std::min(a.real(), b.real()), std::max(a.real(), b.real()), std::min(a.imag(), b.imag()), std::max(a.imag(), b.imag())};
     sr[i] = runs(a, b);
   }
-  const auto join = [](const Box& p, const Box& q) -> Box {
-    return {std::min(p.x0, q.x0), std::max(p.x1, q.x1), std::min(p.y0, q.y0), std::max(p.y1, q.y1)};
-  };
   for (size_t id = nodes_.size(); id-- > 0;) {  // children after parents: refit bottom-up
     const Node& n = nodes_[id];
     if (n.right < 0) {
       Box b = sb[static_cast<size_t>(n.lo)];
       unsigned char r = sr[static_cast<size_t>(n.lo)];
       for (int i = n.lo + 1; i < n.hi; ++i) {
-        b = join(b, sb[static_cast<size_t>(i)]);
+        b = b | sb[static_cast<size_t>(i)];
         r &= sr[static_cast<size_t>(i)];
       }
       nb[id] = b;
       nr[id] = r;
     } else {
-      nb[id] = join(nb[id + 1], nb[static_cast<size_t>(n.right)]);
+      nb[id] = nb[id + 1] | nb[static_cast<size_t>(n.right)];
       nr[id] = n.chain ? static_cast<unsigned char>(nr[id + 1] & nr[static_cast<size_t>(n.right)]) : 0;
     }
   }
   Traversal t(nodes_, points, next, sb, nb, nr);
-  t.self(0);
+  t.run();
   return t.found;
 }
 

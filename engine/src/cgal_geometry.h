@@ -2,6 +2,7 @@
 // cgal_geometry.cpp, so that builds stay fast).
 #pragma once
 
+#include <algorithm>
 #include <span>
 #include <utility>
 #include <vector>
@@ -47,6 +48,10 @@ class LoopHierarchy {
 
   struct Box {
     double x0, x1, y0, y1;  // closed; empty (x0 > x1) for a slot without an edge
+    bool meets(const Box& o) const { return x0 <= o.x1 && o.x0 <= x1 && y0 <= o.y1 && o.y0 <= y1; }
+    Box operator|(const Box& o) const {
+      return {std::min(x0, o.x0), std::max(x1, o.x1), std::min(y0, o.y0), std::max(y1, o.y1)};
+    }
   };
   struct Node {
     int lo, hi;  // the slots [lo, hi)
