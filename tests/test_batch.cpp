@@ -9,11 +9,13 @@
 #endif
 
 #include "bench_scenes.h"
+#include "frame_compare.h"
 #include "hsi/batch.h"
 #include "hsi/keyframes.h"
 #include "hsi/runtime/backend.h"
 
 using namespace hsi;
+using hsi::test::require_same;  // every field a frame reports, exactly (timings aside)
 using Catch::Matchers::Contains;
 
 namespace {
@@ -47,26 +49,6 @@ struct OneThread {
   ~OneThread() { omp_set_num_threads(before); }
 #endif
 };
-
-// Every field a frame reports, compared exactly (the time it took aside).
-void require_same(const FrameResult& a, const FrameResult& b) {
-  INFO("t = " << a.t);
-  REQUIRE(a.t == b.t);
-  REQUIRE(a.keyframe == b.keyframe);
-  REQUIRE(a.held == b.held);
-  REQUIRE(a.certified == b.certified);
-  REQUIRE(a.converged == b.converged);
-  REQUIRE(a.iterations == b.iterations);
-  REQUIRE(a.energy == b.energy);
-  REQUIRE(a.x == b.x);
-  REQUIRE(a.map.phi == b.map.phi);
-  REQUIRE(a.map.psi == b.map.psi);
-  REQUIRE(a.certificate.certified == b.certificate.certified);
-  REQUIRE(a.certificate.sigma1_max == b.certificate.sigma1_max);
-  REQUIRE(a.distortion.conformal_max == b.distortion.conformal_max);
-  REQUIRE(a.overlap.crossings == b.overlap.crossings);
-  REQUIRE(a.message == b.message);
-}
 
 }  // namespace
 

@@ -14,6 +14,7 @@
 #include "hsi/keyframes.h"
 #include "hsi/overlap.h"
 #include "hsi/scene_sequence.h"
+#include "random_loops.h"
 #include "test_shapes.h"
 
 using namespace hsi;
@@ -171,31 +172,6 @@ TEST_CASE("overlap: a round-off fold-back a hair's width from a vertex is not a 
 
 namespace {
 
-// Random closed polylines: a noisy circle (a simple loop with few or no crossings), a
-// random walk (many crossings), and a walk on a coarse integer grid (collinear
-// overlaps, touchings at vertices, repeated points: the exact predicates' hard cases).
-std::vector<Loop> random_polylines(std::mt19937& rng, int kind, int points) {
-  std::uniform_real_distribution<double> u(-1, 1);
-  std::uniform_int_distribution<int> step(-1, 1);
-  std::vector<Loop> loops(3);
-  for (size_t l = 0; l < loops.size(); ++l) {
-    Loop& L = loops[l];
-    const int n = points / 3;
-    cd z{0, 0};
-    for (int i = 0; i < n; ++i) {
-      if (kind == 0) {
-        L.push_back((1.0 - 0.3 * static_cast<double>(l)) * std::polar(1.0 + 0.002 * u(rng), 2 * std::numbers::pi * i / n));
-      } else if (kind == 1) {
-        z += cd(0.01 * u(rng), 0.01 * u(rng));
-        L.push_back(z);
-      } else {
-        z += cd(step(rng), step(rng));
-        L.push_back(z);
-      }
-    }
-  }
-  return loops;
-}
 
 std::vector<std::pair<std::array<int, 2>, std::array<int, 2>>> pairs_of(
     const std::vector<std::pair<detail::EdgeRef, detail::EdgeRef>>& found) {
@@ -211,7 +187,8 @@ TEST_CASE("overlap: the box hierarchy finds exactly the pairs CGAL's box sweep f
   std::mt19937 rng(2023);
   for (int kind = 0; kind < 3; ++kind)
     for (int points : {30, 3000, 12000}) {
-      const std::vector<Loop> loops = random_polylines(rng, kind, points);
+      // Kinds 0-2: noisy circles (simple), random walks (many crossings), integer-grid walks (collinear overlaps, touchings).
+      const std::vector<Loop> loops = hsi::test::random_loops(rng, kind, points);
       std::vector<const Loop*> ptrs;
       for (const Loop& l : loops) ptrs.push_back(&l);
       const auto want = detail::intersecting_edges_box_sweep(ptrs, std::numeric_limits<size_t>::max());

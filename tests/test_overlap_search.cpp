@@ -11,87 +11,15 @@
 #include "hsi/keyframes.h"
 #include "hsi/overlap.h"
 #include "hsi/scene_sequence.h"
+#include "frame_compare.h"
+#include "random_loops.h"
 #include "test_shapes.h"
 
 using namespace hsi;
+using hsi::test::random_loops;
+using hsi::test::require_same;
 
 namespace {
-
-// The same double, NaN included (the crossing point of two segments of size ~1e300
-// overflows in both searches).
-bool same(double a, double b) { return a == b || (std::isnan(a) && std::isnan(b)); }
-
-// Every field, the crossing point bit for bit.
-void require_same(const OverlapResult& got, const OverlapResult& want) {
-  INFO(describe(want));
-  CHECK(got.checked == want.checked);
-  CHECK(got.crossings == want.crossings);
-  CHECK(got.points == want.points);
-  CHECK(got.loop_a == want.loop_a);
-  CHECK(got.edge_a == want.edge_a);
-  CHECK(got.loop_b == want.loop_b);
-  CHECK(got.edge_b == want.edge_b);
-  CHECK(same(got.point.real(), want.point.real()));
-  CHECK(same(got.point.imag(), want.point.imag()));
-}
-
-// Random closed polylines of one kind, before scaling: 0 noisy concentric circles
-// (simple, apart), 1 random walks (many crossings), 2 walks on the integer grid
-// (collinear overlaps, touchings at vertices, shared vertices, repeated points), 3 grid
-// walks with steps of 1e-8 to 1e-11 of the size mixed in (around the merge tolerance
-// of 1e-9), 4 integer polygons with spikes (a vertex, then back along the same line:
-// fold-backs of neighbours, some exactly onto the previous vertex), 5 many small loops
-// in a box (loop against loop; some collapse to fewer than 3 distinct points).
-std::vector<Loop> random_loops(std::mt19937& rng, int kind, int points) {
-  std::uniform_real_distribution<double> u(-1, 1);
-  std::uniform_int_distribution<int> step(-1, 1), coin(0, 9), grid(-6, 6);
-  std::vector<Loop> loops;
-  if (kind == 5) {
-    for (int l = 0; l < std::max(2, points / 8); ++l) {
-      Loop L;
-      const cd c(grid(rng), grid(rng));
-      const int n = 1 + coin(rng);
-      for (int i = 0; i < n; ++i) L.push_back(coin(rng) < 2 ? c : c + cd(step(rng), step(rng)));
-      loops.push_back(L);
-    }
-    return loops;
-  }
-  loops.resize(3);
-  for (size_t l = 0; l < loops.size(); ++l) {
-    Loop& L = loops[l];
-    const int n = std::max(1, points / 3);
-    cd z{0, 0};
-    for (int i = 0; i < n; ++i) {
-      if (kind == 0) {
-        L.push_back((1.0 - 0.3 * static_cast<double>(l)) * std::polar(1.0 + 0.002 * u(rng), 2 * std::numbers::pi * i / n));
-      } else if (kind == 1) {
-        z += cd(0.01 * u(rng), 0.01 * u(rng));
-        L.push_back(z);
-      } else if (kind == 2) {
-        z += cd(step(rng), step(rng));
-        L.push_back(z);
-      } else if (kind == 3) {
-        const double tiny = coin(rng) < 3 ? std::pow(10.0, -8 - coin(rng) % 4) : 1.0;
-        z += tiny * cd(step(rng), step(rng));
-        L.push_back(z);
-      } else {
-        // A square's boundary walked in unit steps, with spikes out and back.
-        const int side = std::max(1, n / 8);
-        const int k = i % (4 * side), s = k / side, t = k % side;
-        const cd corner[4] = {{0, 0}, {double(side), 0}, {double(side), double(side)}, {0, double(side)}};
-        const cd dir[4] = {{1, 0}, {0, 1}, {-1, 0}, {0, -1}};
-        const cd p = corner[s] + static_cast<double>(t) * dir[s] + static_cast<double>(l) * cd(0.5, 0.5);
-        L.push_back(p);
-        if (coin(rng) == 0) {
-          const cd d(step(rng), step(rng));
-          L.push_back(p + 2.0 * d);
-          if (coin(rng) < 5) L.push_back(p + d);  // back to the middle, or on to p's successor
-        }
-      }
-    }
-  }
-  return loops;
-}
 
 bool finite(const std::vector<Loop>& loops) {
   for (const Loop& l : loops)
@@ -244,46 +172,6 @@ TEST_CASE("overlap search: a checker's image checks equal the reference's, one w
 namespace {
 
 std::filesystem::path bent_bar_path() { return std::filesystem::path(HSI_TESTS_DIR) / "scenes" / "bent_bar.json"; }
-
-bool same_number(double a, double b) { return a == b || (std::isnan(a) && std::isnan(b)); }
-
-void require_same(const Distortion& a, const Distortion& b) {
-  CHECK(same_number(a.sigma1_max, b.sigma1_max));
-  CHECK(same_number(a.sigma2_min, b.sigma2_min));
-  CHECK(same_number(a.conformal_max, b.conformal_max));
-  CHECK(same_number(a.isometric_max, b.isometric_max));
-}
-
-// Every field a frame has but its timings.
-void require_same(const FrameResult& a, const FrameResult& b) {
-  INFO("t = " << b.t);
-  CHECK(a.t == b.t);
-  CHECK(a.map.phi == b.map.phi);
-  CHECK(a.map.psi == b.map.psi);
-  CHECK(a.x == b.x);
-  CHECK(a.keyframe == b.keyframe);
-  CHECK(a.held == b.held);
-  CHECK(a.certified == b.certified);
-  CHECK(a.converged == b.converged);
-  CHECK(a.certificate.certified == b.certificate.certified);
-  CHECK(a.certificate.reason == b.certificate.reason);
-  CHECK(a.certificate.winding == b.certificate.winding);
-  CHECK(a.certificate.sigma1_max == b.certificate.sigma1_max);
-  CHECK(a.certificate.sigma2_min == b.certificate.sigma2_min);
-  CHECK(a.certificate.observed_isometric_max == b.certificate.observed_isometric_max);
-  CHECK(a.certificate.segments == b.certificate.segments);
-  CHECK(a.certificate.subdivisions == b.certificate.subdivisions);
-  CHECK(a.iterations == b.iterations);
-  CHECK(a.energy == b.energy);
-  require_same(a.distortion, b.distortion);
-  require_same(a.distortion_certified, b.distortion_certified);
-  require_same(a.bound, b.bound);
-  require_same(a.certified_bound, b.certified_bound);
-  CHECK(same_number(a.bound_excess, b.bound_excess));
-  CHECK(same_number(a.certified_bound_excess, b.certified_bound_excess));
-  CHECK(a.message == b.message);
-  require_same(a.overlap, b.overlap);
-}
 
 struct BentBar {
   Scene scene = load_scene(bent_bar_path());
