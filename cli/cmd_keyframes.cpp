@@ -146,11 +146,9 @@ void register_keyframes(CLI::App& app) {
     ko.stages = o->stages;
     ko.newton.max_iterations = o->max_iterations;
     const runtime::Backend backend = runtime::parse_backend(o->backend);
-    bool said_core = false;
-    ko.make_core = [&](const ShapeSetup& s) {
+    ko.make_core = [&](const ShapeSetup& s) {  // once, for the scene's keyframes
       runtime::NewtonCoreChoice c = runtime::make_newton_core(s, backend);
-      if (!said_core) std::printf("Newton core: %s\n", runtime::describe(c.choice).c_str());
-      said_core = true;
+      std::printf("Newton core: %s\n", runtime::describe(c.choice).c_str());
       return std::move(c.core);
     };
     std::optional<SceneTexture> tex;  // the keyframe pictures draw the sprite through each map

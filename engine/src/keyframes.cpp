@@ -21,9 +21,15 @@ std::vector<cd> map_points(const Cage& cage, const HarmonicMap& map, std::span<c
   return std::vector<cd>(f.data(), f.data() + f.size());
 }
 
-KeyframeResult author_keyframe(const ShapeSetup& setup, std::span<const cd> handles, std::span<const cd> targets,
-                               const HarmonicMap& start, const KeyframeOptions& o,
-                               const std::function<void(int, int)>& progress) {
+namespace {
+// Identity target metric: the symmetric Dirichlet energy.
+std::unique_ptr<NewtonCore> authoring_core(const ShapeSetup& setup, const KeyframeOptions& o) {
+  return o.make_core ? o.make_core(setup) : make_cpu_newton_core(setup.D_G, setup.H);
+}
+
+// author_keyframe on a given core (a scene's keyframes share one).
+KeyframeResult author_on(NewtonCore& core, const ShapeSetup& setup, std::span<const cd> handles, std::span<const cd> targets,
+                         const HarmonicMap& start, const KeyframeOptions& o, const std::function<void(int, int)>& progress) {
   const auto t0 = std::chrono::steady_clock::now();
   if (handles.size() != targets.size())
     throw InputError("keyframe: " + std::to_string(targets.size()) + " targets for " + std::to_string(handles.size()) + " handles");
@@ -44,8 +50,6 @@ KeyframeResult author_keyframe(const ShapeSetup& setup, std::span<const cd> hand
   const double lam = o.lambda / (setup.size * setup.size);
   const std::vector<cd> from = map_points(setup.cage, start, handles);
 
-  // Identity target metric: the symmetric Dirichlet energy.
-  std::unique_ptr<NewtonCore> core = o.make_core ? o.make_core(setup) : make_cpu_newton_core(setup.D_G, setup.H);
   KeyframeResult r;
   const int stages = std::max(1, o.stages);
   NewtonResult last;
@@ -64,7 +68,7 @@ KeyframeResult author_keyframe(const ShapeSetup& setup, std::span<const cd> hand
       no.max_iterations = o.stage_iterations;
       no.tolerance = 1e-6;
     }
-    last = newton_solve(*core, space, &setup.certifier, &quad, x, no);
+    last = newton_solve(core, space, &setup.certifier, &quad, x, no);
     r.iterations += last.iterations;
     r.log.insert(r.log.end(), last.log.begin(), last.log.end());
     x = last.x;
@@ -72,7 +76,7 @@ KeyframeResult author_keyframe(const ShapeSetup& setup, std::span<const cd> hand
   r.map = space.expand(x);
   r.certificate = last.certificate;
   r.certified = last.certified;
-  r.energy = core->energy();
+  r.energy = core.energy();
   const std::vector<cd> got = map_points(setup.cage, r.map, handles);
   for (size_t k = 0; k < handles.size(); ++k) {
     const double e = std::abs(got[k] - targets[k]);
@@ -94,6 +98,14 @@ KeyframeResult author_keyframe(const ShapeSetup& setup, std::span<const cd> hand
   r.message = m.str();
   r.ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
   return r;
+}
+}  // namespace
+
+KeyframeResult author_keyframe(const ShapeSetup& setup, std::span<const cd> handles, std::span<const cd> targets,
+                               const HarmonicMap& start, const KeyframeOptions& o,
+                               const std::function<void(int, int)>& progress) {
+  const std::unique_ptr<NewtonCore> core = authoring_core(setup, o);
+  return author_on(*core, setup, handles, targets, start, o, progress);
 }
 
 HarmonicMap import_keyframe(const ShapeSetup& setup, const HarmonicMap& map, const std::string& what) {
@@ -119,6 +131,7 @@ std::vector<SceneKeyframe> solve_scene_keyframes(Scene& scene, const ShapeSetup&
                                                  bool force, const std::function<void(const SceneKeyframe&)>& on_keyframe) {
   std::vector<SceneKeyframe> out;
   HarmonicMap previous = identity_map(setup.cage);
+  std::unique_ptr<NewtonCore> core;
   try {
   for (size_t k = 0; k < scene.keyframes.size(); ++k) {
     Keyframe& key = scene.keyframes[k];
@@ -130,7 +143,8 @@ std::vector<SceneKeyframe> solve_scene_keyframes(Scene& scene, const ShapeSetup&
     } else {
       if (key.targets.empty()) throw InputError(label + ": has neither targets nor coefficients");
       rep.solved = true;
-      rep.result = author_keyframe(setup, scene.handles, key.targets, previous, options);
+      if (!core) core = authoring_core(setup, options);  // one core for the scene's keyframes, made when first needed
+      rep.result = author_on(*core, setup, scene.handles, key.targets, previous, options, {});
       if (!rep.result.certified) throw InputError(label + ": " + rep.result.message);
       key.coefficients = rep.result.map;
     }
