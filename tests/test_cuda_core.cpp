@@ -18,8 +18,10 @@
 #include "hsi/cuda/newton_core.h"
 #include "sample_math.cuh"
 #include "hsi/interpolation.h"
+#include "hsi/keyframes.h"
 #include "hsi/newton.h"
 #include "hsi/shape_setup.h"
+#include "frame_compare.h"
 #include "test_shapes.h"
 
 using namespace hsi;
@@ -471,6 +473,56 @@ TEST_CASE("a short sequence solved on the GPU matches the CPU", "[cuda][small]")
   HSI_REQUIRE_GPU();
   for (const auto& p : test::asset_scenes())
     if (p.filename() == "annulus.json") compare_sequences(p, 6, 4000);
+}
+
+// The device stepper replays each call as a CUDA graph (device.h GraphCache): a value a
+// graph baked in at capture that should change between calls (a step, a ridge, a
+// pointer) would give other frames than launching the same work directly
+// (HSI_CUDA_GRAPHS=0). Frames and authored keyframes must be the same bit for bit, on a
+// scene whose loop frees the rotation and uses the exact system, and in authoring (the
+// quadratic term's path).
+TEST_CASE("the device loop replayed as CUDA graphs gives the frames of direct launches", "[cuda][small]") {
+  HSI_REQUIRE_GPU();
+  for (const auto& p : test::asset_scenes()) {
+    if (p.filename() != "annulus.json" && p.filename() != "bar_holes.json") continue;
+    INFO(p.filename().string());
+    Scene scene = load_scene(p);
+    const auto setup = make_shape_setup(scene, 4000, 0.2);
+    auto make = [&](bool graphs) {
+      if (!graphs) REQUIRE(setenv("HSI_CUDA_GRAPHS", "0", 1) == 0);
+      auto core = hsi::cuda::make_newton_core(*setup);
+      if (!graphs) REQUIRE(unsetenv("HSI_CUDA_GRAPHS") == 0);
+      return core;
+    };
+    std::vector<double> times;
+    std::vector<HarmonicMap> maps;
+    for (const Keyframe& k : scene.keyframes) {
+      times.push_back(k.time);
+      maps.push_back(*k.coefficients);
+    }
+    Interpolator with(*setup, times, maps, {}, make(true)), without(*setup, times, maps, {}, make(false));
+    const auto a = with.sequence(30), b = without.sequence(30);
+    REQUIRE(a.size() == b.size());
+    int exact_frames = 0;
+    for (size_t i = 0; i < a.size(); ++i) {
+      test::require_same(a[i], b[i]);
+      exact_frames += a[i].iterations > 1;
+    }
+    CHECK(exact_frames > 0);  // frames past their first iteration: the exact system's path
+    // Authoring: the second keyframe from its targets, on each core.
+    if (scene.keyframes.size() >= 2 && !scene.handles.empty() && !scene.keyframes[1].targets.empty()) {
+      KeyframeOptions o;
+      auto author = [&](bool graphs) {
+        o.make_core = [&, graphs](const ShapeSetup&) { return make(graphs); };
+        return author_keyframe(*setup, scene.handles, scene.keyframes[1].targets, maps[0], o);
+      };
+      const KeyframeResult ka = author(true), kb = author(false);
+      CHECK(ka.map.phi == kb.map.phi);
+      CHECK(ka.map.psi == kb.map.psi);
+      CHECK(ka.iterations == kb.iterations);
+      CHECK(ka.certified == kb.certified);
+    }
+  }
 }
 
 // cuBLAS and cuSOLVER are not linked (cuda/src/lazy_libraries.cpp): every process with

@@ -49,11 +49,15 @@ struct DeviceSpace {
   DeviceArray<double> X0;   // 4M: expand(0)
   DeviceArray<int> primary; // MapSpace::primary_rows
   DeviceArray<double> xa, xna, z, g, d, tmp, v, Hr, Hr0, Y, work, full, Q, c;  // xa = [x; 0], xna the trial
-  DeviceArray<int> info;
-  DeviceArray<double> sc;
+  DeviceArray<int> info;      // potrf's, potrs' status
+  DeviceArray<double> sc;     // the stepper's scalar slots (device_newton.cpp)
   PinnedArray<double> sc_down;
   PinnedArray<int> info_down;
   PinnedArray<double> x_up;
+  PinnedArray<double> params;  // per-call numbers (ridge, steps) the graphs copy into sc
+  Event params_done;           // recorded after the last graph that copied from params
+  bool params_pending = false;
+  GraphCache graphs{graphs_enabled()};  // the stepper's calls, one graph per call shape
   int lwork = 0;
 };
 
@@ -78,8 +82,8 @@ class CudaNewtonCore final : public NewtonCore {
         Wt_(sz(h_) * 6 * sz(n_)),
         R_(sz(n_) * 6 * sz(n_)),
         Hv_(16 * sz(n_) * sz(n_)),
-        part_sum_(kernels::kMaxPartials),
-        part_bad_(kernels::kMaxPartials),
+        part_sum_(sz(kernels::kMaxPartials) * sz(kernels::kMaxSteps)),
+        part_bad_(sz(kernels::kMaxPartials) * sz(kernels::kMaxSteps)),
         scalar_(1),
         targets_up_(3 * sz(G_)),
         coef_up_(2 * sz(n_)),
@@ -200,15 +204,7 @@ class CudaNewtonCore final : public NewtonCore {
   // made on the first escalation only (NewtonOptions::escalate_after_cuts).
   void build_hessian(HessianProjection projection, bool exact, bool all_samples) {
     const cudaStream_t s = stream_;
-    if (all_samples && !all_index_.get()) {
-      std::vector<int> iota(sz(G_));
-      for (size_t i = 0; i < iota.size(); ++i) iota[i] = static_cast<int>(i);
-      all_index_ = DeviceArray<int>(sz(G_));
-      W_all_ = DeviceArray<double2>(6 * sz(G_));
-      Wt_all_ = DeviceArray<double2>(sz(G_) * 6 * sz(n_));
-      HSI_CUDA_CHECK(cudaMemcpyAsync(all_index_.get(), iota.data(), all_index_.bytes(), cudaMemcpyHostToDevice, s));
-      HSI_CUDA_CHECK(cudaStreamSynchronize(s));  // iota is pageable host memory
-    }
+    if (all_samples) prepare_all_samples();
     const int rows = all_samples ? G_ : h_;
     const double2* DH = all_samples ? D_.get() : DH_.get();
     double2* Wt = all_samples ? Wt_all_.get() : Wt_.get();
@@ -217,6 +213,18 @@ class CudaNewtonCore final : public NewtonCore {
     HSI_CUDA_CHECK(cublasZgemm(blas_, CUBLAS_OP_C, CUBLAS_OP_N, n_, 6 * n_, rows, &kOne, DH, rows, Wt, rows, &kZero, R_.get(),
                                n_));
     HSI_CUDA_CHECK(kernels::real_hessian(n_, R_.get(), static_cast<double>(rows), Hv_.get(), s));
+  }
+
+  // The all-samples buffers, made on first use (synchronises once; outside any graph).
+  void prepare_all_samples() {
+    if (all_index_.get()) return;
+    std::vector<int> iota(sz(G_));
+    for (size_t i = 0; i < iota.size(); ++i) iota[i] = static_cast<int>(i);
+    all_index_ = DeviceArray<int>(sz(G_));
+    W_all_ = DeviceArray<double2>(6 * sz(G_));
+    Wt_all_ = DeviceArray<double2>(sz(G_) * 6 * sz(n_));
+    HSI_CUDA_CHECK(cudaMemcpyAsync(all_index_.get(), iota.data(), all_index_.bytes(), cudaMemcpyHostToDevice, stream_));
+    HSI_CUDA_CHECK(cudaStreamSynchronize(stream_));  // iota is pageable host memory
   }
 
   double mean_energy(double s) {

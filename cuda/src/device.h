@@ -9,7 +9,10 @@
 #include <cuda_runtime.h>
 
 #include <cstddef>
+#include <cstdlib>
+#include <cstdint>
 #include <string>
+#include <unordered_map>
 #include <utility>
 
 #include "hsi/cuda/newton_core.h"
@@ -143,14 +146,18 @@ class Upload {
   bool pending_ = false;
 };
 
-// A cuBLAS handle bound to a stream, scalars passed from the host.
+// A cuBLAS handle bound to a stream, scalars passed from the host, with a workspace of
+// its own (cuBLAS's size for Hopper), so that calls captured into CUDA graphs allocate
+// nothing.
 class BlasHandle {
  public:
-  explicit BlasHandle(cudaStream_t stream) {
+  static constexpr size_t kWorkspaceBytes = size_t{32} << 20;
+  explicit BlasHandle(cudaStream_t stream) : workspace_(kWorkspaceBytes) {
     HSI_CUDA_CHECK(cublasCreate(&h_));
     try {
       HSI_CUDA_CHECK(cublasSetStream(h_, stream));
       HSI_CUDA_CHECK(cublasSetPointerMode(h_, CUBLAS_POINTER_MODE_HOST));
+      HSI_CUDA_CHECK(cublasSetWorkspace(h_, workspace_.get(), workspace_.bytes()));
     } catch (...) {
       cublasDestroy(h_);
       throw;
@@ -162,6 +169,7 @@ class BlasHandle {
   operator cublasHandle_t() const { return h_; }
 
  private:
+  DeviceArray<unsigned char> workspace_;  // outlives the handle (declared first)
   cublasHandle_t h_ = nullptr;
 };
 
@@ -183,5 +191,78 @@ class SolverHandle {
  private:
   cusolverDnHandle_t h_ = nullptr;
 };
+
+// An instantiated CUDA graph (owns the executable; the graph itself is freed once
+// instantiated).
+class GraphExec {
+ public:
+  explicit GraphExec(cudaGraph_t graph) {
+    const cudaError_t e = cudaGraphInstantiate(&g_, graph, 0);
+    cudaGraphDestroy(graph);
+    HSI_CUDA_CHECK(e);
+  }
+  ~GraphExec() {
+    if (g_) cudaGraphExecDestroy(g_);
+  }
+  GraphExec(GraphExec&& o) noexcept : g_(std::exchange(o.g_, nullptr)) {}
+  GraphExec& operator=(GraphExec&& o) noexcept {
+    std::swap(g_, o.g_);
+    return *this;
+  }
+  GraphExec(const GraphExec&) = delete;
+  GraphExec& operator=(const GraphExec&) = delete;
+  operator cudaGraphExec_t() const { return g_; }
+
+ private:
+  cudaGraphExec_t g_ = nullptr;
+};
+
+// A stream's recurring call sequences as CUDA graphs, one per key: the first run of a
+// key captures what `enqueue` puts on the stream and instantiates it, every run launches
+// it (one launch instead of tens: the Newton stepper's calls are launch-bound, issue
+// #23). `enqueue` must be capturable and replayable: asynchronous work on the stream
+// only (no synchronisation, allocation or host reads of device data), and everything it
+// passes by value the same on every run of its key; values that change between runs go
+// through device memory (or pinned host memory the graph copies from). Disabled, run()
+// just calls `enqueue` (the reference path: HSI_CUDA_GRAPHS=0).
+class GraphCache {
+ public:
+  explicit GraphCache(bool enabled) : enabled_(enabled) {}
+  bool enabled() const { return enabled_; }
+
+  template <class Enqueue>
+  void run(std::uint64_t key, cudaStream_t stream, Enqueue&& enqueue) {
+    if (!enabled_) {
+      enqueue();
+      return;
+    }
+    auto it = graphs_.find(key);
+    if (it == graphs_.end()) {
+      HSI_CUDA_CHECK(cudaStreamBeginCapture(stream, cudaStreamCaptureModeThreadLocal));
+      cudaGraph_t graph = nullptr;
+      try {
+        enqueue();
+      } catch (...) {
+        if (cudaStreamEndCapture(stream, &graph) == cudaSuccess && graph) cudaGraphDestroy(graph);
+        throw;
+      }
+      HSI_CUDA_CHECK(cudaStreamEndCapture(stream, &graph));
+      it = graphs_.emplace(key, GraphExec(graph)).first;
+    }
+    HSI_CUDA_CHECK(cudaGraphLaunch(it->second, stream));
+  }
+  size_t size() const { return graphs_.size(); }
+
+ private:
+  bool enabled_;
+  std::unordered_map<std::uint64_t, GraphExec> graphs_;
+};
+
+// Whether the CUDA backend replays its recurring call sequences as graphs: yes unless
+// the environment sets HSI_CUDA_GRAPHS=0 (a switch for comparison and debugging).
+inline bool graphs_enabled() {
+  const char* v = std::getenv("HSI_CUDA_GRAPHS");
+  return !(v && std::string(v) == "0");
+}
 
 }  // namespace hsi::cuda

@@ -4,8 +4,13 @@
 // ZGEMM), the reduced system [T u]ᵀ Hv [T u]; per solve: the Cholesky factor and solve
 // (cuSOLVER), the direction in the samples and the maximal safe step, one download of
 // a few scalars; trial energies a batch of steps per download; the certificate of a
-// trial map (certify_kernels.cu). x, d and the system never leave the device.
+// trial map (certify_kernels.cu). x, d and the system never leave the device. Each call
+// is one CUDA graph (GraphCache, device.h), captured on its first run per call shape
+// and replayed after: per-call numbers (the ridge, the steps) reach it through pinned
+// slots it copies from, and nothing inside a call waits for the host; a call then
+// synchronises once, to hand back its few scalars.
 #include <cmath>
+#include <cstdint>
 #include <limits>
 
 #include "cuda_newton_core.h"
@@ -14,7 +19,7 @@
 namespace hsi::cuda {
 
 namespace {
-constexpr int kBatch = 4;  // trial energies per download (NewtonStepper asks for up to this many)
+constexpr int kBatch = kernels::kMaxSteps;  // trial energies per download (NewtonStepper asks for up to this many)
 // Scalar slots of DeviceSpace::sc.
 enum Slot {
   kSlope = 0,
@@ -27,8 +32,18 @@ enum Slot {
   kQuad2 = 7,  // dᵀ Q d
   kScratch = 8,
   kTrials = 9,
-  kSlots = kTrials + kBatch
+  kRidge = kTrials + kBatch,  // the per-call numbers, copied in from DeviceSpace::params
+  kStep = kRidge + 1,
+  kSteps = kStep + 1,
+  kSlots = kSteps + kBatch
 };
+// DeviceSpace::params (pinned) mirrors sc from kRidge on.
+constexpr int kParams = kSlots - kRidge;
+constexpr int param(Slot s) { return s - kRidge; }
+
+// Graph keys: the call, then what changes its sequence of work.
+enum Call : std::uint64_t { kStart = 1, kLinearize, kSolve, kTrialEnergies, kCertify, kAccept };
+std::uint64_t key(Call call, std::uint64_t shape) { return call | shape << 8; }
 
 // The rotation generator applied to rows: in v layout (Re φ, Im φ, Re ψ, Im ψ blocks of n)
 // u = (−Im φ, Re φ, Im ψ, −Re ψ); in complex order (Re φ_j, Im φ_j at 2j, 2j+1; ψ at 2n+2j…)
@@ -119,10 +134,11 @@ DeviceSpace& CudaNewtonCore::device_space(const MapSpace& space) {
   ds->Hr0 = DeviceArray<double>(D * D);
   ds->Y = DeviceArray<double>(4 * sz(n) * D);
   ds->full = DeviceArray<double>(4 * sz(M));
-  ds->info = DeviceArray<int>(1);
+  ds->info = DeviceArray<int>(2);
   ds->sc = DeviceArray<double>(kSlots);
   ds->sc_down = PinnedArray<double>(kSlots);
-  ds->info_down = PinnedArray<int>(1);
+  ds->info_down = PinnedArray<int>(2);
+  ds->params = PinnedArray<double>(kParams);
   ds->x_up = PinnedArray<double>(D);
   HSI_CUDA_CHECK(cudaMemsetAsync(ds->xa.get(), 0, ds->xa.bytes(), stream_));
   HSI_CUDA_CHECK(cudaMemsetAsync(ds->xna.get(), 0, ds->xna.bytes(), stream_));
@@ -141,7 +157,7 @@ class DeviceStepper final : public NewtonStepper {
       const int dim = S_.dim;
       if (quad_->Q.rows() != dim || quad_->Q.cols() != dim || quad_->c.size() != dim)
         throw InputError("hsi::cuda: the quadratic term does not match the space");
-      if (S_.Q.size() != sz(dim) * sz(dim)) {
+      if (S_.Q.size() != sz(dim) * sz(dim)) {  // once per space: the graphs keep these addresses
         S_.Q = DeviceArray<double>(sz(dim) * sz(dim));
         S_.c = DeviceArray<double>(sz(dim));
       }
@@ -154,20 +170,144 @@ class DeviceStepper final : public NewtonStepper {
     const int dim = S_.dim;
     if (x0.size() != dim) throw InputError("hsi::cuda: the start vector has " + std::to_string(x0.size()) + " entries, the space " + std::to_string(dim));
     std::copy(x0.data(), x0.data() + dim, S_.x_up.get());
-    HSI_CUDA_CHECK(cudaMemcpyAsync(S_.xa.get(), S_.x_up.get(), sz(dim) * sizeof(double), cudaMemcpyHostToDevice, st()));
-    set_coefficients();
-    HSI_CUDA_CHECK(kernels::mean_energy(c_.G_, c_.g_.get(), c_.ab_.get(), c_.dab_.get(), 0.0, c_.part_sum_.get(),
-                                        c_.part_bad_.get(), S_.sc.get() + kEnergy0, st()));
-    HSI_CUDA_CHECK(cudaMemcpyAsync(S_.sc_down.get() + kEnergy0, S_.sc.get() + kEnergy0, sizeof(double), cudaMemcpyDeviceToHost, st()));
-    HSI_CUDA_CHECK(cudaStreamSynchronize(st()));
+    S_.graphs.run(key(kStart, 0), st(), [&] {
+      HSI_CUDA_CHECK(cudaMemcpyAsync(S_.xa.get(), S_.x_up.get(), sz(dim) * sizeof(double), cudaMemcpyHostToDevice, st()));
+      set_coefficients();
+      HSI_CUDA_CHECK(kernels::mean_energy(c_.G_, c_.g_.get(), c_.ab_.get(), c_.dab_.get(), 0.0, c_.part_sum_.get(),
+                                          c_.part_bad_.get(), S_.sc.get() + kEnergy0, st()));
+      HSI_CUDA_CHECK(cudaMemcpyAsync(S_.sc_down.get() + kEnergy0, S_.sc.get() + kEnergy0, sizeof(double), cudaMemcpyDeviceToHost, st()));
+    });
+    HSI_CUDA_CHECK(cudaStreamSynchronize(st()));  // also frees x_up
     trial_step_ = std::numeric_limits<double>::quiet_NaN();
     return S_.sc_down[kEnergy0] + (quad_ ? quad_->value(x0) : 0.0);
   }
 
   double linearize(const HessianChoice& choice) override {
-    const int n = c_.n_, dim = S_.dim;
+    const int dim = S_.dim;
     m_ = choice.free_rotation ? dim + 1 : dim;
     rotation_ = choice.free_rotation;
+    horizontal_ = rotation_ && choice.exact && !quad_;
+    if (choice.all_samples) c_.prepare_all_samples();  // its buffers are made outside any graph
+    const std::uint64_t shape = static_cast<std::uint64_t>(choice.projection) | std::uint64_t{choice.exact} << 2 |
+                                std::uint64_t{choice.all_samples} << 3 | std::uint64_t{rotation_} << 4 |
+                                std::uint64_t{quad_ != nullptr} << 5;
+    S_.graphs.run(key(kLinearize, shape), st(), [&] { enqueue_linearize(choice); });
+    HSI_CUDA_CHECK(cudaStreamSynchronize(st()));  // also attributes the work to this call in the host's timing
+    return S_.sc_down[kDiagMax];
+  }
+
+  NewtonSystem solve(double ridge) override {
+    write_params([&] { S_.params[param(kRidge)] = ridge; });
+    const std::uint64_t shape = std::uint64_t{rotation_} | std::uint64_t{horizontal_} << 1 | std::uint64_t{quad_ != nullptr} << 2;
+    S_.graphs.run(key(kSolve, shape), st(), [&] { enqueue_solve(); });
+    params_read();
+    HSI_CUDA_CHECK(cudaStreamSynchronize(st()));
+    trial_step_ = std::numeric_limits<double>::quiet_NaN();
+    NewtonSystem sys;
+    sys.diagonal_max = S_.sc_down[kDiagMax];
+    sys.gradient_norm = std::sqrt(S_.sc_down[kGradNorm2]);
+    sys.slope = S_.sc_down[kSlope];
+    sys.max_safe_step = S_.sc_down[kSafeStep];
+    // The factorisation's and the solve's own status: potrs after a failed potrf reads
+    // an unfinished factor, whose numbers may well be finite.
+    sys.factored = S_.info_down[0] == 0 && S_.info_down[1] == 0 && std::isfinite(sys.slope);
+    if (quad_) {
+      q0_ = 0.5 * S_.sc_down[kQuad0] + S_.sc_down[kScratch] + quad_->k;
+      q1_ = S_.sc_down[kQuad1];
+      q2_ = S_.sc_down[kQuad2];
+    }
+    return sys;
+  }
+
+  void trial_energies(std::span<const double> steps, std::span<double> energies) override {
+    for (size_t begin = 0; begin < steps.size(); begin += kBatch) {
+      const int count = static_cast<int>(std::min<size_t>(kBatch, steps.size() - begin));
+      write_params([&] { std::copy_n(steps.begin() + static_cast<std::ptrdiff_t>(begin), count, S_.params.get() + param(kSteps)); });
+      S_.graphs.run(key(kTrialEnergies, static_cast<std::uint64_t>(count)), st(), [&] {
+        copy_params(kSteps, count);
+        HSI_CUDA_CHECK(kernels::mean_energies(c_.G_, c_.g_.get(), c_.ab_.get(), c_.dab_.get(), S_.sc.get() + kSteps, count,
+                                              c_.part_sum_.get(), c_.part_bad_.get(), S_.sc.get() + kTrials, st()));
+        HSI_CUDA_CHECK(cudaMemcpyAsync(S_.sc_down.get() + kTrials, S_.sc.get() + kTrials, sz(count) * sizeof(double),
+                                       cudaMemcpyDeviceToHost, st()));
+      });
+      params_read();
+      HSI_CUDA_CHECK(cudaStreamSynchronize(st()));
+      for (int j = 0; j < count; ++j) {
+        const double s = steps[begin + sz(j)];
+        energies[begin + sz(j)] = S_.sc_down[kTrials + j] + (quad_ ? q0_ + s * q1_ + 0.5 * s * s * q2_ : 0.0);
+      }
+    }
+  }
+
+  CertificateResult certify(double step, bool full) override {
+    if (!certify_) throw InputError("hsi::cuda: no certifier to certify with");
+    const bool trial = step != 0;
+    if (trial) write_params([&] { S_.params[param(kStep)] = step; });
+    const std::uint64_t shape = std::uint64_t{trial} | std::uint64_t{full} << 1 | std::uint64_t{rotation_} << 2;
+    S_.graphs.run(key(kCertify, shape), st(), [&] {
+      const double* x = S_.xa.get();
+      if (trial) {
+        enqueue_trial();
+        x = S_.xna.get();
+      }
+      // Full coefficients of x into S.full, then the certificate.
+      HSI_CUDA_CHECK(cudaMemcpyAsync(S_.full.get(), S_.X0.get(), S_.full.bytes(), cudaMemcpyDeviceToDevice, st()));
+      HSI_CUDA_CHECK(cublasDgemv(c_.blas_, CUBLAS_OP_N, S_.M4, S_.dim, &kOneD, S_.X.get(), S_.M4, x, 1, &kOneD, S_.full.get(), 1));
+      CertificateOptions o;
+      o.stop_at_first_failure = !full;
+      c_.certifier_->enqueue(reinterpret_cast<const double2*>(S_.full.get()), o);
+    });
+    if (trial) {
+      params_read();
+      trial_step_ = step;
+    }
+    return c_.certifier_->fetch();
+  }
+
+  void accept(double step) override {
+    // x ← the very point certify() looked at, else one made alike; copied (not swapped),
+    // since the graphs keep the buffers' addresses.
+    const bool trial = !(step == trial_step_);
+    if (trial) write_params([&] { S_.params[param(kStep)] = step; });
+    S_.graphs.run(key(kAccept, std::uint64_t{trial} | std::uint64_t{rotation_} << 1), st(), [&] {
+      if (trial) enqueue_trial();
+      HSI_CUDA_CHECK(cudaMemcpyAsync(S_.xa.get(), S_.xna.get(), sz(S_.dim) * sizeof(double), cudaMemcpyDeviceToDevice, st()));
+      set_coefficients();
+    });
+    if (trial) params_read();
+    trial_step_ = std::numeric_limits<double>::quiet_NaN();
+  }
+
+  Eigen::VectorXd x() override {
+    const int dim = S_.dim;
+    HSI_CUDA_CHECK(cudaMemcpyAsync(S_.x_up.get(), S_.xa.get(), sz(dim) * sizeof(double), cudaMemcpyDeviceToHost, st()));
+    HSI_CUDA_CHECK(cudaStreamSynchronize(st()));
+    return Eigen::Map<const Eigen::VectorXd>(S_.x_up.get(), dim);
+  }
+
+ private:
+  cudaStream_t st() const { return c_.stream_; }
+
+  // The pinned parameter slots are written only once the graph that last copied from
+  // them has run past that copy.
+  template <class Fill>
+  void write_params(Fill&& fill) {
+    if (S_.params_pending) HSI_CUDA_CHECK(cudaEventSynchronize(S_.params_done));
+    S_.params_pending = false;
+    fill();
+  }
+  void params_read() {
+    HSI_CUDA_CHECK(cudaEventRecord(S_.params_done, st()));
+    S_.params_pending = true;
+  }
+  // Inside a graph: the parameter slots [first, first + count) into sc.
+  void copy_params(Slot first, int count) {
+    HSI_CUDA_CHECK(cudaMemcpyAsync(S_.sc.get() + first, S_.params.get() + param(first), sz(count) * sizeof(double),
+                                   cudaMemcpyHostToDevice, st()));
+  }
+
+  void enqueue_linearize(const HessianChoice& choice) {
+    const int n = c_.n_, dim = S_.dim;
     if (rotation_) {  // u = R T x in both layouts, as the last columns of Ta and Tca
       HSI_CUDA_CHECK(cublasDgemv(c_.blas_, CUBLAS_OP_N, 4 * n, dim, &kOneD, S_.RT.get(), 4 * n, S_.xa.get(), 1, &kZeroD,
                                  S_.Ta.get() + sz(4 * n) * sz(dim), 1));
@@ -194,7 +334,6 @@ class DeviceStepper final : public NewtonStepper {
     if (quad_)  // m_ = dim here: the quadratic term never frees the rotation
       HSI_CUDA_CHECK(cublasDgeam(c_.blas_, CUBLAS_OP_N, CUBLAS_OP_N, dim, dim, &kOneD, S_.Hr0.get(), dim, &kOneD, S_.Q.get(), dim,
                                  S_.Hr0.get(), dim));
-    horizontal_ = rotation_ && choice.exact && !quad_;
     if (horizontal_) {
       // The exact system modulo the rotation (HessianChoice::free_rotation, newton.h): with
       // a = Tᵀu (tmp), k = Tᵀ Hv u (column dim of Hr0), c = uᵀ Hv u, the system in d is
@@ -203,53 +342,26 @@ class DeviceStepper final : public NewtonStepper {
       // system solves the dim one with d[dim] = 0, and solve() sets θ = −aᵀd/|u|².
       HSI_CUDA_CHECK(cublasDgemv(c_.blas_, CUBLAS_OP_T, 4 * n, m_, &kOneD, S_.Ta.get(), 4 * n, S_.Ta.get() + sz(4 * n) * sz(dim), 1,
                                  &kZeroD, S_.tmp.get(), 1));
-      HSI_CUDA_CHECK(cudaMemcpyAsync(S_.sc.get() + kQuad0, S_.tmp.get() + dim, sizeof(double), cudaMemcpyDeviceToDevice, st()));
-      HSI_CUDA_CHECK(cudaMemcpyAsync(S_.sc.get() + kQuad1, S_.Hr0.get() + sz(dim) * sz(m_) + sz(dim), sizeof(double),
-                                     cudaMemcpyDeviceToDevice, st()));
-      HSI_CUDA_CHECK(cudaMemcpyAsync(S_.sc.get() + kQuad2, S_.g.get() + dim, sizeof(double), cudaMemcpyDeviceToDevice, st()));
-      HSI_CUDA_CHECK(cudaMemcpyAsync(S_.sc_down.get() + kQuad0, S_.sc.get() + kQuad0, 3 * sizeof(double), cudaMemcpyDeviceToHost, st()));
-      HSI_CUDA_CHECK(cudaStreamSynchronize(st()));
-      uu_ = S_.sc_down[kQuad0];
-      const double c = S_.sc_down[kQuad1], gu = S_.sc_down[kQuad2];
-      const double minus_inv_uu = -1 / uu_, c_uu2 = c / (uu_ * uu_), minus_gu_uu = -gu / uu_, zero = 0;
-      double* k = S_.Hr0.get() + sz(dim) * sz(m_);
-      // Rank-1 updates A += α x yᵀ of the leading dim × dim block as GEMMs with k = 1.
-      auto rank1 = [&](const double* alpha, const double* x, const double* y) {
-        HSI_CUDA_CHECK(cublasDgemm(c_.blas_, CUBLAS_OP_N, CUBLAS_OP_T, dim, dim, 1, alpha, x, dim, y, dim, &kOneD, S_.Hr0.get(), m_));
-      };
-      rank1(&minus_inv_uu, S_.tmp.get(), k);
-      rank1(&minus_inv_uu, k, S_.tmp.get());
-      rank1(&c_uu2, S_.tmp.get(), S_.tmp.get());
-      HSI_CUDA_CHECK(cublasDaxpy(c_.blas_, dim, &minus_gu_uu, S_.tmp.get(), 1, S_.g.get(), 1));
-      HSI_CUDA_CHECK(cublasDscal(c_.blas_, m_, &zero, k, 1));                       // column dim
-      HSI_CUDA_CHECK(cublasDscal(c_.blas_, m_, &zero, S_.Hr0.get() + dim, m_));    // row dim
-      HSI_CUDA_CHECK(cublasDscal(c_.blas_, 1, &zero, S_.g.get() + dim, 1));
+      HSI_CUDA_CHECK(kernels::horizontal_system(dim, S_.Hr0.get(), S_.tmp.get(), S_.g.get(), st()));
     }
     HSI_CUDA_CHECK(kernels::diag_abs_max(m_, S_.Hr0.get(), S_.sc.get() + kDiagMax, st()));
     if (horizontal_)
       HSI_CUDA_CHECK(cudaMemcpyAsync(S_.Hr0.get() + sz(dim) * sz(m_) + sz(dim), S_.sc.get() + kDiagMax, sizeof(double),
                                      cudaMemcpyDeviceToDevice, st()));
     HSI_CUDA_CHECK(cudaMemcpyAsync(S_.sc_down.get() + kDiagMax, S_.sc.get() + kDiagMax, sizeof(double), cudaMemcpyDeviceToHost, st()));
-    HSI_CUDA_CHECK(cudaStreamSynchronize(st()));  // also attributes the work to this call in the host's timing
-    return S_.sc_down[kDiagMax];
   }
 
-  NewtonSystem solve(double ridge) override {
+  void enqueue_solve() {
     const int n = c_.n_, dim = S_.dim, m = m_;
-    HSI_CUDA_CHECK(kernels::add_ridge(m, S_.Hr0.get(), ridge, S_.Hr.get(), st()));
+    copy_params(kRidge, 1);
+    HSI_CUDA_CHECK(kernels::add_ridge(m, S_.Hr0.get(), S_.sc.get() + kRidge, S_.Hr.get(), st()));
     HSI_CUDA_CHECK(cusolverDnDpotrf(c_.solver_, CUBLAS_FILL_MODE_LOWER, m, S_.Hr.get(), m, S_.work.get(), S_.lwork, S_.info.get()));
-    // d = −g, solved in place; potrs after a failed potrf gives garbage that info flags.
+    // d = −g, solved in place.
     HSI_CUDA_CHECK(cudaMemcpyAsync(S_.d.get(), S_.g.get(), sz(m) * sizeof(double), cudaMemcpyDeviceToDevice, st()));
     HSI_CUDA_CHECK(cublasDscal(c_.blas_, m, &kMinusOneD, S_.d.get(), 1));
-    HSI_CUDA_CHECK(cusolverDnDpotrs(c_.solver_, CUBLAS_FILL_MODE_LOWER, m, 1, S_.Hr.get(), m, S_.d.get(), m, S_.info.get()));
-    if (horizontal_) {  // θ = −aᵀd / |u|² into d[dim] (0 from the decoupled solve)
-      HSI_CUDA_CHECK(kernels::dot(dim, S_.tmp.get(), S_.d.get(), S_.sc.get() + kScratch, st()));
-      HSI_CUDA_CHECK(cudaMemcpyAsync(S_.sc_down.get() + kScratch, S_.sc.get() + kScratch, sizeof(double), cudaMemcpyDeviceToHost, st()));
-      HSI_CUDA_CHECK(cudaStreamSynchronize(st()));
-      S_.sc_down[kScratch] = -S_.sc_down[kScratch] / uu_;
-      HSI_CUDA_CHECK(cudaMemcpyAsync(S_.d.get() + dim, S_.sc_down.get() + kScratch, sizeof(double), cudaMemcpyHostToDevice, st()));
-      HSI_CUDA_CHECK(cudaStreamSynchronize(st()));  // the pinned slot is reused below
-    }
+    HSI_CUDA_CHECK(cusolverDnDpotrs(c_.solver_, CUBLAS_FILL_MODE_LOWER, m, 1, S_.Hr.get(), m, S_.d.get(), m, S_.info.get() + 1));
+    if (horizontal_)  // θ = −aᵀd / |u|² into d[dim] (0 from the decoupled solve)
+      HSI_CUDA_CHECK(kernels::rotation_angle(dim, S_.tmp.get(), S_.d.get(), st()));
     HSI_CUDA_CHECK(kernels::dot(m, S_.g.get(), S_.d.get(), S_.sc.get() + kSlope, st()));
     HSI_CUDA_CHECK(kernels::dot(dim, S_.g.get(), S_.g.get(), S_.sc.get() + kGradNorm2, st()));
     if (quad_) {  // the quadratic term along d: q(x + s d) = q0 + s q1 + ½ s² q2
@@ -268,71 +380,8 @@ class DeviceStepper final : public NewtonStepper {
                                c_.coef_.get(), n, &CudaNewtonCore::kZero, c_.dab_.get(), c_.G_));
     HSI_CUDA_CHECK(kernels::max_safe_step(c_.G_, c_.ab_.get(), c_.dab_.get(), c_.part_sum_.get(), S_.sc.get() + kSafeStep, st()));
     HSI_CUDA_CHECK(cudaMemcpyAsync(S_.sc_down.get(), S_.sc.get(), kTrials * sizeof(double), cudaMemcpyDeviceToHost, st()));
-    HSI_CUDA_CHECK(cudaMemcpyAsync(S_.info_down.get(), S_.info.get(), sizeof(int), cudaMemcpyDeviceToHost, st()));
-    HSI_CUDA_CHECK(cudaStreamSynchronize(st()));
-    trial_step_ = std::numeric_limits<double>::quiet_NaN();
-    NewtonSystem sys;
-    sys.diagonal_max = S_.sc_down[kDiagMax];
-    sys.gradient_norm = std::sqrt(S_.sc_down[kGradNorm2]);
-    sys.slope = S_.sc_down[kSlope];
-    sys.max_safe_step = S_.sc_down[kSafeStep];
-    sys.factored = S_.info_down[0] == 0 && std::isfinite(sys.slope);
-    if (quad_) {
-      q0_ = 0.5 * S_.sc_down[kQuad0] + S_.sc_down[kScratch] + quad_->k;
-      q1_ = S_.sc_down[kQuad1];
-      q2_ = S_.sc_down[kQuad2];
-    }
-    return sys;
+    HSI_CUDA_CHECK(cudaMemcpyAsync(S_.info_down.get(), S_.info.get(), 2 * sizeof(int), cudaMemcpyDeviceToHost, st()));
   }
-
-  void trial_energies(std::span<const double> steps, std::span<double> energies) override {
-    for (size_t begin = 0; begin < steps.size(); begin += kBatch) {
-      const size_t count = std::min<size_t>(kBatch, steps.size() - begin);
-      for (size_t j = 0; j < count; ++j)
-        HSI_CUDA_CHECK(kernels::mean_energy(c_.G_, c_.g_.get(), c_.ab_.get(), c_.dab_.get(), steps[begin + j], c_.part_sum_.get(),
-                                            c_.part_bad_.get(), S_.sc.get() + kTrials + j, st()));
-      HSI_CUDA_CHECK(cudaMemcpyAsync(S_.sc_down.get() + kTrials, S_.sc.get() + kTrials, count * sizeof(double),
-                                     cudaMemcpyDeviceToHost, st()));
-      HSI_CUDA_CHECK(cudaStreamSynchronize(st()));
-      for (size_t j = 0; j < count; ++j) {
-        const double s = steps[begin + j];
-        energies[begin + j] = S_.sc_down[kTrials + j] + (quad_ ? q0_ + s * q1_ + 0.5 * s * s * q2_ : 0.0);
-      }
-    }
-  }
-
-  CertificateResult certify(double step, bool full) override {
-    if (!certify_) throw InputError("hsi::cuda: no certifier to certify with");
-    const double* x = S_.xa.get();
-    if (step != 0) {
-      make_trial(step);
-      x = S_.xna.get();
-    }
-    // Full coefficients of x into S.full, then the certificate.
-    HSI_CUDA_CHECK(cudaMemcpyAsync(S_.full.get(), S_.X0.get(), S_.full.bytes(), cudaMemcpyDeviceToDevice, st()));
-    HSI_CUDA_CHECK(cublasDgemv(c_.blas_, CUBLAS_OP_N, S_.M4, S_.dim, &kOneD, S_.X.get(), S_.M4, x, 1, &kOneD, S_.full.get(), 1));
-    CertificateOptions o;
-    o.stop_at_first_failure = !full;
-    c_.certifier_->enqueue(reinterpret_cast<const double2*>(S_.full.get()), o);
-    return c_.certifier_->fetch();
-  }
-
-  void accept(double step) override {
-    if (!(step == trial_step_)) make_trial(step);  // the very point certify() looked at, else made alike
-    std::swap(S_.xa, S_.xna);
-    trial_step_ = std::numeric_limits<double>::quiet_NaN();
-    set_coefficients();
-  }
-
-  Eigen::VectorXd x() override {
-    const int dim = S_.dim;
-    HSI_CUDA_CHECK(cudaMemcpyAsync(S_.x_up.get(), S_.xa.get(), sz(dim) * sizeof(double), cudaMemcpyDeviceToHost, st()));
-    HSI_CUDA_CHECK(cudaStreamSynchronize(st()));
-    return Eigen::Map<const Eigen::VectorXd>(S_.x_up.get(), dim);
-  }
-
- private:
-  cudaStream_t st() const { return c_.stream_; }
 
   // ab = D · (Tc x) at the device's current x.
   void set_coefficients() {
@@ -342,20 +391,19 @@ class DeviceStepper final : public NewtonStepper {
                                c_.coef_.get(), c_.n_, &CudaNewtonCore::kZero, c_.ab_.get(), c_.G_));
   }
 
-  // xna = x ⊕ step·d: x + s d, or regauge(Ta ([x; 0] + s d)) with the rotation freed.
-  void make_trial(double step) {
+  // Inside a graph: xna = x ⊕ s·d with s the step slot: x + s d, or regauge(Ta ([x; 0] +
+  // s d)) with the rotation freed.
+  void enqueue_trial() {
     const int dim = S_.dim;
+    copy_params(kStep, 1);
     if (!rotation_) {
-      HSI_CUDA_CHECK(cudaMemcpyAsync(S_.xna.get(), S_.xa.get(), sz(dim) * sizeof(double), cudaMemcpyDeviceToDevice, st()));
-      HSI_CUDA_CHECK(cublasDaxpy(c_.blas_, dim, &step, S_.d.get(), 1, S_.xna.get(), 1));
+      HSI_CUDA_CHECK(kernels::trial_point(dim, S_.xa.get(), S_.d.get(), S_.sc.get() + kStep, S_.xna.get(), st()));
     } else {
       const int n = c_.n_, m = dim + 1;
-      HSI_CUDA_CHECK(cudaMemcpyAsync(S_.z.get(), S_.xa.get(), sz(m) * sizeof(double), cudaMemcpyDeviceToDevice, st()));
-      HSI_CUDA_CHECK(cublasDaxpy(c_.blas_, m, &step, S_.d.get(), 1, S_.z.get(), 1));
+      HSI_CUDA_CHECK(kernels::trial_point(m, S_.xa.get(), S_.d.get(), S_.sc.get() + kStep, S_.z.get(), st()));
       HSI_CUDA_CHECK(cublasDgemv(c_.blas_, CUBLAS_OP_N, 4 * n, m, &kOneD, S_.Ta.get(), 4 * n, S_.z.get(), 1, &kZeroD, S_.v.get(), 1));
       HSI_CUDA_CHECK(kernels::regauge(dim, n, S_.rotation_vertex, S_.primary.get(), S_.v.get(), S_.xna.get(), st()));
     }
-    trial_step_ = step;
   }
 
   static constexpr double kOneD = 1, kZeroD = 0, kMinusOneD = -1;
@@ -366,7 +414,6 @@ class DeviceStepper final : public NewtonStepper {
   int m_ = 0;
   bool rotation_ = false;
   bool horizontal_ = false;  // the exact system modulo the rotation (linearize)
-  double uu_ = 1;            // |u|² of that system
   double trial_step_ = std::numeric_limits<double>::quiet_NaN();  // the step xna holds
   double q0_ = 0, q1_ = 0, q2_ = 0;
 };

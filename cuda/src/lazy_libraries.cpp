@@ -62,6 +62,8 @@ HSI_LAZY(kCublas, cublasStatus_t, cublasCreate_v2, (cublasHandle_t * handle), (h
 HSI_LAZY(kCublas, cublasStatus_t, cublasDestroy_v2, (cublasHandle_t handle), (handle))
 HSI_LAZY(kCublas, cublasStatus_t, cublasSetStream_v2, (cublasHandle_t handle, cudaStream_t stream), (handle, stream))
 HSI_LAZY(kCublas, cublasStatus_t, cublasSetPointerMode_v2, (cublasHandle_t handle, cublasPointerMode_t mode), (handle, mode))
+HSI_LAZY(kCublas, cublasStatus_t, cublasSetWorkspace_v2, (cublasHandle_t handle, void* workspace, size_t bytes),
+         (handle, workspace, bytes))
 HSI_LAZY(kCublas, const char*, cublasGetStatusName, (cublasStatus_t status), (status))
 HSI_LAZY(kCublas, const char*, cublasGetStatusString, (cublasStatus_t status), (status))
 HSI_LAZY(kCublas, cublasStatus_t, cublasZgemm_v2,

@@ -58,11 +58,12 @@ __device__ void block_min(double& v) {
   }
 }
 
-// Pass 1 of E(s) = mean_G e(g, a + s da, b + s db): per-block sums of the finite sample
-// energies and whether any sample was infinite (folded or degenerate).
-__global__ void __launch_bounds__(kBlock) energy_partials(int G, const double* __restrict__ g, const double2* __restrict__ ab,
-                                                          const double2* __restrict__ dab, double s,
-                                                          double* __restrict__ part_sum, int* __restrict__ part_bad) {
+// Pass 1 of E(s) = mean_G e(g, a + s da, b + s db): this block's sum of the finite
+// sample energies and whether any sample was infinite (folded or degenerate), written
+// to part_sum / part_bad at `slot`.
+__device__ void energy_partial(int G, const double* __restrict__ g, const double2* __restrict__ ab,
+                               const double2* __restrict__ dab, double s, double* __restrict__ part_sum,
+                               int* __restrict__ part_bad, unsigned slot) {
   double sum = 0;
   int bad = 0;
   for (int i = static_cast<int>(blockIdx.x * blockDim.x + threadIdx.x); i < G; i += static_cast<int>(gridDim.x * blockDim.x)) {
@@ -80,22 +81,41 @@ __global__ void __launch_bounds__(kBlock) energy_partials(int G, const double* _
   }
   block_sum_bad(sum, bad);
   if (threadIdx.x == 0) {
-    part_sum[blockIdx.x] = sum;
-    part_bad[blockIdx.x] = bad;
+    part_sum[slot] = sum;
+    part_bad[slot] = bad;
   }
 }
 
-// Pass 2 (one block): the mean, or +inf if any sample was.
+__global__ void __launch_bounds__(kBlock) energy_partials(int G, const double* __restrict__ g, const double2* __restrict__ ab,
+                                                          const double2* __restrict__ dab, double s,
+                                                          double* __restrict__ part_sum, int* __restrict__ part_bad) {
+  energy_partial(G, g, ab, dab, s, part_sum, part_bad, blockIdx.x);
+}
+
+// Pass 1 for `count` steps read from device memory: step k's partials at k·gridDim.x +
+// block, each summed exactly as energy_partials sums it (same grid, same order).
+__global__ void __launch_bounds__(kBlock) energies_partials(int G, const double* __restrict__ g, const double2* __restrict__ ab,
+                                                            const double2* __restrict__ dab, const double* __restrict__ steps,
+                                                            int count, double* __restrict__ part_sum, int* __restrict__ part_bad) {
+  for (int k = 0; k < count; ++k) {
+    energy_partial(G, g, ab, dab, steps[k], part_sum, part_bad, static_cast<unsigned>(k) * gridDim.x + blockIdx.x);
+    __syncthreads();  // block_sum_bad's shared slots are reused by the next step
+  }
+}
+
+// Pass 2 (one block per step): the mean, or +inf if any sample was; block k reads the
+// partials at k·parts and writes out[k].
 __global__ void __launch_bounds__(kBlock) finish_mean(int parts, const double* __restrict__ part_sum, const int* __restrict__ part_bad,
                                                       double count, double* __restrict__ out) {
+  const size_t base = static_cast<size_t>(blockIdx.x) * static_cast<size_t>(parts);
   double sum = 0;
   int bad = 0;
   for (int i = static_cast<int>(threadIdx.x); i < parts; i += static_cast<int>(blockDim.x)) {
-    sum += part_sum[i];
-    bad |= part_bad[i];
+    sum += part_sum[base + static_cast<size_t>(i)];
+    bad |= part_bad[base + static_cast<size_t>(i)];
   }
   block_sum_bad(sum, bad);
-  if (threadIdx.x == 0) *out = bad ? sample::infinity() : sum / count;
+  if (threadIdx.x == 0) out[blockIdx.x] = bad ? sample::infinity() : sum / count;
 }
 
 // ∂e/∂(Re a, Im a, Re b, Im b) per sample of G, packed as complex ∂E/∂a, ∂E/∂b (zero
@@ -237,6 +257,55 @@ __global__ void add_ridge_kernel(int n, const double* __restrict__ A0, double ri
     A[t] = A0[t] + (t % (static_cast<size_t>(n) + 1) == 0 ? ridge : 0.0);
 }
 
+__global__ void add_ridge_at_kernel(int n, const double* __restrict__ A0, const double* __restrict__ ridge, double* __restrict__ A) {
+  const double r = *ridge;
+  const size_t total = static_cast<size_t>(n) * static_cast<size_t>(n);
+  for (size_t t = blockIdx.x * static_cast<size_t>(blockDim.x) + threadIdx.x; t < total;
+       t += static_cast<size_t>(gridDim.x) * blockDim.x)
+    A[t] = A0[t] + (t % (static_cast<size_t>(n) + 1) == 0 ? r : 0.0);
+}
+
+__global__ void trial_point_kernel(int n, const double* __restrict__ x, const double* __restrict__ d, const double* __restrict__ step,
+                                   double* __restrict__ out) {
+  const int i = static_cast<int>(blockIdx.x * blockDim.x + threadIdx.x);
+  if (i < n) out[i] = x[i] + *step * d[i];
+}
+
+// The leading dim × dim block of the exact system modulo the rotation (device_newton.cpp,
+// linearize): A_ij += −(a_i k_j + k_i a_j)/uu + c a_i a_j/uu², with k = column dim of A, c =
+// A_dim,dim and uu = a[dim]. Reads column dim, writes only the leading block.
+__global__ void horizontal_block_kernel(int dim, int m, double* __restrict__ A, const double* __restrict__ a) {
+  const int i = static_cast<int>(blockIdx.x * blockDim.x + threadIdx.x), j = static_cast<int>(blockIdx.y * blockDim.y + threadIdx.y);
+  if (i >= dim || j >= dim) return;
+  const size_t M = static_cast<size_t>(m), D = static_cast<size_t>(dim);
+  const double uu = a[dim], c = A[D * M + D];
+  const double* k = A + D * M;
+  const double ai = a[i], aj = a[j];
+  A[static_cast<size_t>(j) * M + static_cast<size_t>(i)] += -(ai * k[j] + k[i] * aj) / uu + c * ai * aj / (uu * uu);
+}
+
+// Then (one block): g_i −= (g_dim/uu) a_i, row and column dim of A and g_dim cleared.
+__global__ void horizontal_clear_kernel(int dim, int m, double* __restrict__ A, const double* __restrict__ a, double* __restrict__ g) {
+  const double f = g[dim] / a[dim];
+  __syncthreads();  // every thread has read g[dim] before it is cleared
+  const size_t M = static_cast<size_t>(m), D = static_cast<size_t>(dim);
+  for (int i = static_cast<int>(threadIdx.x); i < m; i += static_cast<int>(blockDim.x)) {
+    if (i < dim) g[i] -= f * a[i];
+    else g[i] = 0;
+    A[D * M + static_cast<size_t>(i)] = 0;                  // column dim
+    A[static_cast<size_t>(i) * M + D] = 0;                  // row dim
+  }
+}
+
+// One block: d[dim] = −(Σ_{i<dim} a_i d_i) / a[dim].
+__global__ void __launch_bounds__(kBlock) rotation_angle_kernel(int dim, const double* __restrict__ a, double* __restrict__ d) {
+  double sum = 0;
+  int bad = 0;
+  for (int i = static_cast<int>(threadIdx.x); i < dim; i += static_cast<int>(blockDim.x)) sum += a[i] * d[i];
+  block_sum_bad(sum, bad);
+  if (threadIdx.x == 0) d[dim] = -sum / a[dim];
+}
+
 // MapSpace::regauge on the device: rotate the image so that φ_r lies on the positive
 // imaginary axis, then read x off the primary rows (same arithmetic as the host).
 __global__ void regauge_kernel(int dim, int n, int r, const int* __restrict__ primary, const double* __restrict__ v,
@@ -291,6 +360,17 @@ cudaError_t mean_energy(int G, const double* g, const double2* ab, const double2
   return cudaGetLastError();
 }
 
+cudaError_t mean_energies(int G, const double* g, const double2* ab, const double2* dab, const double* steps, int count,
+                          double* part_sum, int* part_bad, double* out, cudaStream_t stream) {
+  if (count < 1 || count > kMaxSteps) return cudaErrorInvalidValue;
+  const unsigned parts = reduction_blocks(G);
+  energies_partials<<<parts, kBlock, 0, stream>>>(G, g, ab, dab, steps, count, part_sum, part_bad);
+  if (const cudaError_t e = cudaGetLastError(); e != cudaSuccess) return e;
+  finish_mean<<<static_cast<unsigned>(count), kBlock, 0, stream>>>(static_cast<int>(parts), part_sum, part_bad,
+                                                                   static_cast<double>(G), out);
+  return cudaGetLastError();
+}
+
 cudaError_t gradient_samples(int G, const double* g, const double2* ab, double2* gab, cudaStream_t stream) {
   gradient_kernel<<<blocks_for(G, kBlock, 1LL << 30), kBlock, 0, stream>>>(G, g, ab, gab);
   return cudaGetLastError();
@@ -333,6 +413,31 @@ cudaError_t diag_abs_max(int n, const double* A, double* out, cudaStream_t strea
 cudaError_t add_ridge(int n, const double* A0, double ridge, double* A, cudaStream_t stream) {
   const long long total = static_cast<long long>(n) * n;
   add_ridge_kernel<<<static_cast<unsigned>(std::min<long long>((total + 255) / 256, 4096)), 256, 0, stream>>>(n, A0, ridge, A);
+  return cudaGetLastError();
+}
+
+cudaError_t add_ridge(int n, const double* A0, const double* ridge, double* A, cudaStream_t stream) {
+  const long long total = static_cast<long long>(n) * n;
+  add_ridge_at_kernel<<<static_cast<unsigned>(std::min<long long>((total + 255) / 256, 4096)), 256, 0, stream>>>(n, A0, ridge, A);
+  return cudaGetLastError();
+}
+
+cudaError_t trial_point(int n, const double* x, const double* d, const double* step, double* out, cudaStream_t stream) {
+  trial_point_kernel<<<static_cast<unsigned>((n + kBlock - 1) / kBlock), kBlock, 0, stream>>>(n, x, d, step, out);
+  return cudaGetLastError();
+}
+
+cudaError_t horizontal_system(int dim, double* A, const double* a, double* g, cudaStream_t stream) {
+  const int m = dim + 1;
+  const dim3 block(32, 8), grid(blocks_for(dim, 32, 65535), blocks_for(dim, 8, 65535));
+  horizontal_block_kernel<<<grid, block, 0, stream>>>(dim, m, A, a);
+  if (const cudaError_t e = cudaGetLastError(); e != cudaSuccess) return e;
+  horizontal_clear_kernel<<<1, kBlock, 0, stream>>>(dim, m, A, a, g);
+  return cudaGetLastError();
+}
+
+cudaError_t rotation_angle(int dim, const double* a, double* d, cudaStream_t stream) {
+  rotation_angle_kernel<<<1, kBlock, 0, stream>>>(dim, a, d);
   return cudaGetLastError();
 }
 

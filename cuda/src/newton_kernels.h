@@ -13,6 +13,7 @@ namespace hsi::cuda::kernels {
 
 constexpr int kBlock = 256;         // threads per block of the sample kernels
 constexpr int kMaxPartials = 1024;  // most blocks (= partial results) of a reduction
+constexpr int kMaxSteps = 4;        // most steps of one mean_energies call
 
 // The number of partials a reduction over `count` samples writes (≤ kMaxPartials);
 // scratch arrays for partials need this many entries.
@@ -29,6 +30,12 @@ cudaError_t gather_rows(int G, int h, int n, const double2* D, const int* H, dou
 // part_bad (reduction_blocks(G) entries each): deterministic.
 cudaError_t mean_energy(int G, const double* g, const double2* ab, const double2* dab, double s, double* part_sum,
                         int* part_bad, double* out, cudaStream_t stream);
+
+// out[k] = mean_energy at steps[k] for k < count ≤ kMaxSteps, the steps read from device
+// memory (so that a CUDA graph replays it with new steps); each value bit for bit what
+// mean_energy gives. part_sum and part_bad: count · reduction_blocks(G) entries.
+cudaError_t mean_energies(int G, const double* g, const double2* ab, const double2* dab, const double* steps, int count,
+                          double* part_sum, int* part_bad, double* out, cudaStream_t stream);
 
 // gab = per-sample (∂e/∂Re a + i ∂e/∂Im a, ∂e/∂Re b + i ∂e/∂Im b); zero where e = +inf.
 cudaError_t gradient_samples(int G, const double* g, const double2* ab, double2* gab, cudaStream_t stream);
@@ -51,6 +58,16 @@ cudaError_t max_safe_step(int G, const double2* ab, const double2* dab, double* 
 cudaError_t dot(int n, const double* a, const double* b, double* out, cudaStream_t stream);
 cudaError_t diag_abs_max(int n, const double* A, double* out, cudaStream_t stream);
 cudaError_t add_ridge(int n, const double* A0, double ridge, double* A, cudaStream_t stream);
+// Device-scalar forms for graph replays: A = A0 + (*ridge)·I; out = x + (*step)·d (n).
+cudaError_t add_ridge(int n, const double* A0, const double* ridge, double* A, cudaStream_t stream);
+cudaError_t trial_point(int n, const double* x, const double* d, const double* step, double* out, cudaStream_t stream);
+// The exact system modulo the rotation in place (device_newton.cpp, linearize), A
+// (dim+1)² and g (dim+1), with a = Tᵀu (dim+1; a[dim] = |u|²): A_TT −= (a kᵀ + k aᵀ)/|u|²
+// − c a aᵀ/|u|⁴ (k = column dim of A, c = A_dim,dim), g_T −= (g_dim/|u|²) a, then row and
+// column dim of A and g_dim cleared.
+cudaError_t horizontal_system(int dim, double* A, const double* a, double* g, cudaStream_t stream);
+// d[dim] = −(Σ_{i<dim} a_i d_i) / a[dim]: the rotation's share of that system's step.
+cudaError_t rotation_angle(int dim, const double* a, double* d, cudaStream_t stream);
 // x = MapSpace::regauge(v) for v (4n, active coefficients) into x (dim).
 cudaError_t regauge(int dim, int n, int rotation_vertex, const int* primary_rows, const double* v, double* x,
                     cudaStream_t stream);
