@@ -475,6 +475,38 @@ TEST_CASE("a short sequence solved on the GPU matches the CPU", "[cuda][small]")
     if (p.filename() == "annulus.json") compare_sequences(p, 6, 4000);
 }
 
+// The CUDA core keeps the keyframes' metric sets on the device and blends them there
+// (NewtonCore::blend_targets); the energy it then gives must be the host blend's.
+TEST_CASE("the CUDA core's target blend matches the host blend, linear and exponential", "[cuda][small]") {
+  HSI_REQUIRE_GPU();
+  const Scene scene = load_scene(test::asset_scenes().front());
+  const auto setup = make_shape_setup(scene, 3000, 0.2);
+  const size_t G = setup->G.points.size();
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> u(-0.3, 0.3);
+  std::vector<std::vector<Metric>> keys(3, std::vector<Metric>(G)), logs(3, std::vector<Metric>(G));
+  for (size_t j = 0; j < 3; ++j)
+    for (size_t i = 0; i < G; ++i) {
+      keys[j][i] = Metric(1 + u(rng), 0.5 * u(rng), 1 + u(rng));
+      logs[j][i] = Metric(u(rng), u(rng), u(rng));
+    }
+  const auto gpu = hsi::cuda::make_newton_core(*setup);
+  const auto cpu = make_cpu_newton_core(setup->D_G, setup->H);
+  const Eigen::VectorXd v = setup->metric_space.T() * setup->metric_space.reduce(identity_map(setup->cage)).x;
+  gpu->set_coefficients(v);
+  cpu->set_coefficients(v);
+  const std::uint64_t tg = gpu->set_target_keys(keys, logs), tc = cpu->set_target_keys(keys, logs);
+  for (const bool exponential : {false, true}) {
+    const std::vector<double> w = exponential ? std::vector<double>{-0.2, 0.7, 0.5} : std::vector<double>{0.3, 0, 0.7};
+    REQUIRE(gpu->blend_targets(tg, w, exponential));
+    REQUIRE(cpu->blend_targets(tc, w, exponential));
+    CHECK(gpu->energy() == Approx(cpu->energy()).epsilon(1e-13));
+    CHECK((gpu->gradient() - cpu->gradient()).norm() <= 1e-12 * cpu->gradient().norm());
+  }
+  CHECK_FALSE(gpu->blend_targets(tc, std::vector<double>{1, 0, 0}, false));  // the CPU core's token
+  CHECK_THROWS_AS(gpu->blend_targets(tg, std::vector<double>{1, 0}, false), InputError);
+}
+
 // The device stepper replays each call as a CUDA graph (device.h GraphCache): a value a
 // graph baked in at capture that should change between calls (a step, a ridge, a
 // pointer) would give other frames than launching the same work directly

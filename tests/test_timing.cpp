@@ -9,6 +9,8 @@
 #include "hsi/interpolation.h"
 #include "hsi/keyframes.h"
 #include "hsi/scene_io.h"
+#include "hsi/newton.h"
+#include "hsi/shape_setup.h"
 #include "hsi/timing.h"
 #include "test_shapes.h"
 
@@ -250,4 +252,54 @@ TEST_CASE("scene files carry keyframe timing (version 2) and refuse what they ca
   Scene plain = s;
   for (Keyframe& k : plain.keyframes) k.timing = KeyTiming::Linear;
   CHECK_THAT(scene_to_json(plain), Contains("\"hsi_scene\": 1"));
+}
+
+// NewtonCore::set_target_keys / blend_targets: the interpolator's per-frame targets as a
+// blend of the keyframes' metric sets kept by the core (the CUDA core keeps them on the
+// GPU). The default blend must set exactly what set_targets of the host blend sets, and
+// a token from before newer sets must be refused, not blend the wrong keyframes.
+TEST_CASE("a core's target blend sets the blended metrics and refuses a stale token", "[timing]") {
+  const Scene scene = load_scene(std::filesystem::path(HSI_ASSETS_DIR) / "annulus.json");
+  const auto setup = make_shape_setup(scene, 600, 0.2);
+  const size_t G = setup->G.points.size();
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> u(-0.3, 0.3);
+  auto random_sets = [&](int K, bool logs) {
+    std::vector<std::vector<Metric>> sets(static_cast<size_t>(K), std::vector<Metric>(G));
+    for (auto& set : sets)
+      for (Metric& m : set) {
+        const double a = u(rng), b = u(rng), c = u(rng);
+        m = logs ? Metric(a, b, c) : Metric(1 + a, 0.5 * b, 1 + c);  // positive definite
+      }
+    return sets;
+  };
+  const auto keys = random_sets(3, false), logs = random_sets(3, true);
+  const std::vector<double> w{0.25, 0, 0.75}, ws{-0.1, 0.6, 0.5};
+  auto blended = [&](const std::vector<std::vector<Metric>>& sets, const std::vector<double>& wt, bool exponential) {
+    std::vector<Metric> m(G, Metric::Zero());
+    for (size_t j = 0; j < wt.size(); ++j)
+      if (wt[j] != 0)
+        for (size_t i = 0; i < G; ++i) m[i] += wt[j] * sets[j][i];
+    if (exponential)
+      for (Metric& mi : m) mi = metric_exp(mi);
+    return m;
+  };
+  const auto a = make_cpu_newton_core(setup->D_G, setup->H), b = make_cpu_newton_core(setup->D_G, setup->H);
+  const Eigen::VectorXd v = setup->metric_space.T() * setup->metric_space.reduce(identity_map(setup->cage)).x;
+  a->set_coefficients(v);
+  b->set_coefficients(v);
+  const std::uint64_t token = a->set_target_keys(keys, logs);
+  for (const bool exponential : {false, true}) {
+    const auto& wt = exponential ? ws : w;
+    REQUIRE(a->blend_targets(token, wt, exponential));
+    b->set_targets(blended(exponential ? logs : keys, wt, exponential));
+    CHECK(a->energy() == b->energy());
+    CHECK(a->gradient() == b->gradient());
+  }
+  CHECK_THROWS_WITH(a->blend_targets(token, std::vector<double>{1, 0}, false), Catch::Contains("2 weights for 3 metric sets"));
+  const std::uint64_t newer = a->set_target_keys(random_sets(2, false), {});
+  CHECK(newer != token);
+  CHECK_FALSE(a->blend_targets(token, w, false));
+  CHECK_FALSE(b->blend_targets(newer, std::vector<double>{1, 0}, false));  // another core's token
+  CHECK(a->blend_targets(newer, std::vector<double>{0.5, 0.5}, false));
 }

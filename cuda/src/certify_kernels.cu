@@ -2,6 +2,8 @@
 // engine/src/certificate.cpp so that both backends reach the same verdicts.
 #include "certify_kernels.h"
 
+#include <algorithm>
+
 #include <cfloat>
 
 namespace hsi::cuda::kernels {
@@ -205,70 +207,110 @@ __global__ void __launch_bounds__(kThreads) segments_kernel(CageView cage, Segme
   out[i] = o;
 }
 
-__global__ void __launch_bounds__(kReduceThreads) reduce_kernel(int S, const SegmentOutcome* __restrict__ outcomes,
-                                                                const double2* __restrict__ values, CertifySummary* out) {
-  // Each thread folds a strided subset, then a fixed tree over the block: deterministic.
-  double arg = 0, margin = inf(), s1 = 0, s2 = inf(), k = 0, os1 = 0, os2 = inf(), ok_ = 0, oiso = 0;
-  long long subdivisions = 0;
-  int first = S;
-  for (int i = static_cast<int>(threadIdx.x); i < S; i += static_cast<int>(blockDim.x)) {
-    const SegmentOutcome& o = outcomes[i];
-    subdivisions += o.pieces > 1 ? o.pieces - 1 : 0;
-    if (!o.ok && i < first) first = i;
-    arg += o.arg;
-    margin = fmin(margin, o.margin);
-    s1 = fmax(s1, o.sigma1);
-    s2 = fmin(s2, o.sigma2);
-    k = fmax(k, o.k);
-    const double aa = cabs(values[i]), bb = cabs(values[2 * S + i]);
-    os1 = fmax(os1, aa + bb);
-    os2 = fmin(os2, aa - bb);
-    ok_ = fmax(ok_, bb / aa);
-    const double x1 = aa + bb, x2 = aa - bb;
-    oiso = fmax(oiso, 0.5 * (x1 * x1 + 1 / (x1 * x1) + x2 * x2 + 1 / (x2 * x2)));
-  }
+// The certificate's summary as a fold: per thread over a strided subset of segments,
+// then fixed trees over a block (deterministic for a fixed grid).
+struct Fold {
+  double v[9];  // arg, margin, σ1, σ2, k, observed σ1, σ2, k, isometric
+  long long subdivisions;
+  int first;
+};
+
+__device__ Fold fold_identity(int S) {
+  return {{0, inf(), 0, inf(), 0, 0, inf(), 0, 0}, 0, S};
+}
+
+__device__ void fold_combine(Fold& a, const Fold& b) {
+  a.v[0] += b.v[0];
+  a.v[1] = fmin(a.v[1], b.v[1]);
+  a.v[2] = fmax(a.v[2], b.v[2]);
+  a.v[3] = fmin(a.v[3], b.v[3]);
+  a.v[4] = fmax(a.v[4], b.v[4]);
+  a.v[5] = fmax(a.v[5], b.v[5]);
+  a.v[6] = fmin(a.v[6], b.v[6]);
+  a.v[7] = fmax(a.v[7], b.v[7]);
+  a.v[8] = fmax(a.v[8], b.v[8]);
+  a.subdivisions += b.subdivisions;
+  a.first = min(a.first, b.first);
+}
+
+// Block tree over every thread's fold; the result in thread 0.
+__device__ Fold block_fold(Fold f) {
   __shared__ double sh[9][kReduceThreads];
   __shared__ long long sh_sub[kReduceThreads];
   __shared__ int sh_first[kReduceThreads];
   const int t = static_cast<int>(threadIdx.x);
-  sh[0][t] = arg, sh[1][t] = margin, sh[2][t] = s1, sh[3][t] = s2, sh[4][t] = k;
-  sh[5][t] = os1, sh[6][t] = os2, sh[7][t] = ok_, sh[8][t] = oiso;
-  sh_sub[t] = subdivisions;
-  sh_first[t] = first;
+  for (int q = 0; q < 9; ++q) sh[q][t] = f.v[q];
+  sh_sub[t] = f.subdivisions;
+  sh_first[t] = f.first;
   __syncthreads();
   for (int w = static_cast<int>(blockDim.x) / 2; w > 0; w /= 2) {
     if (t < w) {
-      const int u = t + w;
-      sh[0][t] += sh[0][u];
-      sh[1][t] = fmin(sh[1][t], sh[1][u]);
-      sh[2][t] = fmax(sh[2][t], sh[2][u]);
-      sh[3][t] = fmin(sh[3][t], sh[3][u]);
-      sh[4][t] = fmax(sh[4][t], sh[4][u]);
-      sh[5][t] = fmax(sh[5][t], sh[5][u]);
-      sh[6][t] = fmin(sh[6][t], sh[6][u]);
-      sh[7][t] = fmax(sh[7][t], sh[7][u]);
-      sh[8][t] = fmax(sh[8][t], sh[8][u]);
-      sh_sub[t] += sh_sub[u];
-      sh_first[t] = min(sh_first[t], sh_first[u]);
+      Fold a, b;
+      for (int q = 0; q < 9; ++q) a.v[q] = sh[q][t], b.v[q] = sh[q][t + w];
+      a.subdivisions = sh_sub[t], b.subdivisions = sh_sub[t + w];
+      a.first = sh_first[t], b.first = sh_first[t + w];
+      fold_combine(a, b);
+      for (int q = 0; q < 9; ++q) sh[q][t] = a.v[q];
+      sh_sub[t] = a.subdivisions;
+      sh_first[t] = a.first;
     }
     __syncthreads();
   }
+  Fold r;
+  for (int q = 0; q < 9; ++q) r.v[q] = sh[q][0];
+  r.subdivisions = sh_sub[0];
+  r.first = sh_first[0];
+  return r;
+}
+
+// Pass 1: each block folds a grid-strided subset of the segments into partials[block].
+__global__ void __launch_bounds__(kReduceThreads) reduce_partials_kernel(int S, const SegmentOutcome* __restrict__ outcomes,
+                                                                         const double2* __restrict__ values, Fold* partials) {
+  Fold f = fold_identity(S);
+  for (int i = static_cast<int>(blockIdx.x * blockDim.x + threadIdx.x); i < S; i += static_cast<int>(gridDim.x * blockDim.x)) {
+    const SegmentOutcome& o = outcomes[i];
+    Fold g = fold_identity(S);
+    g.subdivisions = o.pieces > 1 ? o.pieces - 1 : 0;
+    if (!o.ok) g.first = i;
+    g.v[0] = o.arg;
+    g.v[1] = o.margin;
+    g.v[2] = o.sigma1;
+    g.v[3] = o.sigma2;
+    g.v[4] = o.k;
+    const double aa = cabs(values[i]), bb = cabs(values[2 * S + i]);
+    const double x1 = aa + bb, x2 = aa - bb;
+    g.v[5] = x1;
+    g.v[6] = x2;
+    g.v[7] = bb / aa;
+    g.v[8] = 0.5 * (x1 * x1 + 1 / (x1 * x1) + x2 * x2 + 1 / (x2 * x2));
+    fold_combine(f, g);
+  }
+  const Fold r = block_fold(f);
+  if (threadIdx.x == 0) partials[blockIdx.x] = r;
+}
+
+// Pass 2 (one block): the partials in order, then the summary.
+__global__ void __launch_bounds__(kReduceThreads) reduce_finish_kernel(int parts, const Fold* __restrict__ partials, int S,
+                                                                       const SegmentOutcome* __restrict__ outcomes,
+                                                                       CertifySummary* out) {
+  const int t = static_cast<int>(threadIdx.x);
+  const Fold r = block_fold(t < parts ? partials[t] : fold_identity(S));
   if (t == 0) {
-    CertifySummary r;
-    r.arg_total = sh[0][0];
-    r.min_margin = sh[1][0];
-    r.sigma1_max = sh[2][0];
-    r.sigma2_min = sh[3][0];
-    r.k_max = sh[4][0];
-    r.observed_sigma1_max = sh[5][0];
-    r.observed_sigma2_min = sh[6][0];
-    r.observed_k_max = sh[7][0];
-    r.observed_isometric_max = sh[8][0];
-    r.segments = S;
-    r.subdivisions = sh_sub[0];
-    r.first_fail = sh_first[0];
-    r.fail_point = r.first_fail < S ? outcomes[r.first_fail].fail_point : make_double2(0, 0);
-    *out = r;
+    CertifySummary c;
+    c.arg_total = r.v[0];
+    c.min_margin = r.v[1];
+    c.sigma1_max = r.v[2];
+    c.sigma2_min = r.v[3];
+    c.k_max = r.v[4];
+    c.observed_sigma1_max = r.v[5];
+    c.observed_sigma2_min = r.v[6];
+    c.observed_k_max = r.v[7];
+    c.observed_isometric_max = r.v[8];
+    c.segments = S;
+    c.subdivisions = r.subdivisions;
+    c.first_fail = r.first;
+    c.fail_point = r.first < S ? outcomes[r.first].fail_point : make_double2(0, 0);
+    *out = c;
   }
 }
 
@@ -297,10 +339,18 @@ cudaError_t certify_segments(CageView cage, SegmentsView seg, const double2* coe
   return cudaGetLastError();
 }
 
-cudaError_t reduce_certificate(int S, const SegmentOutcome* outcomes, const double2* values, CertifySummary* out,
+cudaError_t reduce_certificate(int S, const SegmentOutcome* outcomes, const double2* values, void* partials, CertifySummary* out,
                                cudaStream_t stream) {
-  reduce_kernel<<<1, kReduceThreads, 0, stream>>>(S, outcomes, values, out);
+  static_assert(kReducePartials <= kReduceThreads);
+  const long long per_block = 4LL * kReduceThreads;  // a few segments per thread
+  const int parts = static_cast<int>(std::min<long long>(std::max<long long>((S + per_block - 1) / per_block, 1), kReducePartials));
+  Fold* p = static_cast<Fold*>(partials);
+  reduce_partials_kernel<<<static_cast<unsigned>(parts), kReduceThreads, 0, stream>>>(S, outcomes, values, p);
+  if (const cudaError_t e = cudaGetLastError(); e != cudaSuccess) return e;
+  reduce_finish_kernel<<<1, kReduceThreads, 0, stream>>>(parts, p, S, outcomes, out);
   return cudaGetLastError();
 }
+
+size_t reduce_partials_bytes() { return sizeof(Fold) * kReducePartials; }
 
 }  // namespace hsi::cuda::kernels

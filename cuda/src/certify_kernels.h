@@ -59,8 +59,12 @@ cudaError_t lipschitz_jumps(CageView cage, const double2* coef, double* jumps, c
 cudaError_t certify_segments(CageView cage, SegmentsView seg, const double2* coef, const double2* values, const double* lip,
                              int max_depth, long long max_pieces, int* stop, SegmentOutcome* out, cudaStream_t stream);
 
-// One block: the summary of all outcomes plus the observed values at the breakpoints.
-cudaError_t reduce_certificate(int S, const SegmentOutcome* outcomes, const double2* values, CertifySummary* out,
+// The summary of all outcomes plus the observed values at the breakpoints: two passes
+// (up to kReducePartials blocks, then one), deterministic. partials: device scratch of
+// reduce_partials_bytes().
+constexpr int kReducePartials = 64;
+size_t reduce_partials_bytes();
+cudaError_t reduce_certificate(int S, const SegmentOutcome* outcomes, const double2* values, void* partials, CertifySummary* out,
                                cudaStream_t stream);
 
 // W (S × m) = 1/dist(z_j, σ_i)², Wh (S × N) = 1/dist(ρ_h, σ_i)³, as one S × (m+N)

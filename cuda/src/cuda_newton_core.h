@@ -131,6 +131,39 @@ class CudaNewtonCore final : public NewtonCore {
     targets_up_.send(g_.get(), g_.size(), stream_);
   }
 
+  // The sets stay on the device; per frame only the weights are uploaded.
+  std::uint64_t set_target_keys(std::vector<std::vector<Metric>> keys, std::vector<std::vector<Metric>> log_keys) override {
+    auto upload = [&](const std::vector<std::vector<Metric>>& sets, DeviceArray<double>& dst) {
+      for (const auto& set : sets)
+        if (set.size() != sz(G_)) throw InputError("target metric sets do not match the samples");
+      std::vector<double> flat(sets.size() * 3 * sz(G_));
+      for (size_t j = 0; j < sets.size(); ++j)
+        for (size_t i = 0; i < sz(G_); ++i)
+          for (int q = 0; q < 3; ++q) flat[(j * sz(G_) + i) * 3 + sz(q)] = sets[j][i](q);
+      dst = DeviceArray<double>(flat.size());
+      if (!flat.empty()) HSI_CUDA_CHECK(cudaMemcpyAsync(dst.get(), flat.data(), dst.bytes(), cudaMemcpyHostToDevice, stream_));
+      HSI_CUDA_CHECK(cudaStreamSynchronize(stream_));  // flat is pageable
+    };
+    upload(keys, keys_);
+    upload(log_keys, log_keys_);
+    key_count_ = static_cast<int>(keys.size());
+    log_key_count_ = static_cast<int>(log_keys.size());
+    weights_up_ = std::make_unique<Upload<double>>(std::max<size_t>(1, std::max(keys.size(), log_keys.size())));
+    weights_ = DeviceArray<double>(std::max<size_t>(1, std::max(keys.size(), log_keys.size())));
+    return target_token_ = next_target_token();
+  }
+  bool blend_targets(std::uint64_t token, std::span<const double> w, bool exponential) override {
+    if (token == 0 || token != target_token_) return false;  // 0: no sets given yet
+    const int K = exponential ? log_key_count_ : key_count_;
+    if (static_cast<int>(w.size()) != K)
+      throw InputError("blend_targets: " + std::to_string(w.size()) + " weights for " + std::to_string(K) + " metric sets");
+    double* up = weights_up_->begin_fill();
+    std::copy(w.begin(), w.end(), up);
+    weights_up_->send(weights_.get(), w.size(), stream_);
+    HSI_CUDA_CHECK(kernels::blend_metrics(G_, K, (exponential ? log_keys_ : keys_).get(), weights_.get(), exponential, g_.get(), stream_));
+    return true;
+  }
+
   void set_coefficients(const Eigen::VectorXd& v) override { apply_D(v, ab_.get(), "coefficient"); }
   void set_direction(const Eigen::VectorXd& dv) override { apply_D(dv, dab_.get(), "direction"); }
 
@@ -141,8 +174,7 @@ class CudaNewtonCore final : public NewtonCore {
     const cudaStream_t s = stream_;
     HSI_CUDA_CHECK(kernels::gradient_samples(G_, g_.get(), ab_.get(), gab_.get(), s));
     // (∂/∂Re φ + i ∂/∂Im φ) E = Σ conj(D) (∂E/∂Re a + i ∂E/∂Im a): [gφ | gψ] = Dᴴ [ga | gb].
-    HSI_CUDA_CHECK(cublasZgemm(blas_, CUBLAS_OP_C, CUBLAS_OP_N, n_, 2, G_, &kOne, D_.get(), G_, gab_.get(), G_, &kZero,
-                               coef_.get(), n_));
+    HSI_CUDA_CHECK(kernels::tall_adjoint_times_two(G_, n_, D_.get(), gab_.get(), coef_.get(), s));
     HSI_CUDA_CHECK(cudaMemcpyAsync(coef_down_.get(), coef_.get(), coef_.bytes(), cudaMemcpyDeviceToHost, s));
     HSI_CUDA_CHECK(cudaStreamSynchronize(s));
     const double count = static_cast<double>(G_);
@@ -194,7 +226,7 @@ class CudaNewtonCore final : public NewtonCore {
       c[n + j] = make_double2(v(2 * n + j), v(3 * n + j));
     }
     coef_up_.send(coef_.get(), coef_.size(), stream_);
-    HSI_CUDA_CHECK(cublasZgemm(blas_, CUBLAS_OP_N, CUBLAS_OP_N, G_, 2, n_, &kOne, D_.get(), G_, coef_.get(), n_, &kZero, out, G_));
+    HSI_CUDA_CHECK(kernels::tall_times_two(G_, n_, D_.get(), coef_.get(), out, stream_));
   }
 
   // Hv_ ← the real Hessian (4n × 4n), mean over H or, with all_samples, over all of G, on
@@ -263,6 +295,10 @@ class CudaNewtonCore final : public NewtonCore {
   Upload<double2> coef_up_;
   PinnedArray<double> scalar_down_;
   PinnedArray<double2> coef_down_;
+  DeviceArray<double> keys_, log_keys_, weights_;  // set_target_keys' sets (K × G × 3) and blend weights
+  std::unique_ptr<Upload<double>> weights_up_;
+  int key_count_ = 0, log_key_count_ = 0;
+  std::uint64_t target_token_ = 0;
 
   // Set-up work that would otherwise fall on the first solve (issue #23: the first frame
   // took 140–165 ms): every kernel and cuBLAS / cuSOLVER routine a solve uses runs once

@@ -8,11 +8,11 @@
 #include <sstream>
 
 #include "hsi/basis.h"
+#include "newton_kernels.h"
 
 namespace hsi::cuda {
 namespace {
 size_t sz(int v) { return static_cast<size_t>(v); }
-constexpr cuDoubleComplex kOne{1, 0}, kZero{0, 0};
 }  // namespace
 
 DeviceCertifier::DeviceCertifier(const Shape& shape, const Cage& cage, const BoundarySamples& samples, cudaStream_t stream,
@@ -48,6 +48,7 @@ DeviceCertifier::DeviceCertifier(const Shape& shape, const Cage& cage, const Bou
   lip_ = DeviceArray<double>(2 * sz(S_));
   outcomes_ = DeviceArray<kernels::SegmentOutcome>(sz(S_));
   summary_ = DeviceArray<kernels::CertifySummary>(1);
+  partials_ = DeviceArray<unsigned char>(kernels::reduce_partials_bytes());
   stop_ = DeviceArray<int>(1);
   summary_down_ = PinnedArray<kernels::CertifySummary>(1);
   coef_up_ = PinnedArray<double2>(2 * sz(M_));
@@ -75,9 +76,8 @@ void DeviceCertifier::enqueue(const double2* coef, const CertificateOptions& opt
     throw InputError("hsi::cuda certificate: max_depth " + std::to_string(options.max_depth) + " exceeds the GPU's " +
                      std::to_string(kernels::kMaxCertifyDepth));
   const cudaStream_t s = stream_;
-  // Values at the breakpoints: [a | a1 | b | b1] = [D; E] · [φ | ψ].
-  HSI_CUDA_CHECK(cublasZgemm(blas_, CUBLAS_OP_N, CUBLAS_OP_N, 2 * S_, 2, M_, &kOne, DE_.get(), 2 * S_, coef, M_, &kZero,
-                             values_.get(), 2 * S_));
+  // Values at the breakpoints: [a | a1 | b | b1] = [D; E] · [φ | ψ] (a tall product).
+  HSI_CUDA_CHECK(kernels::tall_times_two(2 * S_, M_, DE_.get(), coef, values_.get(), s));
   // Lipschitz constants of f_zz and (conj f_zbar)' per segment: [W | Wh] · jumps.
   HSI_CUDA_CHECK(kernels::lipschitz_jumps(cage_view(), coef, jumps_.get(), s));
   const double one = 1, zero = 0;
@@ -90,7 +90,7 @@ void DeviceCertifier::enqueue(const double2* coef, const CertificateOptions& opt
   }
   HSI_CUDA_CHECK(kernels::certify_segments(cage_view(), segments_view(), coef, values_.get(), lip_.get(), options.max_depth,
                                            options.max_pieces_per_segment, stop, outcomes_.get(), s));
-  HSI_CUDA_CHECK(kernels::reduce_certificate(S_, outcomes_.get(), values_.get(), summary_.get(), s));
+  HSI_CUDA_CHECK(kernels::reduce_certificate(S_, outcomes_.get(), values_.get(), partials_.get(), summary_.get(), s));
   HSI_CUDA_CHECK(cudaMemcpyAsync(summary_down_.get(), summary_.get(), sizeof(kernels::CertifySummary), cudaMemcpyDeviceToHost, s));
 }
 

@@ -43,6 +43,7 @@ class DeviceCertifier {
   DeviceArray<double> lip_;        // S × 2
   DeviceArray<kernels::SegmentOutcome> outcomes_;
   DeviceArray<kernels::CertifySummary> summary_;
+  DeviceArray<unsigned char> partials_;  // the summary's first pass
   DeviceArray<int> stop_;
   PinnedArray<kernels::CertifySummary> summary_down_;
   PinnedArray<double2> coef_up_;

@@ -58,6 +58,14 @@ cudaError_t max_safe_step(int G, const double2* ab, const double2* dab, double* 
 cudaError_t dot(int n, const double* a, const double* b, double* out, cudaStream_t stream);
 cudaError_t diag_abs_max(int n, const double* A, double* out, cudaStream_t stream);
 cudaError_t add_ridge(int n, const double* A0, double ridge, double* A, cudaStream_t stream);
+// Products of a tall complex matrix A (rows × k, column-major) with two columns, as
+// ZGEMM computes them but not launch- and split-bound at these shapes: C = A·B (B k × 2,
+// C rows × 2) and C = Aᴴ·B (B rows × 2, C k × 2). Deterministic.
+cudaError_t tall_times_two(int rows, int k, const double2* A, const double2* B, double2* C, cudaStream_t stream);
+cudaError_t tall_adjoint_times_two(int rows, int k, const double2* A, const double2* B, double2* C, cudaStream_t stream);
+// g (G metrics) = Σ_j w_j keys_j, or metric_exp of it with `exponential` (K sets of G
+// metrics, w K weights on the device; zero weights skipped). NewtonCore::blend_targets.
+cudaError_t blend_metrics(int G, int K, const double* keys, const double* w, bool exponential, double* g, cudaStream_t stream);
 // Device-scalar forms for graph replays: A = A0 + (*ridge)·I; out = x + (*step)·d (n).
 cudaError_t add_ridge(int n, const double* A0, const double* ridge, double* A, cudaStream_t stream);
 cudaError_t trial_point(int n, const double* x, const double* d, const double* step, double* out, cudaStream_t stream);

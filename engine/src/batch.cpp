@@ -55,6 +55,12 @@ class BorrowedCore final : public NewtonCore {
   void set_direction(const Eigen::VectorXd& dv) override { core_.set_direction(dv); }
   double max_safe_step() override { return core_.max_safe_step(); }
   double energy_at(double s) override { return core_.energy_at(s); }
+  std::uint64_t set_target_keys(std::vector<std::vector<Metric>> keys, std::vector<std::vector<Metric>> log_keys) override {
+    return core_.set_target_keys(std::move(keys), std::move(log_keys));
+  }
+  bool blend_targets(std::uint64_t token, std::span<const double> w, bool exponential) override {
+    return core_.blend_targets(token, w, exponential);
+  }
   std::unique_ptr<NewtonStepper> make_stepper(const MapSpace& space, const Certifier* certifier, const QuadraticTerm* quad) override {
     return core_.make_stepper(space, certifier, quad);
   }

@@ -10,6 +10,7 @@
 #include <mutex>
 #include <numbers>
 #include <optional>
+#include <stdexcept>
 #include <sstream>
 #include <thread>
 #include <utility>
@@ -319,7 +320,16 @@ FrameResult Interpolator::frame_before_crossings(double t, const Eigen::VectorXd
     return keyframe_itself(static_cast<size_t>(k), "keyframe " + std::to_string(k) + " held");
   }
   auto tp = Clock::now();
-  core_->set_targets(blended_metric(t));
+  {
+    // The keyframes' metric sets live in the core (on the GPU for the CUDA core): per
+    // frame only the weights travel. Given again if the core has had other sets since.
+    const std::vector<double> w = key_weights(times_, options_.timing, t);
+    const bool smooth = interval_timing(times_, options_.timing, t) == KeyTiming::Smooth;
+    if (!core_->blend_targets(target_token_, w, smooth)) {
+      target_token_ = core_->set_target_keys(key_metrics_, key_log_metrics_);
+      if (!core_->blend_targets(target_token_, w, smooth)) throw std::logic_error("the Newton core did not keep the keyframes' metrics");
+    }
+  }
   r.parts.targets = ms_since(tp);
   NewtonOptions no;
   no.tolerance = options_.tolerance;

@@ -1,8 +1,10 @@
 // CPU Newton core (the reference for every backend) and the certified Newton loop.
 #include "hsi/stopwatch.h"
 #include "hsi/newton.h"
+#include "hsi/timing.h"
 
 #include <Eigen/Cholesky>
+#include <atomic>
 #include <cmath>
 #include <algorithm>
 #include <array>
@@ -495,6 +497,33 @@ NewtonResult newton_run(NewtonStepper& st, bool certify, bool rotation_invariant
     res.certified = res.certificate.certified;
   }
   return finish(E);
+}
+
+std::uint64_t NewtonCore::next_target_token() {
+  static std::atomic<std::uint64_t> next{1};
+  return next.fetch_add(1);
+}
+
+std::uint64_t NewtonCore::set_target_keys(std::vector<std::vector<Metric>> keys, std::vector<std::vector<Metric>> log_keys) {
+  keys_ = std::move(keys);
+  log_keys_ = std::move(log_keys);
+  return token_ = next_target_token();
+}
+
+bool NewtonCore::blend_targets(std::uint64_t token, std::span<const double> w, bool exponential) {
+  if (token == 0 || token != token_) return false;  // 0: no sets given yet
+  const auto& keys = exponential ? log_keys_ : keys_;
+  if (keys.size() != w.size()) throw InputError("blend_targets: " + std::to_string(w.size()) + " weights for " + std::to_string(keys.size()) + " metric sets");
+  // Linear, Ease, Hold: a convex combination, so positive definite; Smooth: exp of a
+  // combination of logs, positive definite for any weights (timing.h).
+  std::vector<Metric> m(keys.empty() ? 0 : keys.front().size(), Metric::Zero());
+  for (size_t j = 0; j < w.size(); ++j)
+    if (w[j] != 0)
+      for (size_t i = 0; i < m.size(); ++i) m[i] += w[j] * keys[j][i];
+  if (exponential)
+    for (Metric& mi : m) mi = metric_exp(mi);
+  set_targets(m);
+  return true;
 }
 
 }  // namespace hsi

@@ -199,6 +199,7 @@ class Interpolator {
   std::vector<Eigen::VectorXd> key_x_;
   std::vector<std::vector<Metric>> key_metrics_;
   std::vector<std::vector<Metric>> key_log_metrics_;  // metric_log of key_metrics_, when some interval is Smooth
+  std::uint64_t target_token_ = 0;  // the core's copy of those sets (NewtonCore::set_target_keys)
   std::vector<Pose> key_poses_;  // angles unwrapped across keyframes
   std::vector<Distortion> key_distortion_;
   std::vector<Distortion> key_certified_;

@@ -16,6 +16,7 @@
 #pragma once
 
 #include <chrono>
+#include <cstdint>
 #include <functional>
 #include <memory>
 #include <span>
@@ -52,6 +53,16 @@ class NewtonCore {
   virtual double max_safe_step() = 0;              // first s > 0 with |a + s da| = |b + s db| at a sample
   virtual double energy_at(double s) = 0;          // energy at v + s dv
 
+  // Targets as a blend of metric sets the core keeps (an interpolator's keyframes, set
+  // once): blend_targets(token, w, false) sets Σ_j w_j keys_j per sample, with
+  // `exponential` metric_exp(Σ_j w_j log_keys_j) (log_keys may be empty otherwise). The
+  // token names the sets; blend_targets returns false, setting nothing, when the core
+  // has been given other sets since (a core lent to several interpolators in turn). The
+  // default blends on the host and calls set_targets; the CUDA core blends on the device
+  // instead of uploading |G| metrics per frame.
+  virtual std::uint64_t set_target_keys(std::vector<std::vector<Metric>> keys, std::vector<std::vector<Metric>> log_keys);
+  virtual bool blend_targets(std::uint64_t token, std::span<const double> w, bool exponential);
+
   // A stepper of the core's own for one solve in `space` (certifier and quad may be
   // null), or null: newton_solve then drives this core through the host stepper. The
   // CUDA core made from a ShapeSetup answers for that setup's spaces and certifier.
@@ -59,6 +70,13 @@ class NewtonCore {
                                                       const QuadraticTerm* /*quad*/) {
     return nullptr;
   }
+
+  // A token no other set_target_keys call of any core gets.
+  static std::uint64_t next_target_token();
+
+ private:
+  std::vector<std::vector<Metric>> keys_, log_keys_;  // the default blend's sets
+  std::uint64_t token_ = 0;
 };
 
 // Which Hessian a Newton system is built from.
