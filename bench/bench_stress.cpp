@@ -15,6 +15,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <fstream>
 #include <atomic>
 #include <functional>
@@ -205,7 +206,15 @@ int main(int argc, char** argv) {
   app.add_option("--hessian-ratio", hessian_ratio,
                  "The Hessian's share r of the samples G in the runs (0: each scene's own, default 0.2); authoring keeps the "
                  "scene's")
-      ->check(CLI::Range(0.0, 1.0));
+      ->check(CLI::Validator(
+          [](std::string& text) -> std::string {  // CLI::Range lets "nan" through (every comparison is false)
+            char* end = nullptr;
+            const double r = std::strtod(text.c_str(), &end);
+            if (end == text.c_str() || *end != '\0' || !(r >= 0 && r <= 1))
+              return "expected a number in [0, 1] (0: each scene's own ratio), got '" + text + "'";
+            return {};
+          },
+          "in [0, 1]"));
   app.add_flag("--paper-newton", paper_newton,
                "The paper's plain projected Newton (rotation gauged, no exact Hessian): the reference the fix is measured against");
   app.add_option("--backend", backend, runtime::kBackendHelp)
@@ -547,6 +556,7 @@ int main(int argc, char** argv) {
   out["options"] = {{"corpus", corpus_file},     {"seed", corpus.seed},         {"samples", samples},
                     {"frames", frame_counts},    {"projections", split(projections_opt)}, {"max_iterations", max_iterations},
                     {"limit", limit},            {"paper_newton", paper_newton}, {"time_limit", time_limit},
+                    {"hessian_ratio", hessian_ratio},
                     {"reverse_loops", reverse_loops}};
   json runs_json = json::array(), shapes_json = json::array();
   std::map<RunKey, Stats> total;
