@@ -15,6 +15,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <fstream>
 #include <atomic>
 #include <functional>
@@ -189,7 +190,7 @@ int main(int argc, char** argv) {
   std::string frames_opt = "60,100,500", projections_opt = "delete,fullproj,partproj", backend = "cpu", json_file, export_dir;
   std::string cache_file;
   int limit = 0, samples = 0, max_iterations = 100, jobs = 1, threads = 0;
-  bool paper_newton = false, author_only = false, trace = false;
+  bool paper_newton = false, author_only = false, trace = false, reverse_loops = false;
   double hessian_ratio = 0;
   double time_limit = 0;
   app.add_option("--corpus", corpus_file, "The corpus file")->capture_default_str();
@@ -205,7 +206,15 @@ int main(int argc, char** argv) {
   app.add_option("--hessian-ratio", hessian_ratio,
                  "The Hessian's share r of the samples G in the runs (0: each scene's own, default 0.2); authoring keeps the "
                  "scene's")
-      ->check(CLI::Range(0.0, 1.0));
+      ->check(CLI::Validator(
+          [](std::string& text) -> std::string {  // CLI::Range lets "nan" through (every comparison is false)
+            char* end = nullptr;
+            const double r = std::strtod(text.c_str(), &end);
+            if (end == text.c_str() || *end != '\0' || !(r >= 0 && r <= 1))
+              return "expected a number in [0, 1] (0: each scene's own ratio), got '" + text + "'";
+            return {};
+          },
+          "in [0, 1]"));
   app.add_flag("--paper-newton", paper_newton,
                "The paper's plain projected Newton (rotation gauged, no exact Hessian): the reference the fix is measured against");
   app.add_option("--backend", backend, runtime::kBackendHelp)
@@ -233,6 +242,9 @@ int main(int argc, char** argv) {
                "Print every frame's Newton iterations (energy, step, exact or projected system, decrement, backtracks, "
                "certificate rejections) to stderr, solving the frames as the interpolator does (warm-started); with "
                "--jobs 1 for readable output");
+  app.add_flag("--reverse-loops", reverse_loops,
+               "Read every loop of each shape the other way round (the same shapes in the other orientation); the "
+               "keyframes are authored anew (their cache key is the reversed text): use a separate --keyframes-cache");
   app.add_option("--json", json_file, "Also write every number to this JSON file");
   app.add_option("--export", export_dir, "Write the selected sequences as scene files (handles + targets) into this folder and stop");
   CLI11_PARSE(app, argc, argv);
@@ -278,7 +290,7 @@ int main(int argc, char** argv) {
   if (!export_dir.empty()) {
     std::filesystem::create_directories(export_dir);
     for (const auto& [sh, seqs] : plan) {
-      const Scene shape = stress::load_shape(corpus, *sh);
+      const Scene shape = stress::load_shape(corpus, *sh, reverse_loops);
       for (const stress::Sequence* q : seqs) {
         Scene scene = stress::sequence_scene(shape, *q, samples);
         if (!scene.texture.empty()) scene.texture = std::filesystem::absolute(scene.texture_path());
@@ -297,10 +309,11 @@ int main(int argc, char** argv) {
   std::printf("Machine: %s, %d logical cores; backend %s; %d workers x %d OpenMP threads\n", machine.cpu.c_str(), machine.cores,
               backend.c_str(), jobs, omp_threads);
   std::printf("Corpus: %s (seed %d): %d of %zu sequences on %zu shapes; |G| %s; frames per interval %s; projections %s; "
-              "iteration cap %d%s\n\n",
+              "iteration cap %d%s%s\n\n",
               corpus_file.c_str(), corpus.seed, total_sequences, corpus.sequences.size(), plan.size(),
               samples > 0 ? std::to_string(samples).c_str() : "per sequence", frames_opt.c_str(), projections_opt.c_str(),
-              max_iterations, paper_newton ? "; the paper's plain Newton (--paper-newton)" : "");
+              max_iterations, paper_newton ? "; the paper's plain Newton (--paper-newton)" : "",
+              reverse_loops ? "; every shape's loops reversed (--reverse-loops)" : "");
   std::printf("Per run: F frames per keyframe interval, F x (keyframes - 1) + 1 frames in all, warm-started; the\n"
               "keyframes themselves are not counted. at cap: iterations >= cap or not converged. it: Newton\n"
               "iterations per frame. ms/frame: the solve (Newton + certificate) per frame.\n");
@@ -335,7 +348,7 @@ int main(int argc, char** argv) {
   std::vector<Item> items;
   for (size_t s = 0; s < plan.size(); ++s) {
     try {
-      shape_slots[s].contents = stress::read_file_bytes(corpus.dir / plan[s].first->scene);
+      shape_slots[s].contents = stress::shape_file_text(corpus, *plan[s].first, reverse_loops);
     } catch (const std::exception& e) {
       shape_slots[s].error = e.what();
     }
@@ -355,7 +368,7 @@ int main(int argc, char** argv) {
     std::call_once(slot.once, [&] {
       if (!slot.error.empty()) return;
       try {
-        slot.scene = stress::load_shape(corpus, *plan[s].first);
+        slot.scene = stress::shape_scene(corpus, *plan[s].first, slot.contents);
       } catch (const std::exception& e) {
         slot.error = std::string("cannot load the shape: ") + e.what();
       }
@@ -542,7 +555,9 @@ int main(int argc, char** argv) {
                     {"backend", backend}};
   out["options"] = {{"corpus", corpus_file},     {"seed", corpus.seed},         {"samples", samples},
                     {"frames", frame_counts},    {"projections", split(projections_opt)}, {"max_iterations", max_iterations},
-                    {"limit", limit},            {"paper_newton", paper_newton}, {"time_limit", time_limit}};
+                    {"limit", limit},            {"paper_newton", paper_newton}, {"time_limit", time_limit},
+                    {"hessian_ratio", hessian_ratio},
+                    {"reverse_loops", reverse_loops}};
   json runs_json = json::array(), shapes_json = json::array();
   std::map<RunKey, Stats> total;
   std::map<std::string, std::map<RunKey, Stats>> by_shape;

@@ -214,12 +214,4 @@ inline Authored from_entry(const CacheEntry& c) {
   return a;
 }
 
-inline std::string read_file_bytes(const std::filesystem::path& file) {
-  std::ifstream in(file, std::ios::binary);
-  if (!in) throw std::runtime_error("cannot read " + file.string());
-  std::ostringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
-
 }  // namespace hsi::stress

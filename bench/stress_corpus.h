@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <filesystem>
 #include <fstream>
+#include <sstream>
 #include <map>
 #include <memory>
 #include <nlohmann/json.hpp>
@@ -17,6 +18,7 @@
 #include <vector>
 
 #include "hsi/keyframes.h"
+#include "hsi/scene_io.h"
 
 namespace hsi::stress {
 
@@ -73,15 +75,52 @@ inline Corpus load_corpus(const std::filesystem::path& file) {
   return c;
 }
 
-// The shape's scene with its cage fixed (the user cage, or the automatic one built
-// now), without handles or keyframes.
-inline Scene load_shape(const Corpus& c, const ShapeEntry& s) {
-  Scene scene = load_scene(c.dir / s.scene);
+inline std::string read_file_bytes(const std::filesystem::path& file) {
+  std::ifstream in(file, std::ios::binary);
+  if (!in) throw std::runtime_error("cannot read " + file.string());
+  std::ostringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+// The scene file's text with every loop of its shape listed the other way round
+// (each of shape.outer and shape.holes[i] reversed): the same shape given in the other
+// orientation (bench_stress --reverse-loops). Everything else is kept as it is.
+inline std::string reverse_shape_loops(const std::string& scene_text, const std::string& source = "scene") {
+  nlohmann::json j = nlohmann::json::parse(scene_text);
+  nlohmann::json* shape = j.is_object() && j.contains("shape") ? &j["shape"] : nullptr;
+  if (!shape || !shape->is_object() || !shape->contains("outer") || !(*shape)["outer"].is_array())
+    throw std::runtime_error(source + ": no shape.outer to reverse");
+  auto reverse = [](nlohmann::json& loop) {
+    if (loop.is_array()) std::reverse(loop.begin(), loop.end());  // anything else: parse_scene says what is wrong
+  };
+  reverse((*shape)["outer"]);
+  if (shape->contains("holes") && (*shape)["holes"].is_array())
+    for (nlohmann::json& h : (*shape)["holes"]) reverse(h);
+  return j.dump(1);
+}
+
+// The text of a shape's scene file as the corpus reads it: as given, or with its
+// loops reversed. Its bytes are the keyframe cache's key (stress_cache.h).
+inline std::string shape_file_text(const Corpus& c, const ShapeEntry& s, bool reverse_loops = false) {
+  const std::filesystem::path file = c.dir / s.scene;
+  const std::string text = read_file_bytes(file);
+  return reverse_loops ? reverse_shape_loops(text, file.string()) : text;
+}
+
+// The shape's scene (from shape_file_text's `text`) with its cage fixed (the user
+// cage, or the automatic one built now), without handles or keyframes.
+inline Scene shape_scene(const Corpus& c, const ShapeEntry& s, const std::string& text) {
+  const std::filesystem::path file = c.dir / s.scene;
+  Scene scene = parse_scene(text, file.parent_path(), file.string());
   scene.name = s.name;
   scene.cage = scene_cage(scene);
   scene.handles.clear();
   scene.keyframes.clear();
   return scene;
+}
+inline Scene load_shape(const Corpus& c, const ShapeEntry& s, bool reverse_loops = false) {
+  return shape_scene(c, s, shape_file_text(c, s, reverse_loops));
 }
 
 // The sequence as a scene: handles and keyframe targets (no coefficients), |G| =

@@ -1,0 +1,28 @@
+# ctest bench_stress_options: bench_stress --hessian-ratio refuses what is not a number in
+# [0, 1] (nan included) with a message naming the option, before any work; 1 (the Hessian
+# over all of G) runs a small slice, every frame certified and converged, and the JSON
+# says which ratio ran.
+# -D: HSI_BENCH_STRESS, HSI_WORK_DIR
+file(REMOVE_RECURSE ${HSI_WORK_DIR})
+file(MAKE_DIRECTORY ${HSI_WORK_DIR})
+include(${CMAKE_CURRENT_LIST_DIR}/cli_test.cmake)
+set(W ${HSI_WORK_DIR})
+set(slice --sequences annulus/hinge --samples 2000 --frames 3 --projections partproj --jobs 1)
+
+foreach(bad 2 -0.5 nan inf abc 0.5x)
+  run(105 ${HSI_BENCH_STRESS} ${slice} --hessian-ratio "${bad}" --json ${W}/bad.json)
+  if(NOT RUN_OUTPUT MATCHES "--hessian-ratio: expected a number in \\[0, 1\\]" OR EXISTS ${W}/bad.json)
+    message(FATAL_ERROR "--hessian-ratio '${bad}' was not refused with a clear message, or ran")
+  endif()
+endforeach()
+
+run(0 ${HSI_BENCH_STRESS} ${slice} --hessian-ratio 1 --json ${W}/r1.json)
+file(READ ${W}/r1.json j)
+string(JSON ratio GET "${j}" options hessian_ratio)
+string(JSON frames GET "${j}" total 0 frames)
+string(JSON certified GET "${j}" total 0 certified)
+string(JSON not_converged GET "${j}" total 0 not_converged)
+string(JSON failed GET "${j}" total 0 failed_runs)
+if(NOT ratio EQUAL 1 OR NOT frames EQUAL 2 OR NOT certified EQUAL frames OR NOT not_converged EQUAL 0 OR NOT failed EQUAL 0)
+  message(FATAL_ERROR "--hessian-ratio 1: ratio ${ratio}, ${frames} frames (want 2), ${certified} certified, ${not_converged} not converged, ${failed} failed runs")
+endif()
