@@ -1,0 +1,288 @@
+// Dense Cholesky factor and solve for the Newton system (see dense_cholesky.h).
+//
+// Factor: right-looking over 32-column tiles with a look-ahead of one, one launch per
+// column tile c. Launch c (a) factors column tile c: every block of tile row i ≥ c
+// applies panel c − 1's update to A_cc and A_ic itself, factors A_cc in registers of
+// one warp (redundantly in each block, 32 × 32 is cheap) and solves its A_ic against it;
+// (b) applies panel c − 1 to the trailing tiles (i, j), j ≥ c + 1. No block reads what
+// another block of the same launch writes, so launches are the only synchronisation.
+// Solve: one block; warp w owns the tile rows ≡ w (mod 8) and substitutes them in
+// order, waiting on a per-tile ready flag in shared memory for the tiles it needs
+// (forward L y = b from the top, then back Lᵀ x = y from the bottom).
+#include "dense_cholesky.h"
+
+#include <cfloat>
+#include <cstddef>
+
+namespace hsi::cuda::kernels {
+namespace {
+
+constexpr int kT = kCholeskyTile;
+constexpr int kFactorThreads = 256;  // 8 warps: 4 outputs each of a 32 × 32 tile product
+constexpr int kSolveThreads = 256;   // 8 warps, each up to 255 registers (two 32-entry rows)
+constexpr int kSolveWarps = kSolveThreads / 32;
+constexpr unsigned kFull = 0xffffffffu;
+static_assert(kT == 32, "the tile kernels map one lane to one tile row");
+static_assert(kFactorThreads == 8 * kT, "subtract_product maps 8 warps x 4 rows");
+
+using Tile = double[kT][kT + 1];  // padded: column walks hit 32 different banks
+
+__device__ __forceinline__ double at(const double* A, int lda, int r, int c) {
+  return A[static_cast<size_t>(r) + static_cast<size_t>(c) * static_cast<size_t>(lda)];
+}
+
+// S = tile (ti, tj) of A, zero outside the m × m matrix. lower_only: a diagonal tile,
+// whose strictly upper part must not be read (it need not hold A) and is set to zero,
+// and whose rows past m get a unit diagonal (so the padding factors to I, fails nothing).
+__device__ void load_tile(Tile& S, const double* A, int lda, int m, int ti, int tj, bool lower_only) {
+  for (int e = static_cast<int>(threadIdx.x); e < kT * kT; e += kFactorThreads) {
+    const int r = e & (kT - 1), c = e / kT;  // consecutive threads: consecutive rows (coalesced)
+    const int gr = ti * kT + r, gc = tj * kT + c;
+    double v = 0.0;
+    if (gr < m && gc < m && (!lower_only || r >= c)) v = at(A, lda, gr, gc);
+    else if (lower_only && r == c) v = 1.0;
+    S[r][c] = v;
+  }
+}
+
+// Tile (ti, tj) of A = S where inside the matrix (and, lower_only, on or below the diagonal).
+__device__ void store_tile(const Tile& S, double* A, int lda, int m, int ti, int tj, bool lower_only) {
+  for (int e = static_cast<int>(threadIdx.x); e < kT * kT; e += kFactorThreads) {
+    const int r = e & (kT - 1), c = e / kT;
+    const int gr = ti * kT + r, gc = tj * kT + c;
+    if (gr < m && gc < m && (!lower_only || r >= c))
+      A[static_cast<size_t>(gr) + static_cast<size_t>(gc) * static_cast<size_t>(lda)] = S[r][c];
+  }
+}
+
+// C −= X Yᵀ (32 × 32 × 32). Thread t: column t mod 32, rows t / 32 + 8p. X reads are
+// warp-wide broadcasts, Y reads walk a column of the padded tile (no bank conflicts).
+__device__ void subtract_product(Tile& C, const Tile& X, const Tile& Y) {
+  const int col = static_cast<int>(threadIdx.x) & (kT - 1), r0 = static_cast<int>(threadIdx.x) / kT;
+  double acc[4] = {0.0, 0.0, 0.0, 0.0};
+#pragma unroll 8
+  for (int q = 0; q < kT; ++q) {
+    const double y = Y[col][q];
+#pragma unroll
+    for (int p = 0; p < 4; ++p) acc[p] += X[r0 + 8 * p][q] * y;
+  }
+#pragma unroll
+  for (int p = 0; p < 4; ++p) C[r0 + 8 * p][col] -= acc[p];
+}
+
+// D = its Cholesky factor (lower, upper part zeroed), by one warp: lane r holds row r in
+// registers, column q's pivot and multipliers travel by shuffle. inv_diag[q] = 1 / L_qq.
+// Returns the 1-based column of the first pivot that is not > 0 or not finite, or 0.
+// Every lane of warp 0 calls it.
+__device__ int factor_diagonal_tile(Tile& D, double* inv_diag) {
+  const int lane = static_cast<int>(threadIdx.x) & 31;
+  double v[kT];
+#pragma unroll
+  for (int j = 0; j < kT; ++j) v[j] = j <= lane ? D[lane][j] : 0.0;
+  int fail = 0;
+#pragma unroll
+  for (int q = 0; q < kT; ++q) {
+    const double pivot = __shfl_sync(kFull, v[q], q);  // A_qq − Σ_{p<q} L_qp²
+    if (fail == 0 && !(pivot > 0.0 && pivot <= DBL_MAX)) fail = q + 1;  // NaN fails both tests
+    const double inv = rsqrt(pivot);
+    // Lane q: L_qq = √pivot; lanes r > q: L_rq; lanes r < q: unused (their row's upper part).
+    const double l = lane == q ? pivot * inv : v[q] * inv;
+    v[q] = l;
+    if (lane == q) inv_diag[q] = inv;
+#pragma unroll
+    for (int j = q + 1; j < kT; ++j) v[j] -= l * __shfl_sync(kFull, l, j);  // A_rj −= L_rq L_jq
+  }
+#pragma unroll
+  for (int j = 0; j < kT; ++j) D[lane][j] = j <= lane ? v[j] : 0.0;
+  return fail;
+}
+
+// B = B L⁻ᵀ (each row x of the result solves x Lᵀ = b) with L = D from
+// factor_diagonal_tile; lane r solves row r. Every lane of warp 0 calls it.
+__device__ void solve_panel_tile(Tile& B, const Tile& D, const double* inv_diag) {
+  const int lane = static_cast<int>(threadIdx.x) & 31;
+  double x[kT];
+#pragma unroll
+  for (int j = 0; j < kT; ++j) x[j] = B[lane][j];
+#pragma unroll
+  for (int q = 0; q < kT; ++q) {
+    x[q] *= inv_diag[q];
+#pragma unroll
+    for (int p = q + 1; p < kT; ++p) x[p] -= x[q] * D[p][q];  // broadcast reads of column q
+  }
+#pragma unroll
+  for (int j = 0; j < kT; ++j) B[lane][j] = x[j];
+}
+
+// Launch c of the factorisation (T column tiles). Blocks [0, T − c): tile rows i = c + b
+// of column tile c; the rest: the trailing tiles (i, j), c + 1 ≤ j ≤ i < T, column by column.
+__global__ void __launch_bounds__(kFactorThreads) factor_step(int m, double* A, int lda, int* info, int c, int T) {
+  __shared__ Tile D, B, X, Y;
+  __shared__ double inv_diag[kT];
+  const int k = c - 1;  // the panel whose update this launch applies (none when c = 0)
+  const int panel_blocks = T - c;
+  const int b = static_cast<int>(blockIdx.x);
+
+  if (b >= panel_blocks) {  // trailing update: A_ij −= L_ik L_jkᵀ
+    int r = b - panel_blocks, j = c + 1;
+    while (r >= T - j) {
+      r -= T - j;
+      ++j;
+    }
+    const int i = j + r;
+    load_tile(B, A, lda, m, i, j, i == j);
+    load_tile(X, A, lda, m, i, k, false);
+    if (i != j) load_tile(Y, A, lda, m, j, k, false);
+    __syncthreads();
+    subtract_product(B, X, i == j ? X : Y);
+    __syncthreads();
+    store_tile(B, A, lda, m, i, j, i == j);
+    return;
+  }
+
+  const int i = c + b;  // this block's tile row in column tile c
+  load_tile(D, A, lda, m, c, c, true);
+  if (k >= 0) load_tile(Y, A, lda, m, c, k, false);
+  if (i > c) {
+    load_tile(B, A, lda, m, i, c, false);
+    if (k >= 0) load_tile(X, A, lda, m, i, k, false);
+  }
+  __syncthreads();
+  if (k >= 0) {
+    subtract_product(D, Y, Y);
+    if (i > c) subtract_product(B, X, Y);
+    __syncthreads();
+  }
+  __shared__ int fail;
+  if (threadIdx.x < 32) {
+    const int f = factor_diagonal_tile(D, inv_diag);
+    if (threadIdx.x == 0) fail = f;
+  }
+  __syncthreads();
+  if (i == c) {
+    store_tile(D, A, lda, m, c, c, true);
+    // Only this block of each launch touches *info, and launches run in order: launch 0
+    // resets it, later ones keep the first failure.
+    if (threadIdx.x == 0) {
+      if (c == 0) *info = fail;
+      else if (fail != 0 && *info == 0) *info = c * kT + fail;
+    }
+    return;
+  }
+  if (threadIdx.x < 32) solve_panel_tile(B, D, inv_diag);
+  __syncthreads();
+  store_tile(B, A, lda, m, i, c, false);
+}
+
+// Ready flags between the solve's warps (shared memory, one block).
+__device__ __forceinline__ void wait_ready(const int* flag) {
+  while (*static_cast<const volatile int*>(flag) == 0) {
+  }
+  __threadfence_block();  // the tile's values are read after the flag (and not cached from before)
+}
+__device__ __forceinline__ void publish_ready(int* flag) {
+  __threadfence_block();  // this lane's values before the flag
+  __syncwarp();
+  if ((threadIdx.x & 31) == 0) *static_cast<volatile int*>(flag) = 1;
+}
+
+__global__ void __launch_bounds__(kSolveThreads) solve_kernel(int m, const double* __restrict__ L, int lda, double* b, int T) {
+  extern __shared__ double y[];  // 32T entries (zero past m), then the forward and back flags
+  int* const ready_fwd = reinterpret_cast<int*>(y + kT * T);
+  int* const ready_bwd = ready_fwd + T;
+  for (int e = static_cast<int>(threadIdx.x); e < kT * T; e += kSolveThreads) y[e] = e < m ? b[e] : 0.0;
+  for (int e = static_cast<int>(threadIdx.x); e < 2 * T; e += kSolveThreads) ready_fwd[e] = 0;
+  __syncthreads();
+  const int lane = static_cast<int>(threadIdx.x) & 31, warp = static_cast<int>(threadIdx.x) / 32;
+  double l[kT];
+
+  // Forward: y_i = L_ii⁻¹ (b_i − Σ_{s<i} L_is y_s); lane r holds row 32i + r.
+  for (int i = warp; i < T; i += kSolveWarps) {
+    const int row = i * kT + lane;
+    const bool valid = row < m;
+    double acc = valid ? y[row] : 0.0;
+    for (int s = 0; s < i; ++s) {
+#pragma unroll
+      for (int c = 0; c < kT; ++c) l[c] = valid ? __ldg(L + row + static_cast<size_t>(s * kT + c) * lda) : 0.0;  // coalesced
+      wait_ready(ready_fwd + s);
+#pragma unroll
+      for (int c = 0; c < kT; ++c) acc -= l[c] * y[s * kT + c];  // broadcast reads
+    }
+#pragma unroll
+    for (int c = 0; c < kT; ++c) l[c] = valid && c < lane ? __ldg(L + row + static_cast<size_t>(i * kT + c) * lda) : 0.0;
+    const double inv = valid ? 1.0 / __ldg(L + row + static_cast<size_t>(row) * lda) : 1.0;
+#pragma unroll
+    for (int c = 0; c < kT; ++c) {
+      if (lane == c) acc *= inv;
+      const double yc = __shfl_sync(kFull, acc, c);
+      if (lane > c) acc -= l[c] * yc;
+    }
+    if (valid) y[row] = acc;
+    publish_ready(ready_fwd + i);
+  }
+  __syncthreads();
+
+  // Back: x_i = L_ii⁻ᵀ (y_i − Σ_{s>i} L_siᵀ x_s), from the last tile row up. Lane r reads
+  // column 32i + r of L (strided across lanes; each 32-byte sector serves 4 rows from L1).
+  if (warp < T) {
+    for (int i = warp + ((T - 1 - warp) / kSolveWarps) * kSolveWarps; i >= 0; i -= kSolveWarps) {
+      const int row = i * kT + lane;
+      const bool valid = row < m;
+      double acc = valid ? y[row] : 0.0;
+      for (int s = T - 1; s > i; --s) {
+#pragma unroll
+        for (int c = 0; c < kT; ++c)
+          l[c] = valid && s * kT + c < m ? __ldg(L + (s * kT + c) + static_cast<size_t>(row) * lda) : 0.0;
+        wait_ready(ready_bwd + s);
+#pragma unroll
+        for (int c = 0; c < kT; ++c) acc -= l[c] * y[s * kT + c];
+      }
+#pragma unroll
+      for (int c = 0; c < kT; ++c)
+        l[c] = valid && c > lane && i * kT + c < m ? __ldg(L + (i * kT + c) + static_cast<size_t>(row) * lda) : 0.0;
+      const double inv = valid ? 1.0 / __ldg(L + row + static_cast<size_t>(row) * lda) : 1.0;
+#pragma unroll
+      for (int c = kT - 1; c >= 0; --c) {
+        if (lane == c) acc *= inv;
+        const double xc = __shfl_sync(kFull, acc, c);
+        if (lane < c) acc -= l[c] * xc;
+      }
+      if (valid) y[row] = acc;
+      publish_ready(ready_bwd + i);
+    }
+  }
+  __syncthreads();
+  for (int e = static_cast<int>(threadIdx.x); e < m; e += kSolveThreads) b[e] = y[e];
+}
+
+int tiles(int m) { return (m + kT - 1) / kT; }
+
+size_t solve_shared_bytes(int T) { return static_cast<size_t>(T) * (kT * sizeof(double) + 2 * sizeof(int)); }
+
+}  // namespace
+
+cudaError_t cholesky_factor(int m, double* A, int lda, int* info, cudaStream_t stream) {
+  if (m < 0 || lda < (m > 1 ? m : 1)) return cudaErrorInvalidValue;
+  if (m == 0) return cudaMemsetAsync(info, 0, sizeof(int), stream);
+  const int T = tiles(m);
+  for (int c = 0; c < T; ++c) {
+    const int rest = T - 1 - c;  // column tiles right of c
+    const int blocks = (T - c) + (c > 0 ? rest * (rest + 1) / 2 : 0);
+    factor_step<<<blocks, kFactorThreads, 0, stream>>>(m, A, lda, info, c, T);
+    if (const cudaError_t e = cudaGetLastError(); e != cudaSuccess) return e;
+  }
+  return cudaSuccess;
+}
+
+cudaError_t cholesky_solve(int m, const double* L, int lda, double* b, cudaStream_t stream) {
+  if (m < 0 || lda < (m > 1 ? m : 1) || m > kCholeskySolveMaxOrder) return cudaErrorInvalidValue;
+  if (m == 0) return cudaSuccess;
+  const int T = tiles(m);
+  static_assert(kCholeskySolveMaxOrder % kT == 0);
+  static_assert((kCholeskySolveMaxOrder / kT) * (kT * sizeof(double) + 2 * sizeof(int)) <= 48 * 1024,
+                "the solve's shared memory must fit the default 48 KiB");
+  solve_kernel<<<1, kSolveThreads, solve_shared_bytes(T), stream>>>(m, L, lda, b, T);
+  return cudaGetLastError();
+}
+
+}  // namespace hsi::cuda::kernels
