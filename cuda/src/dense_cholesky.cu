@@ -4,7 +4,8 @@
 // column tile c. Launch c (a) factors column tile c: every block of tile row i ≥ c
 // applies panel c − 1's update to A_cc and A_ic itself, factors A_cc in registers of
 // one warp (redundantly in each block, 32 × 32 is cheap) and solves its A_ic against it;
-// (b) applies panel c − 1 to the trailing tiles (i, j), j ≥ c + 1. No block reads what
+// (b) applies panel c − 1 to the trailing tiles (i, j), j ≥ c + 1; (c) stores L_c−1,c−1,
+// which launch c − 1 could not (its blocks were reading A_c−1,c−1). No block reads what
 // another block of the same launch writes, so launches are the only synchronisation.
 // Solve: one block; warp w owns the tile rows ≡ w (mod 8) and substitutes them in
 // order, waiting on a per-tile ready flag in shared memory for the tiles it needs
@@ -114,17 +115,47 @@ __device__ void solve_panel_tile(Tile& B, const Tile& D, const double* inv_diag)
   for (int j = 0; j < kT; ++j) B[lane][j] = x[j];
 }
 
-// Launch c of the factorisation (T column tiles). Blocks [0, T − c): tile rows i = c + b
-// of column tile c; the rest: the trailing tiles (i, j), c + 1 ≤ j ≤ i < T, column by column.
+// D = the diagonal tile (c, c) with panel c − 1's update applied (Y: scratch), factored:
+// what every block that needs L_cc computes for itself (the same instructions on the
+// same data, so the same bits). Returns factor_diagonal_tile's failing column. Every
+// thread of the block calls it; extra loads (load_more) join the first barrier.
+template <class LoadMore>
+__device__ int factor_diagonal(Tile& D, Tile& Y, double* inv_diag, int* fail, const double* A, int lda, int m, int c,
+                               LoadMore load_more) {
+  load_tile(D, A, lda, m, c, c, true);
+  if (c > 0) load_tile(Y, A, lda, m, c, c - 1, false);
+  load_more();
+  __syncthreads();
+  if (c > 0) {
+    subtract_product(D, Y, Y);  // D −= L_c,c−1 L_c,c−1ᵀ
+    __syncthreads();
+  }
+  if (threadIdx.x < 32) {
+    const int f = factor_diagonal_tile(D, inv_diag);
+    if (threadIdx.x == 0) *fail = f;
+  }
+  __syncthreads();
+  return *fail;
+}
+
+// Launch c of the factorisation (T column tiles). Blocks, in order:
+//  - T − c panel blocks, tile rows i = c..T−1 of column tile c: each factors L_cc for
+//    itself; i > c then stores L_ic = (A_ic − L_i,c−1 L_c,c−1ᵀ) L_cc⁻ᵀ; i = c only sets
+//    *info, and stores L_cc itself when c is the last tile;
+//  - for c > 0, one block that stores L_c−1,c−1 (factored again as launch c − 1 did):
+//    in launch c − 1 the other panel blocks still read A_c−1,c−1, so nobody wrote it;
+//  - the trailing tiles (i, j), c + 1 ≤ j ≤ i < T, column by column: A_ij −= L_i,c−1 L_j,c−1ᵀ.
+// No block reads a tile another block of the same launch writes.
 __global__ void __launch_bounds__(kFactorThreads) factor_step(int m, double* A, int lda, int* info, int c, int T) {
   __shared__ Tile D, B, X, Y;
   __shared__ double inv_diag[kT];
+  __shared__ int fail;
   const int k = c - 1;  // the panel whose update this launch applies (none when c = 0)
-  const int panel_blocks = T - c;
+  const int panel_blocks = T - c, delayed_blocks = c > 0 ? 1 : 0;
   const int b = static_cast<int>(blockIdx.x);
 
-  if (b >= panel_blocks) {  // trailing update: A_ij −= L_ik L_jkᵀ
-    int r = b - panel_blocks, j = c + 1;
+  if (b >= panel_blocks + delayed_blocks) {  // trailing update: A_ij −= L_ik L_jkᵀ
+    int r = b - panel_blocks - delayed_blocks, j = c + 1;
     while (r >= T - j) {
       r -= T - j;
       ++j;
@@ -140,34 +171,32 @@ __global__ void __launch_bounds__(kFactorThreads) factor_step(int m, double* A, 
     return;
   }
 
+  if (b == panel_blocks) {  // the delayed store of L_kk
+    factor_diagonal(D, Y, inv_diag, &fail, A, lda, m, k, [] {});
+    store_tile(D, A, lda, m, k, k, true);
+    return;
+  }
+
   const int i = c + b;  // this block's tile row in column tile c
-  load_tile(D, A, lda, m, c, c, true);
-  if (k >= 0) load_tile(Y, A, lda, m, c, k, false);
-  if (i > c) {
-    load_tile(B, A, lda, m, i, c, false);
-    if (k >= 0) load_tile(X, A, lda, m, i, k, false);
-  }
-  __syncthreads();
-  if (k >= 0) {
-    subtract_product(D, Y, Y);
-    if (i > c) subtract_product(B, X, Y);
-    __syncthreads();
-  }
-  __shared__ int fail;
-  if (threadIdx.x < 32) {
-    const int f = factor_diagonal_tile(D, inv_diag);
-    if (threadIdx.x == 0) fail = f;
-  }
-  __syncthreads();
+  const int f = factor_diagonal(D, Y, inv_diag, &fail, A, lda, m, c, [&] {
+    if (i > c) {
+      load_tile(B, A, lda, m, i, c, false);
+      if (k >= 0) load_tile(X, A, lda, m, i, k, false);
+    }
+  });
   if (i == c) {
-    store_tile(D, A, lda, m, c, c, true);
+    if (c == T - 1) store_tile(D, A, lda, m, c, c, true);  // no later launch to store it
     // Only this block of each launch touches *info, and launches run in order: launch 0
     // resets it, later ones keep the first failure.
     if (threadIdx.x == 0) {
-      if (c == 0) *info = fail;
-      else if (fail != 0 && *info == 0) *info = c * kT + fail;
+      if (c == 0) *info = f;
+      else if (f != 0 && *info == 0) *info = c * kT + f;
     }
     return;
+  }
+  if (k >= 0) {
+    subtract_product(B, X, Y);  // Y = L_ck, still in shared memory from factor_diagonal
+    __syncthreads();
   }
   if (threadIdx.x < 32) solve_panel_tile(B, D, inv_diag);
   __syncthreads();
@@ -267,7 +296,7 @@ cudaError_t cholesky_factor(int m, double* A, int lda, int* info, cudaStream_t s
   const int T = tiles(m);
   for (int c = 0; c < T; ++c) {
     const int rest = T - 1 - c;  // column tiles right of c
-    const int blocks = (T - c) + (c > 0 ? rest * (rest + 1) / 2 : 0);
+    const int blocks = (T - c) + (c > 0 ? 1 + rest * (rest + 1) / 2 : 0);  // panel, delayed L_c−1,c−1, trailing
     factor_step<<<blocks, kFactorThreads, 0, stream>>>(m, A, lda, info, c, T);
     if (const cudaError_t e = cudaGetLastError(); e != cudaSuccess) return e;
   }
