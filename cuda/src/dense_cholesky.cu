@@ -115,19 +115,21 @@ __device__ void solve_panel_tile(Tile& B, const Tile& D, const double* inv_diag)
   for (int j = 0; j < kT; ++j) B[lane][j] = x[j];
 }
 
-// D = the diagonal tile (c, c) with panel c − 1's update applied (Y: scratch), factored:
-// what every block that needs L_cc computes for itself (the same instructions on the
-// same data, so the same bits). Returns factor_diagonal_tile's failing column. Every
-// thread of the block calls it; extra loads (load_more) join the first barrier.
-template <class LoadMore>
+// D = the diagonal tile (c, c) with panel c − 1's update applied, factored: what every
+// block that needs L_cc computes for itself (the same instructions on the same data, so
+// the same bits). Y = L_c,c−1 afterwards (c > 0). Returns factor_diagonal_tile's failing
+// column. Every thread of the block calls it; the caller's own loads (load_more) join
+// the first barrier and its own updates with Y (update_more) the second.
+template <class LoadMore, class UpdateMore>
 __device__ int factor_diagonal(Tile& D, Tile& Y, double* inv_diag, int* fail, const double* A, int lda, int m, int c,
-                               LoadMore load_more) {
+                               LoadMore load_more, UpdateMore update_more) {
   load_tile(D, A, lda, m, c, c, true);
   if (c > 0) load_tile(Y, A, lda, m, c, c - 1, false);
   load_more();
   __syncthreads();
   if (c > 0) {
     subtract_product(D, Y, Y);  // D −= L_c,c−1 L_c,c−1ᵀ
+    update_more();
     __syncthreads();
   }
   if (threadIdx.x < 32) {
@@ -172,18 +174,23 @@ __global__ void __launch_bounds__(kFactorThreads) factor_step(int m, double* A, 
   }
 
   if (b == panel_blocks) {  // the delayed store of L_kk
-    factor_diagonal(D, Y, inv_diag, &fail, A, lda, m, k, [] {});
+    factor_diagonal(D, Y, inv_diag, &fail, A, lda, m, k, [] {}, [] {});
     store_tile(D, A, lda, m, k, k, true);
     return;
   }
 
   const int i = c + b;  // this block's tile row in column tile c
-  const int f = factor_diagonal(D, Y, inv_diag, &fail, A, lda, m, c, [&] {
-    if (i > c) {
-      load_tile(B, A, lda, m, i, c, false);
-      if (k >= 0) load_tile(X, A, lda, m, i, k, false);
-    }
-  });
+  const int f = factor_diagonal(
+      D, Y, inv_diag, &fail, A, lda, m, c,
+      [&] {
+        if (i > c) {
+          load_tile(B, A, lda, m, i, c, false);
+          if (k >= 0) load_tile(X, A, lda, m, i, k, false);
+        }
+      },
+      [&] {
+        if (i > c) subtract_product(B, X, Y);  // B = A_ic − L_ik L_ckᵀ, beside D's update
+      });
   if (i == c) {
     if (c == T - 1) store_tile(D, A, lda, m, c, c, true);  // no later launch to store it
     // Only this block of each launch touches *info, and launches run in order: launch 0
@@ -193,10 +200,6 @@ __global__ void __launch_bounds__(kFactorThreads) factor_step(int m, double* A, 
       else if (f != 0 && *info == 0) *info = c * kT + f;
     }
     return;
-  }
-  if (k >= 0) {
-    subtract_product(B, X, Y);  // Y = L_ck, still in shared memory from factor_diagonal
-    __syncthreads();
   }
   if (threadIdx.x < 32) solve_panel_tile(B, D, inv_diag);
   __syncthreads();
