@@ -194,7 +194,7 @@ int main(int argc, char** argv) {
   std::vector<int> orders{64, 128, 256, 305, 512, 1024};
   int reps = 100;
   app.add_option("scenes", scenes, "Scene files: each adds a row at its Newton system's order");
-  app.add_option("--orders", orders, "System orders m to time besides the scenes'")->capture_default_str();
+  app.add_option("--orders", orders, "System orders m to time besides the scenes' (comma-separated)")->delimiter(',')->capture_default_str();
   app.add_option("--reps", reps, "Timed calls per measurement (the median is printed; at least 50)")->capture_default_str();
   CLI11_PARSE(app, argc, argv);
   reps = std::max(reps, 50);
