@@ -9,7 +9,8 @@
 // another block of the same launch writes, so launches are the only synchronisation.
 // Solve: one block; warp w owns the tile rows ≡ w (mod 8) and substitutes them in
 // order, waiting on a per-tile ready flag in shared memory for the tiles it needs
-// (forward L y = b from the top, then back Lᵀ x = y from the bottom).
+// (forward L y = b from the top, then back Lᵀ x = y from the bottom); the diagonal
+// tiles are applied as explicit inverses, made by each owner before it waits.
 #include "dense_cholesky.h"
 
 #include <cfloat>
@@ -218,6 +219,40 @@ __device__ __forceinline__ void publish_ready(int* flag) {
   if ((threadIdx.x & 31) == 0) *static_cast<volatile int*>(flag) = 1;
 }
 
+// x = row `lane` of the inverse of a 32 × 32 triangular tile T whose row `lane` this lane
+// holds in t (zero off the triangle and on the diagonal) with inv_d = 1 / T_rr. Lower:
+// row p of T⁻¹ is final once rows q < p are (so p ascends); upper: p descends. Each row,
+// once final, is broadcast and eliminated from the rows beyond it.
+template <bool kLower>
+__device__ __forceinline__ void invert_triangular_tile(const double (&t)[kT], double inv_d, double (&x)[kT]) {
+  const int lane = static_cast<int>(threadIdx.x) & 31;
+#pragma unroll
+  for (int j = 0; j < kT; ++j) x[j] = j == lane ? 1.0 : 0.0;
+#pragma unroll
+  for (int step = 0; step < kT; ++step) {
+    const int p = kLower ? step : kT - 1 - step;
+    if (lane == p) {
+#pragma unroll
+      for (int j = 0; j < kT; ++j) x[j] *= inv_d;
+    }
+    // Row p of T⁻¹ is zero outside j ≤ p (lower) or j ≥ p (upper); t[p] is zero on p's
+    // own side of the diagonal and at p, so only the rows beyond p change.
+#pragma unroll
+    for (int j = kLower ? 0 : p; j <= (kLower ? p : kT - 1); ++j) x[j] -= t[p] * __shfl_sync(kFull, x[j], p);
+  }
+}
+
+// Σ_c x[c] · (lane c's v): row `lane` of a 32 × 32 matrix times the warp's vector.
+__device__ __forceinline__ double row_times_warp_vector(const double (&x)[kT], double v) {
+  double s0 = 0.0, s1 = 0.0;
+#pragma unroll
+  for (int c = 0; c < kT; c += 2) {
+    s0 += x[c] * __shfl_sync(kFull, v, c);
+    s1 += x[c + 1] * __shfl_sync(kFull, v, c + 1);
+  }
+  return s0 + s1;
+}
+
 __global__ void __launch_bounds__(kSolveThreads) solve_kernel(int m, const double* __restrict__ L, int lda, double* b, int T) {
   extern __shared__ double y[];  // 32T entries (zero past m), then the forward and back flags
   int* const ready_fwd = reinterpret_cast<int*>(y + kT * T);
@@ -226,12 +261,17 @@ __global__ void __launch_bounds__(kSolveThreads) solve_kernel(int m, const doubl
   for (int e = static_cast<int>(threadIdx.x); e < 2 * T; e += kSolveThreads) ready_fwd[e] = 0;
   __syncthreads();
   const int lane = static_cast<int>(threadIdx.x) & 31, warp = static_cast<int>(threadIdx.x) / 32;
-  double l[kT];
+  double l[kT], x[kT];  // a row of L's tile; a row of the diagonal tile's inverse
 
-  // Forward: y_i = L_ii⁻¹ (b_i − Σ_{s<i} L_is y_s); lane r holds row 32i + r.
+  // Forward: y_i = L_ii⁻¹ (b_i − Σ_{s<i} L_is y_s); lane r holds row 32i + r. L_ii⁻¹ is
+  // made before the first wait, off the critical path, so that a tile's last step is
+  // one update and one 32 × 32 product instead of 32 dependent substitution steps.
   for (int i = warp; i < T; i += kSolveWarps) {
     const int row = i * kT + lane;
     const bool valid = row < m;
+#pragma unroll
+    for (int c = 0; c < kT; ++c) l[c] = valid && c < lane ? __ldg(L + row + static_cast<size_t>(i * kT + c) * lda) : 0.0;
+    invert_triangular_tile<true>(l, valid ? 1.0 / __ldg(L + row + static_cast<size_t>(row) * lda) : 1.0, x);
     double acc = valid ? y[row] : 0.0;
     for (int s = 0; s < i; ++s) {
 #pragma unroll
@@ -240,26 +280,23 @@ __global__ void __launch_bounds__(kSolveThreads) solve_kernel(int m, const doubl
 #pragma unroll
       for (int c = 0; c < kT; ++c) acc -= l[c] * y[s * kT + c];  // broadcast reads
     }
-#pragma unroll
-    for (int c = 0; c < kT; ++c) l[c] = valid && c < lane ? __ldg(L + row + static_cast<size_t>(i * kT + c) * lda) : 0.0;
-    const double inv = valid ? 1.0 / __ldg(L + row + static_cast<size_t>(row) * lda) : 1.0;
-#pragma unroll
-    for (int c = 0; c < kT; ++c) {
-      if (lane == c) acc *= inv;
-      const double yc = __shfl_sync(kFull, acc, c);
-      if (lane > c) acc -= l[c] * yc;
-    }
+    acc = row_times_warp_vector(x, acc);
     if (valid) y[row] = acc;
     publish_ready(ready_fwd + i);
   }
   __syncthreads();
 
-  // Back: x_i = L_ii⁻ᵀ (y_i − Σ_{s>i} L_siᵀ x_s), from the last tile row up. Lane r reads
-  // column 32i + r of L (strided across lanes; each 32-byte sector serves 4 rows from L1).
+  // Back: x_i = L_ii⁻ᵀ (y_i − Σ_{s>i} L_siᵀ x_s), from the last tile row up; lane r holds
+  // row r of L_iiᵀ (column 32i + r of L: strided across lanes, each 32-byte sector
+  // serving 4 rows from L1).
   if (warp < T) {
     for (int i = warp + ((T - 1 - warp) / kSolveWarps) * kSolveWarps; i >= 0; i -= kSolveWarps) {
       const int row = i * kT + lane;
       const bool valid = row < m;
+#pragma unroll
+      for (int c = 0; c < kT; ++c)
+        l[c] = valid && c > lane && i * kT + c < m ? __ldg(L + (i * kT + c) + static_cast<size_t>(row) * lda) : 0.0;
+      invert_triangular_tile<false>(l, valid ? 1.0 / __ldg(L + row + static_cast<size_t>(row) * lda) : 1.0, x);
       double acc = valid ? y[row] : 0.0;
       for (int s = T - 1; s > i; --s) {
 #pragma unroll
@@ -269,16 +306,7 @@ __global__ void __launch_bounds__(kSolveThreads) solve_kernel(int m, const doubl
 #pragma unroll
         for (int c = 0; c < kT; ++c) acc -= l[c] * y[s * kT + c];
       }
-#pragma unroll
-      for (int c = 0; c < kT; ++c)
-        l[c] = valid && c > lane && i * kT + c < m ? __ldg(L + (i * kT + c) + static_cast<size_t>(row) * lda) : 0.0;
-      const double inv = valid ? 1.0 / __ldg(L + row + static_cast<size_t>(row) * lda) : 1.0;
-#pragma unroll
-      for (int c = kT - 1; c >= 0; --c) {
-        if (lane == c) acc *= inv;
-        const double xc = __shfl_sync(kFull, acc, c);
-        if (lane < c) acc -= l[c] * xc;
-      }
+      acc = row_times_warp_vector(x, acc);
       if (valid) y[row] = acc;
       publish_ready(ready_bwd + i);
     }
