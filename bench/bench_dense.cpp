@@ -1,0 +1,237 @@
+// Benchmark of the Newton system's dense Cholesky on the GPU (issue #23): our factor
+// and solve (cuda/src/dense_cholesky.h) against cuSOLVER's potrf and potrs, at each
+// given scene's system order (m = the metric space's dim + 1, as the CUDA core sets it)
+// and at chosen orders. CUDA events around each call, median over the timed calls after
+// warm-up (A and b restored outside the timed region), alone and captured into a CUDA
+// graph (factor + solve per replay), and the largest relative difference of the two
+// solutions. Prints a Markdown table. Not a test: timings only.
+#include <CLI/CLI.hpp>
+#include <algorithm>
+#include <cstdio>
+#include <cusolverDn.h>
+#include <deque>
+#include <functional>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "dense_cholesky.h"
+#include "device.h"
+#include "hsi/cage.h"
+#include "hsi/cuda/newton_core.h"
+#include "hsi/shape_setup.h"
+
+using namespace hsi;
+namespace hc = hsi::cuda;
+namespace hk = hsi::cuda::kernels;
+
+namespace {
+
+// A = B Bᵀ / m + I, B uniform in [−1, 1] (SPD, condition number ~5), and b, fixed seeds.
+std::vector<double> spd_matrix(int m) {
+  std::mt19937 rng(static_cast<unsigned>(m));
+  std::uniform_real_distribution<double> u(-1, 1);
+  const size_t M = static_cast<size_t>(m);
+  std::vector<double> B(M * M), A(M * M, 0.0);
+  for (double& v : B) v = u(rng);
+  for (size_t j = 0; j < M; ++j)
+    for (size_t i = j; i < M; ++i) {
+      double s = 0;
+      for (size_t k = 0; k < M; ++k) s += B[i + k * M] * B[j + k * M];
+      A[i + j * M] = A[j + i * M] = s / m + (i == j ? 1.0 : 0.0);
+    }
+  return A;
+}
+
+// Median time in µs of `body` (CUDA events on `stream`), `reset` run before each call
+// outside the events; three untimed calls first.
+double median_us(cudaStream_t stream, int reps, const std::function<void()>& reset, const std::function<void()>& body) {
+  for (int w = 0; w < 3; ++w) {
+    reset();
+    body();
+  }
+  std::deque<hc::Event> starts, stops;
+  for (int r = 0; r < reps; ++r) {
+    starts.emplace_back(true);
+    stops.emplace_back(true);
+  }
+  for (int r = 0; r < reps; ++r) {
+    reset();
+    HSI_CUDA_CHECK(cudaEventRecord(starts[static_cast<size_t>(r)], stream));
+    body();
+    HSI_CUDA_CHECK(cudaEventRecord(stops[static_cast<size_t>(r)], stream));
+  }
+  HSI_CUDA_CHECK(cudaStreamSynchronize(stream));
+  std::vector<double> us;
+  for (int r = 0; r < reps; ++r) {
+    float ms = 0;
+    HSI_CUDA_CHECK(cudaEventElapsedTime(&ms, starts[static_cast<size_t>(r)], stops[static_cast<size_t>(r)]));
+    us.push_back(1e3 * ms);
+  }
+  std::nth_element(us.begin(), us.begin() + reps / 2, us.end());
+  return us[static_cast<size_t>(reps / 2)];
+}
+
+// `body` captured into a graph and instantiated; null where the capture failed.
+cudaGraphExec_t capture(cudaStream_t stream, const std::function<void()>& body) {
+  cudaGraph_t graph = nullptr;
+  HSI_CUDA_CHECK(cudaStreamBeginCapture(stream, cudaStreamCaptureModeThreadLocal));
+  try {
+    body();
+  } catch (const hc::Error& e) {
+    std::fprintf(stderr, "  capture failed: %s\n", e.what());
+  }
+  const cudaError_t end = cudaStreamEndCapture(stream, &graph);
+  if (end != cudaSuccess || !graph) {
+    (void)cudaGetLastError();
+    return nullptr;
+  }
+  cudaGraphExec_t exec = nullptr;
+  const cudaError_t inst = cudaGraphInstantiate(&exec, graph, 0);
+  cudaGraphDestroy(graph);
+  if (inst != cudaSuccess) {
+    (void)cudaGetLastError();
+    return nullptr;
+  }
+  return exec;
+}
+
+struct Row {
+  double potrf = 0, factor = 0, potrs = 0, solve = 0, cusolver_graph = -1, ours_graph = -1, max_rel_diff = 0;
+  int cusolver_info = -1, ours_info = -1;
+};
+
+Row time_order(int m, int reps) {
+  Row row;
+  hc::Stream stream;
+  hc::SolverHandle solver(stream);
+  const size_t M = static_cast<size_t>(m);
+  const std::vector<double> A_host = spd_matrix(m);
+  std::vector<double> b_host(M);
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> u(-1, 1);
+  for (double& v : b_host) v = u(rng);
+  hc::DeviceArray<double> A0(M * M), b0(M), A(M * M), b(M);
+  hc::DeviceArray<int> info(1);
+  HSI_CUDA_CHECK(cudaMemcpy(A0.get(), A_host.data(), A0.bytes(), cudaMemcpyHostToDevice));
+  HSI_CUDA_CHECK(cudaMemcpy(b0.get(), b_host.data(), b0.bytes(), cudaMemcpyHostToDevice));
+  int lwork = 0;
+  HSI_CUDA_CHECK(cusolverDnDpotrf_bufferSize(solver, CUBLAS_FILL_MODE_LOWER, m, A.get(), m, &lwork));
+  hc::DeviceArray<double> work(static_cast<size_t>(std::max(lwork, 1)));
+
+  const auto restore_A = [&] { HSI_CUDA_CHECK(cudaMemcpyAsync(A.get(), A0.get(), A.bytes(), cudaMemcpyDeviceToDevice, stream)); };
+  const auto restore_b = [&] { HSI_CUDA_CHECK(cudaMemcpyAsync(b.get(), b0.get(), b.bytes(), cudaMemcpyDeviceToDevice, stream)); };
+  const auto restore = [&] {
+    restore_A();
+    restore_b();
+  };
+  const auto potrf = [&] {
+    HSI_CUDA_CHECK(cusolverDnDpotrf(solver, CUBLAS_FILL_MODE_LOWER, m, A.get(), m, work.get(), lwork, info.get()));
+  };
+  const auto potrs = [&] { HSI_CUDA_CHECK(cusolverDnDpotrs(solver, CUBLAS_FILL_MODE_LOWER, m, 1, A.get(), m, b.get(), m, info.get())); };
+  const auto factor = [&] { HSI_CUDA_CHECK(hk::cholesky_factor(m, A.get(), m, info.get(), stream)); };
+  const auto solve = [&] { HSI_CUDA_CHECK(hk::cholesky_solve(m, A.get(), m, b.get(), stream)); };
+  const auto read_back = [&](std::vector<double>& x, int& inf) {
+    x.resize(M);
+    HSI_CUDA_CHECK(cudaStreamSynchronize(stream));
+    HSI_CUDA_CHECK(cudaMemcpy(x.data(), b.get(), b.bytes(), cudaMemcpyDeviceToHost));
+    HSI_CUDA_CHECK(cudaMemcpy(&inf, info.get(), sizeof(int), cudaMemcpyDeviceToHost));
+  };
+
+  // cuSOLVER: factor (A restored before each call), then solve on the factor (b restored).
+  row.potrf = median_us(stream, reps, restore_A, potrf);
+  row.potrs = median_us(stream, reps, restore_b, potrs);
+  std::vector<double> x_cusolver, x_ours;
+  restore();
+  potrf();
+  potrs();
+  read_back(x_cusolver, row.cusolver_info);
+  // Ours, the same way.
+  row.factor = median_us(stream, reps, restore_A, factor);
+  row.solve = median_us(stream, reps, restore_b, solve);
+  restore();
+  factor();
+  solve();
+  read_back(x_ours, row.ours_info);
+  double diff = 0, scale = 0;
+  for (size_t i = 0; i < M; ++i) {
+    diff = std::max(diff, std::abs(x_ours[i] - x_cusolver[i]));
+    scale = std::max(scale, std::abs(x_cusolver[i]));
+  }
+  row.max_rel_diff = diff / std::max(scale, 1e-300);
+
+  // Factor + solve as one graph replay each (A and b restored outside the timed replay).
+  const auto factor_solve_cusolver = [&] {
+    potrf();
+    potrs();
+  };
+  const auto factor_solve_ours = [&] {
+    factor();
+    solve();
+  };
+  for (auto [body, out] : {std::pair{std::function<void()>(factor_solve_cusolver), &row.cusolver_graph},
+                           std::pair{std::function<void()>(factor_solve_ours), &row.ours_graph}}) {
+    cudaGraphExec_t exec = capture(stream, body);
+    if (!exec) continue;
+    *out = median_us(stream, reps, restore, [&] { HSI_CUDA_CHECK(cudaGraphLaunch(exec, stream)); });
+    cudaGraphExecDestroy(exec);
+  }
+  return row;
+}
+
+std::string us_or_na(double us) {
+  if (us < 0) return "n/a";
+  char s[32];
+  std::snprintf(s, sizeof s, "%.1f", us);
+  return s;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"hsi dense Cholesky benchmark: ours against cuSOLVER's potrf/potrs at the Newton system's orders"};
+  std::vector<std::string> scenes;
+  std::vector<int> orders{64, 128, 256, 305, 512, 1024};
+  int reps = 100;
+  app.add_option("scenes", scenes, "Scene files: each adds a row at its Newton system's order");
+  app.add_option("--orders", orders, "System orders m to time besides the scenes' (comma-separated)")->delimiter(',')->capture_default_str();
+  app.add_option("--reps", reps, "Timed calls per measurement (the median is printed; at least 50)")->capture_default_str();
+  CLI11_PARSE(app, argc, argv);
+  reps = std::max(reps, 50);
+  std::vector<std::pair<std::string, int>> rows;
+  for (const std::string& path : scenes) {
+    Scene scene = load_scene(path);
+    if (!scene.cage) scene.cage = build_cage(scene.shape, scene.cage_options);
+    const auto setup = make_shape_setup(scene);
+    rows.emplace_back(scene.name.empty() ? path : scene.name, setup->metric_space.dim() + 1);
+    std::fprintf(stderr, "%s: m = %d\n", rows.back().first.c_str(), rows.back().second);
+  }
+  for (int m : orders) rows.emplace_back("", m);
+  std::string why;
+  if (!hc::device_available(&why)) {
+    std::fprintf(stderr, "bench_dense: %s\n", why.c_str());
+    return 1;
+  }
+
+  std::printf("## Dense Cholesky, FP64, one right-hand side: ours (cuda/src/dense_cholesky.h) against cuSOLVER\n\n"
+              "Median µs over %d calls (CUDA events, after 3 untimed calls; A and b restored outside the timed "
+              "region). graph: factor + solve captured into one CUDA graph, per replay. max rel diff: "
+              "max |x_ours − x_cuSOLVER| / max |x_cuSOLVER|. A = B Bᵀ/m + I, random B. Our factor makes "
+              "ceil(m/32) launches; the caller prefers cuSOLVER above m = %d (kCholeskyPreferredMaxOrder).\n\n",
+              reps, hk::kCholeskyPreferredMaxOrder);
+  std::printf("| scene | m | potrf µs | our factor µs | potrf / ours | potrs µs | our solve µs | potrs / ours | "
+              "cuSOLVER graph µs | our graph µs | cuSOLVER / ours (graph) | max rel diff | info (cuSOLVER, ours) |\n"
+              "|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
+  for (const auto& [name, m] : rows) {
+    std::fprintf(stderr, "m = %d%s%s\n", m, name.empty() ? "" : ": ", name.c_str());
+    const Row r = time_order(m, reps);
+    const std::string graph_ratio =
+        r.cusolver_graph > 0 && r.ours_graph > 0 ? us_or_na(r.cusolver_graph / r.ours_graph).append("x") : "n/a";
+    std::printf("| %s | %d | %.1f | %.1f | %.1fx | %.1f | %.1f | %.1fx | %s | %s | %s | %.1e | %d, %d |\n",
+                name.empty() ? "-" : name.c_str(), m, r.potrf, r.factor, r.potrf / r.factor, r.potrs, r.solve, r.potrs / r.solve,
+                us_or_na(r.cusolver_graph).c_str(), us_or_na(r.ours_graph).c_str(), graph_ratio.c_str(), r.max_rel_diff,
+                r.cusolver_info, r.ours_info);
+    std::fflush(stdout);
+  }
+  return 0;
+}

@@ -1,0 +1,348 @@
+// Dense Cholesky factor and solve for the Newton system (see dense_cholesky.h).
+//
+// Factor: right-looking over 32-column tiles with a look-ahead of one, one launch per
+// column tile c. Launch c (a) factors column tile c: every block of tile row i ≥ c
+// applies panel c − 1's update to A_cc and A_ic itself, factors A_cc in registers of
+// one warp (redundantly in each block, 32 × 32 is cheap) and solves its A_ic against it;
+// (b) applies panel c − 1 to the trailing tiles (i, j), j ≥ c + 1; (c) stores L_c−1,c−1,
+// which launch c − 1 could not (its blocks were reading A_c−1,c−1). No block reads what
+// another block of the same launch writes, so launches are the only synchronisation.
+// Solve: one block; warp w owns the tile rows ≡ w (mod 8) and substitutes them in
+// order, waiting on a per-tile ready flag in shared memory for the tiles it needs
+// (forward L y = b from the top, then back Lᵀ x = y from the bottom); the diagonal
+// tiles are applied as explicit inverses, made by each owner before it waits.
+#include "dense_cholesky.h"
+
+#include <cfloat>
+#include <cstddef>
+
+namespace hsi::cuda::kernels {
+namespace {
+
+constexpr int kT = kCholeskyTile;
+constexpr int kFactorThreads = 256;  // 8 warps: 4 outputs each of a 32 × 32 tile product
+constexpr int kSolveThreads = 256;   // 8 warps, each up to 255 registers (two 32-entry rows)
+constexpr int kSolveWarps = kSolveThreads / 32;
+constexpr unsigned kFull = 0xffffffffu;
+static_assert(kT == 32, "the tile kernels map one lane to one tile row");
+static_assert(kFactorThreads == 8 * kT, "subtract_product maps 8 warps x 4 rows");
+
+using Tile = double[kT][kT + 1];  // padded: column walks hit 32 different banks
+
+__device__ __forceinline__ double at(const double* A, int lda, int r, int c) {
+  return A[static_cast<size_t>(r) + static_cast<size_t>(c) * static_cast<size_t>(lda)];
+}
+
+// S = tile (ti, tj) of A, zero outside the m × m matrix. lower_only: a diagonal tile,
+// whose strictly upper part must not be read (it need not hold A) and is set to zero,
+// and whose rows past m get a unit diagonal (so the padding factors to I, fails nothing).
+__device__ void load_tile(Tile& S, const double* A, int lda, int m, int ti, int tj, bool lower_only) {
+  for (int e = static_cast<int>(threadIdx.x); e < kT * kT; e += kFactorThreads) {
+    const int r = e & (kT - 1), c = e / kT;  // consecutive threads: consecutive rows (coalesced)
+    const int gr = ti * kT + r, gc = tj * kT + c;
+    double v = 0.0;
+    if (gr < m && gc < m && (!lower_only || r >= c)) v = at(A, lda, gr, gc);
+    else if (lower_only && r == c) v = 1.0;
+    S[r][c] = v;
+  }
+}
+
+// Tile (ti, tj) of A = S where inside the matrix (and, lower_only, on or below the diagonal).
+__device__ void store_tile(const Tile& S, double* A, int lda, int m, int ti, int tj, bool lower_only) {
+  for (int e = static_cast<int>(threadIdx.x); e < kT * kT; e += kFactorThreads) {
+    const int r = e & (kT - 1), c = e / kT;
+    const int gr = ti * kT + r, gc = tj * kT + c;
+    if (gr < m && gc < m && (!lower_only || r >= c))
+      A[static_cast<size_t>(gr) + static_cast<size_t>(gc) * static_cast<size_t>(lda)] = S[r][c];
+  }
+}
+
+// C −= X Yᵀ (32 × 32 × 32). Thread t: column t mod 32, rows t / 32 + 8p. X reads are
+// warp-wide broadcasts, Y reads walk a column of the padded tile (no bank conflicts).
+__device__ void subtract_product(Tile& C, const Tile& X, const Tile& Y) {
+  const int col = static_cast<int>(threadIdx.x) & (kT - 1), r0 = static_cast<int>(threadIdx.x) / kT;
+  double acc[4] = {0.0, 0.0, 0.0, 0.0};
+#pragma unroll 8
+  for (int q = 0; q < kT; ++q) {
+    const double y = Y[col][q];
+#pragma unroll
+    for (int p = 0; p < 4; ++p) acc[p] += X[r0 + 8 * p][q] * y;
+  }
+#pragma unroll
+  for (int p = 0; p < 4; ++p) C[r0 + 8 * p][col] -= acc[p];
+}
+
+// D = its Cholesky factor (lower, upper part zeroed), by one warp: lane r holds row r in
+// registers, column q's pivot and multipliers travel by shuffle. inv_diag[q] = 1 / L_qq.
+// Returns the 1-based column of the first pivot that is not > 0 or not finite, or 0.
+// Every lane of warp 0 calls it.
+__device__ int factor_diagonal_tile(Tile& D, double* inv_diag) {
+  const int lane = static_cast<int>(threadIdx.x) & 31;
+  double v[kT];
+#pragma unroll
+  for (int j = 0; j < kT; ++j) v[j] = j <= lane ? D[lane][j] : 0.0;
+  int fail = 0;
+#pragma unroll
+  for (int q = 0; q < kT; ++q) {
+    const double pivot = __shfl_sync(kFull, v[q], q);  // A_qq − Σ_{p<q} L_qp²
+    if (fail == 0 && !(pivot > 0.0 && pivot <= DBL_MAX)) fail = q + 1;  // NaN fails both tests
+    const double inv = rsqrt(pivot);
+    // Lane q: L_qq = √pivot; lanes r > q: L_rq; lanes r < q: unused (their row's upper part).
+    const double l = lane == q ? pivot * inv : v[q] * inv;
+    v[q] = l;
+    if (lane == q) inv_diag[q] = inv;
+#pragma unroll
+    for (int j = q + 1; j < kT; ++j) v[j] -= l * __shfl_sync(kFull, l, j);  // A_rj −= L_rq L_jq
+  }
+#pragma unroll
+  for (int j = 0; j < kT; ++j) D[lane][j] = j <= lane ? v[j] : 0.0;
+  return fail;
+}
+
+// B = B L⁻ᵀ (each row x of the result solves x Lᵀ = b) with L = D from
+// factor_diagonal_tile; lane r solves row r. Every lane of warp 0 calls it.
+__device__ void solve_panel_tile(Tile& B, const Tile& D, const double* inv_diag) {
+  const int lane = static_cast<int>(threadIdx.x) & 31;
+  double x[kT];
+#pragma unroll
+  for (int j = 0; j < kT; ++j) x[j] = B[lane][j];
+#pragma unroll
+  for (int q = 0; q < kT; ++q) {
+    x[q] *= inv_diag[q];
+#pragma unroll
+    for (int p = q + 1; p < kT; ++p) x[p] -= x[q] * D[p][q];  // broadcast reads of column q
+  }
+#pragma unroll
+  for (int j = 0; j < kT; ++j) B[lane][j] = x[j];
+}
+
+// D = the diagonal tile (c, c) with panel c − 1's update applied, factored: what every
+// block that needs L_cc computes for itself (the same instructions on the same data, so
+// the same bits). Y = L_c,c−1 afterwards (c > 0). Returns factor_diagonal_tile's failing
+// column. Every thread of the block calls it; the caller's own loads (load_more) join
+// the first barrier and its own updates with Y (update_more) the second.
+template <class LoadMore, class UpdateMore>
+__device__ int factor_diagonal(Tile& D, Tile& Y, double* inv_diag, int* fail, const double* A, int lda, int m, int c,
+                               LoadMore load_more, UpdateMore update_more) {
+  load_tile(D, A, lda, m, c, c, true);
+  if (c > 0) load_tile(Y, A, lda, m, c, c - 1, false);
+  load_more();
+  __syncthreads();
+  if (c > 0) {
+    subtract_product(D, Y, Y);  // D −= L_c,c−1 L_c,c−1ᵀ
+    update_more();
+    __syncthreads();
+  }
+  if (threadIdx.x < 32) {
+    const int f = factor_diagonal_tile(D, inv_diag);
+    if (threadIdx.x == 0) *fail = f;
+  }
+  __syncthreads();
+  return *fail;
+}
+
+// Launch c of the factorisation (T column tiles). Blocks, in order:
+//  - T − c panel blocks, tile rows i = c..T−1 of column tile c: each factors L_cc for
+//    itself; i > c then stores L_ic = (A_ic − L_i,c−1 L_c,c−1ᵀ) L_cc⁻ᵀ; i = c only sets
+//    *info, and stores L_cc itself when c is the last tile;
+//  - for c > 0, one block that stores L_c−1,c−1 (factored again as launch c − 1 did):
+//    in launch c − 1 the other panel blocks still read A_c−1,c−1, so nobody wrote it;
+//  - the trailing tiles (i, j), c + 1 ≤ j ≤ i < T, column by column: A_ij −= L_i,c−1 L_j,c−1ᵀ.
+// No block reads a tile another block of the same launch writes.
+__global__ void __launch_bounds__(kFactorThreads) factor_step(int m, double* A, int lda, int* info, int c, int T) {
+  __shared__ Tile D, B, X, Y;
+  __shared__ double inv_diag[kT];
+  __shared__ int fail;
+  const int k = c - 1;  // the panel whose update this launch applies (none when c = 0)
+  const int panel_blocks = T - c, delayed_blocks = c > 0 ? 1 : 0;
+  const int b = static_cast<int>(blockIdx.x);
+
+  if (b >= panel_blocks + delayed_blocks) {  // trailing update: A_ij −= L_ik L_jkᵀ
+    int r = b - panel_blocks - delayed_blocks, j = c + 1;
+    while (r >= T - j) {
+      r -= T - j;
+      ++j;
+    }
+    const int i = j + r;
+    load_tile(B, A, lda, m, i, j, i == j);
+    load_tile(X, A, lda, m, i, k, false);
+    if (i != j) load_tile(Y, A, lda, m, j, k, false);
+    __syncthreads();
+    subtract_product(B, X, i == j ? X : Y);
+    __syncthreads();
+    store_tile(B, A, lda, m, i, j, i == j);
+    return;
+  }
+
+  if (b == panel_blocks) {  // the delayed store of L_kk
+    factor_diagonal(D, Y, inv_diag, &fail, A, lda, m, k, [] {}, [] {});
+    store_tile(D, A, lda, m, k, k, true);
+    return;
+  }
+
+  const int i = c + b;  // this block's tile row in column tile c
+  const int f = factor_diagonal(
+      D, Y, inv_diag, &fail, A, lda, m, c,
+      [&] {
+        if (i > c) {
+          load_tile(B, A, lda, m, i, c, false);
+          if (k >= 0) load_tile(X, A, lda, m, i, k, false);
+        }
+      },
+      [&] {
+        if (i > c) subtract_product(B, X, Y);  // B = A_ic − L_ik L_ckᵀ, beside D's update
+      });
+  if (i == c) {
+    if (c == T - 1) store_tile(D, A, lda, m, c, c, true);  // no later launch to store it
+    // Only this block of each launch touches *info, and launches run in order: launch 0
+    // resets it, later ones keep the first failure.
+    if (threadIdx.x == 0) {
+      if (c == 0) *info = f;
+      else if (f != 0 && *info == 0) *info = c * kT + f;
+    }
+    return;
+  }
+  if (threadIdx.x < 32) solve_panel_tile(B, D, inv_diag);
+  __syncthreads();
+  store_tile(B, A, lda, m, i, c, false);
+}
+
+// Ready flags between the solve's warps (shared memory, one block).
+__device__ __forceinline__ void wait_ready(const int* flag) {
+  while (*static_cast<const volatile int*>(flag) == 0) {
+  }
+  __threadfence_block();  // the tile's values are read after the flag (and not cached from before)
+}
+__device__ __forceinline__ void publish_ready(int* flag) {
+  __threadfence_block();  // this lane's values before the flag
+  __syncwarp();
+  if ((threadIdx.x & 31) == 0) *static_cast<volatile int*>(flag) = 1;
+}
+
+// x = row `lane` of the inverse of a 32 × 32 triangular tile T whose row `lane` this lane
+// holds in t (zero off the triangle and on the diagonal) with inv_d = 1 / T_rr. Lower:
+// row p of T⁻¹ is final once rows q < p are (so p ascends); upper: p descends. Each row,
+// once final, is broadcast and eliminated from the rows beyond it.
+template <bool kLower>
+__device__ __forceinline__ void invert_triangular_tile(const double (&t)[kT], double inv_d, double (&x)[kT]) {
+  const int lane = static_cast<int>(threadIdx.x) & 31;
+#pragma unroll
+  for (int j = 0; j < kT; ++j) x[j] = j == lane ? 1.0 : 0.0;
+#pragma unroll
+  for (int step = 0; step < kT; ++step) {
+    const int p = kLower ? step : kT - 1 - step;
+    if (lane == p) {
+#pragma unroll
+      for (int j = 0; j < kT; ++j) x[j] *= inv_d;
+    }
+    // Row p of T⁻¹ is zero outside j ≤ p (lower) or j ≥ p (upper); t[p] is zero on p's
+    // own side of the diagonal and at p, so only the rows beyond p change.
+#pragma unroll
+    for (int j = kLower ? 0 : p; j <= (kLower ? p : kT - 1); ++j) x[j] -= t[p] * __shfl_sync(kFull, x[j], p);
+  }
+}
+
+// Σ_c x[c] · (lane c's v): row `lane` of a 32 × 32 matrix times the warp's vector.
+__device__ __forceinline__ double row_times_warp_vector(const double (&x)[kT], double v) {
+  double s0 = 0.0, s1 = 0.0;
+#pragma unroll
+  for (int c = 0; c < kT; c += 2) {
+    s0 += x[c] * __shfl_sync(kFull, v, c);
+    s1 += x[c + 1] * __shfl_sync(kFull, v, c + 1);
+  }
+  return s0 + s1;
+}
+
+__global__ void __launch_bounds__(kSolveThreads) solve_kernel(int m, const double* __restrict__ L, int lda, double* b, int T) {
+  extern __shared__ double y[];  // 32T entries (zero past m), then the forward and back flags
+  int* const ready_fwd = reinterpret_cast<int*>(y + kT * T);
+  int* const ready_bwd = ready_fwd + T;
+  for (int e = static_cast<int>(threadIdx.x); e < kT * T; e += kSolveThreads) y[e] = e < m ? b[e] : 0.0;
+  for (int e = static_cast<int>(threadIdx.x); e < 2 * T; e += kSolveThreads) ready_fwd[e] = 0;
+  __syncthreads();
+  const int lane = static_cast<int>(threadIdx.x) & 31, warp = static_cast<int>(threadIdx.x) / 32;
+  double l[kT], x[kT];  // a row of L's tile; a row of the diagonal tile's inverse
+
+  // Forward: y_i = L_ii⁻¹ (b_i − Σ_{s<i} L_is y_s); lane r holds row 32i + r. L_ii⁻¹ is
+  // made before the first wait, off the critical path, so that a tile's last step is
+  // one update and one 32 × 32 product instead of 32 dependent substitution steps.
+  for (int i = warp; i < T; i += kSolveWarps) {
+    const int row = i * kT + lane;
+    const bool valid = row < m;
+#pragma unroll
+    for (int c = 0; c < kT; ++c) l[c] = valid && c < lane ? __ldg(L + row + static_cast<size_t>(i * kT + c) * lda) : 0.0;
+    invert_triangular_tile<true>(l, valid ? 1.0 / __ldg(L + row + static_cast<size_t>(row) * lda) : 1.0, x);
+    double acc = valid ? y[row] : 0.0;
+    for (int s = 0; s < i; ++s) {
+#pragma unroll
+      for (int c = 0; c < kT; ++c) l[c] = valid ? __ldg(L + row + static_cast<size_t>(s * kT + c) * lda) : 0.0;  // coalesced
+      wait_ready(ready_fwd + s);
+#pragma unroll
+      for (int c = 0; c < kT; ++c) acc -= l[c] * y[s * kT + c];  // broadcast reads
+    }
+    acc = row_times_warp_vector(x, acc);
+    if (valid) y[row] = acc;
+    publish_ready(ready_fwd + i);
+  }
+  __syncthreads();
+
+  // Back: x_i = L_ii⁻ᵀ (y_i − Σ_{s>i} L_siᵀ x_s), from the last tile row up; lane r holds
+  // row r of L_iiᵀ (column 32i + r of L: strided across lanes, each 32-byte sector
+  // serving 4 rows from L1).
+  if (warp < T) {
+    for (int i = warp + ((T - 1 - warp) / kSolveWarps) * kSolveWarps; i >= 0; i -= kSolveWarps) {
+      const int row = i * kT + lane;
+      const bool valid = row < m;
+#pragma unroll
+      for (int c = 0; c < kT; ++c)
+        l[c] = valid && c > lane && i * kT + c < m ? __ldg(L + (i * kT + c) + static_cast<size_t>(row) * lda) : 0.0;
+      invert_triangular_tile<false>(l, valid ? 1.0 / __ldg(L + row + static_cast<size_t>(row) * lda) : 1.0, x);
+      double acc = valid ? y[row] : 0.0;
+      for (int s = T - 1; s > i; --s) {
+#pragma unroll
+        for (int c = 0; c < kT; ++c)
+          l[c] = valid && s * kT + c < m ? __ldg(L + (s * kT + c) + static_cast<size_t>(row) * lda) : 0.0;
+        wait_ready(ready_bwd + s);
+#pragma unroll
+        for (int c = 0; c < kT; ++c) acc -= l[c] * y[s * kT + c];
+      }
+      acc = row_times_warp_vector(x, acc);
+      if (valid) y[row] = acc;
+      publish_ready(ready_bwd + i);
+    }
+  }
+  __syncthreads();
+  for (int e = static_cast<int>(threadIdx.x); e < m; e += kSolveThreads) b[e] = y[e];
+}
+
+int tiles(int m) { return (m + kT - 1) / kT; }
+
+size_t solve_shared_bytes(int T) { return static_cast<size_t>(T) * (kT * sizeof(double) + 2 * sizeof(int)); }
+
+}  // namespace
+
+cudaError_t cholesky_factor(int m, double* A, int lda, int* info, cudaStream_t stream) {
+  if (m < 0 || lda < (m > 1 ? m : 1)) return cudaErrorInvalidValue;
+  if (m == 0) return cudaMemsetAsync(info, 0, sizeof(int), stream);
+  const int T = tiles(m);
+  for (int c = 0; c < T; ++c) {
+    const int rest = T - 1 - c;  // column tiles right of c
+    const int blocks = (T - c) + (c > 0 ? 1 + rest * (rest + 1) / 2 : 0);  // panel, delayed L_c−1,c−1, trailing
+    factor_step<<<blocks, kFactorThreads, 0, stream>>>(m, A, lda, info, c, T);
+    if (const cudaError_t e = cudaGetLastError(); e != cudaSuccess) return e;
+  }
+  return cudaSuccess;
+}
+
+cudaError_t cholesky_solve(int m, const double* L, int lda, double* b, cudaStream_t stream) {
+  if (m < 0 || lda < (m > 1 ? m : 1) || m > kCholeskySolveMaxOrder) return cudaErrorInvalidValue;
+  if (m == 0) return cudaSuccess;
+  const int T = tiles(m);
+  static_assert(kCholeskySolveMaxOrder % kT == 0);
+  static_assert((kCholeskySolveMaxOrder / kT) * (kT * sizeof(double) + 2 * sizeof(int)) <= 48 * 1024,
+                "the solve's shared memory must fit the default 48 KiB");
+  solve_kernel<<<1, kSolveThreads, solve_shared_bytes(T), stream>>>(m, L, lda, b, T);
+  return cudaGetLastError();
+}
+
+}  // namespace hsi::cuda::kernels

@@ -1,0 +1,39 @@
+// The Newton system's dense Cholesky factor and solve on the GPU (issue #23), in place
+// of cuSOLVER's potrf/potrs, which at our sizes (m = 4n or 4n + 1, about 50 to 1,700,
+// mostly 150 to 400) cost ~150 + ~65 us per Newton iteration in launch and latency more
+// than in arithmetic. FP64, lower triangle, column-major, one right-hand side. Both
+// calls only enqueue kernels on `stream`: no allocation, no host synchronisation and no
+// host read of device data, so they can be captured into a CUDA graph.
+#pragma once
+
+#include <cuda_runtime.h>
+
+namespace hsi::cuda::kernels {
+
+// Tile edge of the blocked factorisation and of the solve's substitutions.
+constexpr int kCholeskyTile = 32;
+
+// Above this order the caller should prefer cuSOLVER (cusolverDnDpotrf/potrs): the
+// factorisation below makes ceil(m / 32) launches, one per column tile, so its cost
+// grows with m while cuSOLVER's blocked kernels catch up. A tuning threshold only:
+// both functions are correct for every m (the solve up to kCholeskySolveMaxOrder).
+// To be set from bench_dense's table on the H100.
+constexpr int kCholeskyPreferredMaxOrder = 1024;
+
+// The largest m cholesky_solve takes (its vector lives in 48 KiB of shared memory).
+constexpr int kCholeskySolveMaxOrder = 5632;
+
+// A = L Lᵀ in place (lower triangle of A, m × m, column-major, leading dimension lda;
+// the strictly upper triangle is neither read nor written). *info (device memory) is
+// set to 0 on success, or to the 1-based column of the first pivot that is not > 0 or
+// not finite (LAPACK's and cuSOLVER's convention; the factor is then garbage from that
+// column on). Enqueues ceil(m / 32) kernels (one memset when m = 0).
+// cudaErrorInvalidValue for m < 0 or lda < max(1, m); otherwise the launch status.
+cudaError_t cholesky_factor(int m, double* A, int lda, int* info, cudaStream_t stream);
+
+// b ← (L Lᵀ)⁻¹ b with L from cholesky_factor (m × m lower, leading dimension lda), one
+// kernel of one thread block. cudaErrorInvalidValue for m < 0, lda < max(1, m) or
+// m > kCholeskySolveMaxOrder; otherwise the launch status.
+cudaError_t cholesky_solve(int m, const double* L, int lda, double* b, cudaStream_t stream);
+
+}  // namespace hsi::cuda::kernels

@@ -1,0 +1,304 @@
+// The GPU's dense Cholesky factor and solve (cuda/src/dense_cholesky.h) against Eigen's
+// LLT: the factor of well- and ill-conditioned SPD matrices at every tile boundary, the
+// solve's residual, the first failing column of matrices that are not positive definite
+// (LAPACK's info), the untouched upper triangle, and the same results from a CUDA graph
+// that captured the calls. Tests that need a GPU skip with a warning where there is none.
+#include <catch2/catch.hpp>
+
+#include <Eigen/Cholesky>
+#include <Eigen/QR>
+#include <cmath>
+#include <cstring>
+#include <limits>
+#include <random>
+#include <string>
+#include <vector>
+
+#include <cuda_runtime.h>
+
+#include "dense_cholesky.h"
+#include "device.h"
+#include "hsi/cuda/newton_core.h"
+
+namespace hc = hsi::cuda;
+namespace hk = hsi::cuda::kernels;
+
+namespace {
+
+#define HSI_REQUIRE_GPU()                            \
+  do {                                               \
+    std::string why_;                                \
+    if (!hsi::cuda::device_available(&why_)) {       \
+      WARN("skipped: " << why_);                     \
+      return;                                        \
+    }                                                \
+  } while (0)
+
+constexpr int kOrders[] = {1, 2, 3, 31, 32, 33, 63, 64, 65, 100, 255, 256, 257, 305, 400, 700, 1200};
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+// A = B Bᵀ + m I: eigenvalues in [m, ~2m], well conditioned.
+Eigen::MatrixXd well_conditioned(int m, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> u(-1, 1);
+  Eigen::MatrixXd B(m, m);
+  for (int j = 0; j < m; ++j)
+    for (int i = 0; i < m; ++i) B(i, j) = u(rng);
+  Eigen::MatrixXd A = B * B.transpose();
+  A.diagonal().array() += m;
+  return A;
+}
+
+// A = Q diag(λ) Qᵀ, Q random orthogonal, λ log-spaced from 1 down to 1/cond.
+Eigen::MatrixXd ill_conditioned(int m, double cond, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::normal_distribution<double> g;
+  Eigen::MatrixXd R(m, m);
+  for (int j = 0; j < m; ++j)
+    for (int i = 0; i < m; ++i) R(i, j) = g(rng);
+  const Eigen::MatrixXd Q = Eigen::HouseholderQR<Eigen::MatrixXd>(R).householderQ();
+  Eigen::VectorXd lambda(m);
+  for (int i = 0; i < m; ++i) lambda(i) = m == 1 ? 1.0 : std::pow(cond, -static_cast<double>(i) / (m - 1));
+  Eigen::MatrixXd A = Q * lambda.asDiagonal() * Q.transpose();
+  return 0.5 * (A + A.transpose());
+}
+
+Eigen::VectorXd random_vector(int m, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> u(-1, 1);
+  Eigen::VectorXd b(m);
+  for (int i = 0; i < m; ++i) b(i) = u(rng);
+  return b;
+}
+
+// A column-major m × m matrix with leading dimension lda on the device; the strictly
+// upper triangle and the rows past m hold NaN, which the factor must neither read nor
+// overwrite.
+struct DeviceSystem {
+  int m, lda;
+  std::vector<double> host;  // lda × m, what was uploaded
+  hc::DeviceArray<double> A, b;
+  hc::DeviceArray<int> info{1};
+  DeviceSystem(const Eigen::MatrixXd& M, int lda_, const Eigen::VectorXd& rhs)
+      : m(static_cast<int>(M.rows())), lda(lda_), host(static_cast<size_t>(lda_) * M.cols(), kNaN),
+        A(host.size()), b(static_cast<size_t>(M.rows())) {
+    for (int j = 0; j < m; ++j)
+      for (int i = j; i < m; ++i) host[static_cast<size_t>(i) + static_cast<size_t>(j) * lda] = M(i, j);
+    upload(rhs);
+  }
+  void upload(const Eigen::VectorXd& rhs) {
+    HSI_CUDA_CHECK(cudaMemcpy(A.get(), host.data(), A.bytes(), cudaMemcpyHostToDevice));
+    HSI_CUDA_CHECK(cudaMemcpy(b.get(), rhs.data(), b.bytes(), cudaMemcpyHostToDevice));
+    const int minus_one = -1;  // the factor must overwrite it
+    HSI_CUDA_CHECK(cudaMemcpy(info.get(), &minus_one, sizeof(int), cudaMemcpyHostToDevice));
+  }
+  std::vector<double> matrix() const {
+    std::vector<double> out(host.size());
+    HSI_CUDA_CHECK(cudaMemcpy(out.data(), A.get(), A.bytes(), cudaMemcpyDeviceToHost));
+    return out;
+  }
+  Eigen::MatrixXd lower() const {
+    const std::vector<double> a = matrix();
+    Eigen::MatrixXd L = Eigen::MatrixXd::Zero(m, m);
+    for (int j = 0; j < m; ++j)
+      for (int i = j; i < m; ++i) L(i, j) = a[static_cast<size_t>(i) + static_cast<size_t>(j) * lda];
+    return L;
+  }
+  Eigen::VectorXd solution() const {
+    Eigen::VectorXd x(m);
+    HSI_CUDA_CHECK(cudaMemcpy(x.data(), b.get(), b.bytes(), cudaMemcpyDeviceToHost));
+    return x;
+  }
+  int info_value() const {
+    int v = -2;
+    HSI_CUDA_CHECK(cudaMemcpy(&v, info.get(), sizeof(int), cudaMemcpyDeviceToHost));
+    return v;
+  }
+  // Every entry outside the lower triangle still the NaN uploaded (bit for bit).
+  bool outside_lower_untouched() const {
+    const std::vector<double> a = matrix();
+    for (int j = 0; j < m; ++j)
+      for (int i = 0; i < lda; ++i) {
+        if (i >= j && i < m) continue;
+        if (!std::isnan(a[static_cast<size_t>(i) + static_cast<size_t>(j) * lda])) return false;
+      }
+    return true;
+  }
+  void factor_and_solve(cudaStream_t s) {
+    HSI_CUDA_CHECK(hk::cholesky_factor(m, A.get(), lda, info.get(), s));
+    HSI_CUDA_CHECK(hk::cholesky_solve(m, A.get(), lda, b.get(), s));
+  }
+};
+
+double max_abs(const Eigen::MatrixXd& M) { return M.size() ? M.cwiseAbs().maxCoeff() : 0.0; }
+
+// |A x − b|∞ / (|A|∞ |x|∞): the solve's normwise backward error.
+double residual(const Eigen::MatrixXd& A, const Eigen::VectorXd& x, const Eigen::VectorXd& b) {
+  const double a_norm = A.cwiseAbs().rowwise().sum().maxCoeff();
+  return (A * x - b).cwiseAbs().maxCoeff() / (a_norm * x.cwiseAbs().maxCoeff());
+}
+
+// LAPACK's dpotrf2 rule, written out (unblocked, left-looking): the 1-based column of
+// the first pivot that is not > 0 (NaN included) or is infinite, 0 if none.
+int reference_info(const Eigen::MatrixXd& A) {
+  const int m = static_cast<int>(A.rows());
+  Eigen::MatrixXd L = Eigen::MatrixXd::Zero(m, m);
+  for (int j = 0; j < m; ++j) {
+    double pivot = A(j, j);
+    for (int p = 0; p < j; ++p) pivot -= L(j, p) * L(j, p);
+    if (!(pivot > 0.0) || std::isinf(pivot)) return j + 1;
+    L(j, j) = std::sqrt(pivot);
+    for (int i = j + 1; i < m; ++i) {
+      double s = A(i, j);
+      for (int p = 0; p < j; ++p) s -= L(i, p) * L(j, p);
+      L(i, j) = s / L(j, j);
+    }
+  }
+  return 0;
+}
+
+}  // namespace
+
+TEST_CASE("dense Cholesky: bad arguments are refused before any launch", "[cuda][dense]") {
+  // No GPU needed: the checks come first.
+  int* info = nullptr;
+  double* A = nullptr;
+  CHECK(hk::cholesky_factor(-1, A, 1, info, nullptr) == cudaErrorInvalidValue);
+  CHECK(hk::cholesky_factor(10, A, 9, info, nullptr) == cudaErrorInvalidValue);
+  CHECK(hk::cholesky_factor(0, A, 0, info, nullptr) == cudaErrorInvalidValue);
+  CHECK(hk::cholesky_solve(-1, A, 1, A, nullptr) == cudaErrorInvalidValue);
+  CHECK(hk::cholesky_solve(10, A, 9, A, nullptr) == cudaErrorInvalidValue);
+  CHECK(hk::cholesky_solve(hk::kCholeskySolveMaxOrder + 1, A, hk::kCholeskySolveMaxOrder + 1, A, nullptr) ==
+        cudaErrorInvalidValue);
+}
+
+TEST_CASE("dense Cholesky: the factor matches Eigen's LLT and the solve's residual is at rounding level", "[cuda][dense]") {
+  HSI_REQUIRE_GPU();
+  hc::Stream stream;
+  for (const int m : kOrders) {
+    for (const bool ill : {false, true}) {
+      const double cond = 1e10;
+      const Eigen::MatrixXd A = ill ? ill_conditioned(m, cond, 100u + static_cast<unsigned>(m)) : well_conditioned(m, static_cast<unsigned>(m));
+      const Eigen::VectorXd b = random_vector(m, 7u + static_cast<unsigned>(m));
+      const Eigen::LLT<Eigen::MatrixXd> llt(A);
+      REQUIRE(llt.info() == Eigen::Success);
+      const Eigen::MatrixXd L_eigen = llt.matrixL();
+      for (const int pad : {0, 3}) {  // lda = m (the Newton system's) and lda > m
+        if (pad && m % 2 == 0 && m > 64) continue;  // a padded leading dimension at a subset of orders is enough
+        INFO("m = " << m << (ill ? ", cond 1e10" : ", well conditioned") << ", lda = m + " << pad);
+        DeviceSystem sys(A, m + pad, b);
+        sys.factor_and_solve(stream);
+        HSI_CUDA_CHECK(cudaStreamSynchronize(stream));
+        CHECK(sys.info_value() == 0);
+        CHECK(sys.outside_lower_untouched());
+        const Eigen::MatrixXd L = sys.lower();
+        // Backward error of the factor: a stable Cholesky gives |A − L Lᵀ| ≲ m ε |A|.
+        const double backward = max_abs(A - L * L.transpose()) / max_abs(A);
+        CHECK(backward < 1e-15 * (m + 16));
+        // Two stable factors differ by up to ~ cond · ε (perturbation bound).
+        const double rel = max_abs(L - L_eigen) / max_abs(L_eigen);
+        CHECK(rel < (ill ? 1e-15 * cond : 1e-13));
+        const Eigen::VectorXd x = sys.solution();
+        CHECK(residual(A, x, b) < 1e-12);
+      }
+    }
+  }
+}
+
+TEST_CASE("dense Cholesky: a matrix that is not positive definite gives LAPACK's first failing column", "[cuda][dense]") {
+  HSI_REQUIRE_GPU();
+  hc::Stream stream;
+  struct Case {
+    int m, row, col;  // the entry (0-based, row ≥ col) made bad
+    double value;
+    int want;         // 1-based first failing column
+  };
+  const double inf = std::numeric_limits<double>::infinity();
+  std::vector<Case> cases;
+  for (const int m : {1, 2, 33, 64, 65, 305, 700})
+    for (const int k : {1, 2, 32, 33, 64, 65, 200, m})  // k: the 1-based column of the negative pivot
+      if (k <= m) {
+        cases.push_back({m, k - 1, k - 1, -1.0, k});
+        cases.push_back({m, k - 1, k - 1, kNaN, k});
+        cases.push_back({m, k - 1, k - 1, inf, k});
+        if (k < m) cases.push_back({m, m - 1, k - 1, kNaN, m});  // NaN below the diagonal fails its row's pivot
+      }
+  for (const Case& c : cases) {
+    INFO("m = " << c.m << ", A(" << c.row << ", " << c.col << ") = " << c.value << ", want info " << c.want);
+    Eigen::MatrixXd A = well_conditioned(c.m, 11u);
+    A(c.row, c.col) = c.value;
+    A(c.col, c.row) = c.value;
+    REQUIRE(reference_info(A) == c.want);
+    if (c.value == -1.0) {  // Eigen's own unblocked LLT agrees (it stops at a pivot ≤ 0)
+      Eigen::MatrixXd E = A;
+      CHECK(Eigen::internal::llt_inplace<double, Eigen::Lower>::unblocked(E) == c.want - 1);
+    }
+    DeviceSystem sys(A, c.m, random_vector(c.m, 3u));
+    HSI_CUDA_CHECK(hk::cholesky_factor(c.m, sys.A.get(), c.m, sys.info.get(), stream));
+    HSI_CUDA_CHECK(cudaStreamSynchronize(stream));
+    CHECK(sys.info_value() == c.want);
+    // The same info buffer is reset by the next, successful, factorisation.
+    sys.host.assign(sys.host.size(), kNaN);
+    const Eigen::MatrixXd good = well_conditioned(c.m, 12u);
+    for (int j = 0; j < c.m; ++j)
+      for (int i = j; i < c.m; ++i) sys.host[static_cast<size_t>(i) + static_cast<size_t>(j) * c.m] = good(i, j);
+    HSI_CUDA_CHECK(cudaMemcpy(sys.A.get(), sys.host.data(), sys.A.bytes(), cudaMemcpyHostToDevice));
+    HSI_CUDA_CHECK(hk::cholesky_factor(c.m, sys.A.get(), c.m, sys.info.get(), stream));
+    HSI_CUDA_CHECK(cudaStreamSynchronize(stream));
+    CHECK(sys.info_value() == 0);
+  }
+}
+
+TEST_CASE("dense Cholesky: the calls captured into a CUDA graph give the same results, replay after replay", "[cuda][dense]") {
+  HSI_REQUIRE_GPU();
+  hc::Stream stream;
+  for (const int m : {1, 33, 305, 700}) {
+    for (const bool fails : {false, true}) {
+      INFO("m = " << m << (fails ? ", pivot " + std::to_string(m / 2 + 1) + " negative" : ", SPD"));
+      Eigen::MatrixXd A = well_conditioned(m, 21u);
+      if (fails) A(m / 2, m / 2) = -1.0;
+      const Eigen::VectorXd b = random_vector(m, 22u);
+      // Direct calls: the reference.
+      DeviceSystem direct(A, m, b);
+      direct.factor_and_solve(stream);
+      HSI_CUDA_CHECK(cudaStreamSynchronize(stream));
+      const std::vector<double> want_A = direct.matrix();
+      const Eigen::VectorXd want_x = direct.solution();
+      const int want_info = direct.info_value();
+      CHECK(want_info == (fails ? m / 2 + 1 : 0));
+
+      // The graph restores A and b from pristine copies, then factors and solves.
+      DeviceSystem sys(A, m, b);
+      hc::DeviceArray<double> A0(sys.A.size()), b0(sys.b.size());
+      HSI_CUDA_CHECK(cudaMemcpy(A0.get(), sys.A.get(), sys.A.bytes(), cudaMemcpyDeviceToDevice));
+      HSI_CUDA_CHECK(cudaMemcpy(b0.get(), sys.b.get(), sys.b.bytes(), cudaMemcpyDeviceToDevice));
+      cudaGraph_t graph = nullptr;
+      HSI_CUDA_CHECK(cudaStreamBeginCapture(stream, cudaStreamCaptureModeThreadLocal));
+      HSI_CUDA_CHECK(cudaMemcpyAsync(sys.A.get(), A0.get(), sys.A.bytes(), cudaMemcpyDeviceToDevice, stream));
+      HSI_CUDA_CHECK(cudaMemcpyAsync(sys.b.get(), b0.get(), sys.b.bytes(), cudaMemcpyDeviceToDevice, stream));
+      const cudaError_t factor = hk::cholesky_factor(m, sys.A.get(), m, sys.info.get(), stream);
+      const cudaError_t solve = hk::cholesky_solve(m, sys.A.get(), m, sys.b.get(), stream);
+      HSI_CUDA_CHECK(cudaStreamEndCapture(stream, &graph));
+      REQUIRE(factor == cudaSuccess);
+      REQUIRE(solve == cudaSuccess);
+      cudaGraphExec_t exec = nullptr;
+      HSI_CUDA_CHECK(cudaGraphInstantiate(&exec, graph, 0));
+      for (int replay = 0; replay < 2; ++replay) {
+        INFO("replay " << replay);
+        const int stale = 12345;  // each replay must write info afresh
+        HSI_CUDA_CHECK(cudaMemcpy(sys.info.get(), &stale, sizeof(int), cudaMemcpyHostToDevice));
+        HSI_CUDA_CHECK(cudaGraphLaunch(exec, stream));
+        HSI_CUDA_CHECK(cudaStreamSynchronize(stream));
+        CHECK(sys.info_value() == want_info);
+        // Bit for bit (memcmp: the NaN of the upper triangle, and of a failed factor's
+        // columns, compare unequal as doubles): the same kernels on the same data.
+        const std::vector<double> got_A = sys.matrix();
+        CHECK(std::memcmp(got_A.data(), want_A.data(), got_A.size() * sizeof(double)) == 0);
+        const Eigen::VectorXd x = sys.solution();
+        CHECK(std::memcmp(x.data(), want_x.data(), static_cast<size_t>(m) * sizeof(double)) == 0);
+      }
+      cudaGraphExecDestroy(exec);
+      cudaGraphDestroy(graph);
+    }
+  }
+}
