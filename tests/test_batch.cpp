@@ -187,6 +187,7 @@ TEST_CASE("a batch on CUDA cores gives the frames of Interpolator::sequence on a
     o.workers = workers;
     o.make_core = make_core;
     const BatchResult r = solve_batch(sequences, o);
+    for (const auto& q : r.sequences) CHECK(q.error == "");
     REQUIRE(r.failed() == 0);
     for (size_t s = 0; s < sequences.size(); ++s) {
       REQUIRE(r.sequences[s].frames.size() == reference[s].size());

@@ -58,6 +58,7 @@ struct DeviceSpace {
   Event params_done;           // recorded after the last graph that copied from params
   bool params_pending = false;
   GraphCache graphs{graphs_enabled()};  // the stepper's calls, one graph per call shape
+  bool own_cholesky = own_cholesky_enabled();  // dense_cholesky.h instead of cuSOLVER (device_newton.cpp, solve)
   int lwork = 0;
 };
 

@@ -11,6 +11,7 @@
 #include <cstddef>
 #include <cstdlib>
 #include <cstdint>
+#include <cstdio>
 #include <string>
 #include <unordered_map>
 #include <utility>
@@ -238,24 +239,47 @@ class GraphCache {
     }
     auto it = graphs_.find(key);
     if (it == graphs_.end()) {
+      int& failures = failures_[key];
+      if (failures >= kMaxCaptureFailures) {
+        enqueue();
+        return;
+      }
+      // A capture that fails (invalidated, or a call refused while capturing) runs the
+      // same work directly instead, and is tried again next time, up to a limit.
       HSI_CUDA_CHECK(cudaStreamBeginCapture(stream, cudaStreamCaptureModeThreadLocal));
-      cudaGraph_t graph = nullptr;
+      std::string why;
       try {
         enqueue();
-      } catch (...) {
-        if (cudaStreamEndCapture(stream, &graph) == cudaSuccess && graph) cudaGraphDestroy(graph);
-        throw;
+      } catch (const Error& e) {
+        why = e.what();
       }
-      HSI_CUDA_CHECK(cudaStreamEndCapture(stream, &graph));
+      cudaGraph_t graph = nullptr;
+      const cudaError_t ended = cudaStreamEndCapture(stream, &graph);
+      if (why.empty() && ended != cudaSuccess) why = std::string("cudaStreamEndCapture: ") + cudaGetErrorName(ended);
+      if (!why.empty() || !graph) {
+        if (graph) cudaGraphDestroy(graph);
+        (void)cudaGetLastError();
+        if (last_failure_.empty())  // once per cache: a performance fallback, not an error
+          std::fprintf(stderr, "hsi cuda: a CUDA graph capture failed, the call runs without one: %s\n", why.c_str());
+        ++failures;
+        last_failure_ = why;
+        enqueue();
+        return;
+      }
       it = graphs_.emplace(key, GraphExec(graph)).first;
     }
     HSI_CUDA_CHECK(cudaGraphLaunch(it->second, stream));
   }
   size_t size() const { return graphs_.size(); }
+  // Why the last failed capture failed (empty if none has).
+  const std::string& last_failure() const { return last_failure_; }
 
  private:
+  static constexpr int kMaxCaptureFailures = 3;
   bool enabled_;
   std::unordered_map<std::uint64_t, GraphExec> graphs_;
+  std::unordered_map<std::uint64_t, int> failures_;
+  std::string last_failure_;
 };
 
 // Whether the CUDA backend replays its recurring call sequences as graphs: yes unless
@@ -263,6 +287,14 @@ class GraphCache {
 inline bool graphs_enabled() {
   const char* v = std::getenv("HSI_CUDA_GRAPHS");
   return !(v && std::string(v) == "0");
+}
+
+// Whether the Newton system is factored by the backend's own dense Cholesky
+// (dense_cholesky.h) rather than cuSOLVER: only with HSI_CUDA_CHOLESKY=own, until it is
+// faster (bench_dense on the H100: 0.8-1.0x cuSOLVER's potrf at our orders).
+inline bool own_cholesky_enabled() {
+  const char* v = std::getenv("HSI_CUDA_CHOLESKY");
+  return v && std::string(v) == "own";
 }
 
 }  // namespace hsi::cuda

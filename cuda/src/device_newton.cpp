@@ -2,7 +2,7 @@
 // vector on the GPU. The loop and all its decisions are the engine's; this file only
 // computes. Per linearize: the gradient (tall products with D, newton_kernels.h), the Hessian as asked (kernels +
 // ZGEMM), the reduced system [T u]ᵀ Hv [T u]; per solve: the Cholesky factor and solve
-// (cuSOLVER), the direction in the samples and the maximal safe step, one download of
+// (dense_cholesky.h, or cuSOLVER), the direction in the samples and the maximal safe step, one download of
 // a few scalars; trial energies a batch of steps per download; the certificate of a
 // trial map (certify_kernels.cu). x, d and the system never leave the device. Each call
 // is one CUDA graph (GraphCache, device.h), captured on its first run per call shape
@@ -14,6 +14,7 @@
 #include <limits>
 
 #include "cuda_newton_core.h"
+#include "dense_cholesky.h"
 #include "newton_kernels.h"
 
 namespace hsi::cuda {
@@ -354,11 +355,21 @@ class DeviceStepper final : public NewtonStepper {
     const int n = c_.n_, dim = S_.dim, m = m_;
     copy_params(kRidge, 1);
     HSI_CUDA_CHECK(kernels::add_ridge(m, S_.Hr0.get(), S_.sc.get() + kRidge, S_.Hr.get(), st()));
-    HSI_CUDA_CHECK(cusolverDnDpotrf(c_.solver_, CUBLAS_FILL_MODE_LOWER, m, S_.Hr.get(), m, S_.work.get(), S_.lwork, S_.info.get()));
-    // d = −g, solved in place.
+    // d = −g, solved in place: cuSOLVER's Cholesky, or with HSI_CUDA_CHOLESKY=own ours
+    // (dense_cholesky.h) up to its preferred order.
+    const bool own = S_.own_cholesky && m <= kernels::kCholeskyPreferredMaxOrder;
+    if (own)
+      HSI_CUDA_CHECK(kernels::cholesky_factor(m, S_.Hr.get(), m, S_.info.get(), st()));
+    else
+      HSI_CUDA_CHECK(cusolverDnDpotrf(c_.solver_, CUBLAS_FILL_MODE_LOWER, m, S_.Hr.get(), m, S_.work.get(), S_.lwork, S_.info.get()));
     HSI_CUDA_CHECK(cudaMemcpyAsync(S_.d.get(), S_.g.get(), sz(m) * sizeof(double), cudaMemcpyDeviceToDevice, st()));
     HSI_CUDA_CHECK(cublasDscal(c_.blas_, m, &kMinusOneD, S_.d.get(), 1));
-    HSI_CUDA_CHECK(cusolverDnDpotrs(c_.solver_, CUBLAS_FILL_MODE_LOWER, m, 1, S_.Hr.get(), m, S_.d.get(), m, S_.info.get() + 1));
+    if (own) {
+      HSI_CUDA_CHECK(kernels::cholesky_solve(m, S_.Hr.get(), m, S_.d.get(), st()));
+      HSI_CUDA_CHECK(cudaMemsetAsync(S_.info.get() + 1, 0, sizeof(int), st()));  // the solve has no status of its own
+    } else {
+      HSI_CUDA_CHECK(cusolverDnDpotrs(c_.solver_, CUBLAS_FILL_MODE_LOWER, m, 1, S_.Hr.get(), m, S_.d.get(), m, S_.info.get() + 1));
+    }
     if (horizontal_)  // θ = −aᵀd / |u|² into d[dim] (0 from the decoupled solve)
       HSI_CUDA_CHECK(kernels::rotation_angle(dim, S_.tmp.get(), S_.d.get(), st()));
     HSI_CUDA_CHECK(kernels::dot(m, S_.g.get(), S_.d.get(), S_.sc.get() + kSlope, st()));
