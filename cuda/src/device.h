@@ -219,8 +219,8 @@ class GraphExec {
 };
 
 // A stream's recurring call sequences as CUDA graphs, one per key: the first run of a
-// key captures what `enqueue` puts on the stream and instantiates it, every run launches
-// it (one launch instead of tens: the Newton stepper's calls are launch-bound, issue
+// key runs `enqueue` directly, the second captures what it puts on the stream and
+// instantiates it, every later run launches it (one launch instead of tens: the Newton stepper's calls are launch-bound, issue
 // #23). `enqueue` must be capturable and replayable: asynchronous work on the stream
 // only (no synchronisation, allocation or host reads of device data), and everything it
 // passes by value the same on every run of its key; values that change between runs go
@@ -239,8 +239,12 @@ class GraphCache {
     }
     auto it = graphs_.find(key);
     if (it == graphs_.end()) {
-      int& failures = failures_[key];
-      if (failures >= kMaxCaptureFailures) {
+      // The first run of a key runs directly: every kernel and library routine it uses
+      // is loaded then (CUDA loads modules lazily), not inside the capture.
+      auto [f, first] = failures_.try_emplace(key, -1);
+      int& failures = f->second;
+      if (first || failures >= kMaxCaptureFailures) {
+        if (first) failures = 0;
         enqueue();
         return;
       }

@@ -450,6 +450,7 @@ void CudaNewtonCore::warm_up() {
     (void)st.start(x0);
     HessianChoice exact;
     exact.exact = true;
+    exact.free_rotation = free_rotation;  // the interpolation's exact system modulo the rotation
     // A ridge that keeps every system definite (the freed rotation is a null direction
     // at the identity): the direction stays finite, so every later call sees numbers.
     const double ridge = 1e-3 * std::max(st.linearize(exact), 1.0);
@@ -464,7 +465,9 @@ void CudaNewtonCore::warm_up() {
     st.accept(kSteps[3]);
     (void)st.x();
   };
-  {
+  // Twice: the first runs each call directly (loading what it uses), the second
+  // captures its graph (GraphCache), so that neither falls on the first frames.
+  for (int pass = 0; pass < 2; ++pass) {
     DeviceStepper st(*this, device_space(setup_->metric_space), nullptr, true);
     iterate(st, setup_->metric_space, true);
   }
@@ -473,8 +476,10 @@ void CudaNewtonCore::warm_up() {
     const Eigen::Index dim = setup_->map_space.dim();
     quad.Q = Eigen::MatrixXd::Identity(dim, dim);
     quad.c = Eigen::VectorXd::Zero(dim);
-    DeviceStepper st(*this, device_space(setup_->map_space), &quad, true);
-    iterate(st, setup_->map_space, false);
+    for (int pass = 0; pass < 2; ++pass) {
+      DeviceStepper st(*this, device_space(setup_->map_space), &quad, true);
+      iterate(st, setup_->map_space, false);
+    }
   }
   // Back to the documented initial state.
   set_coefficients(zero);
