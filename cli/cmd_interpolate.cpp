@@ -73,8 +73,11 @@ void register_interpolate(CLI::App& app) {
     const std::shared_ptr<const ShapeSetup> setup = scene_setup(scene, o->samples, o->ratio);
     std::printf("scene %s: %d loops, cage %d vertices, n = %d, |G| = %zu, |H| = %zu\n", scene.name.c_str(),
                 scene.shape.loop_count(), setup->cage.vertex_count(), setup->map_space.n(), setup->G.size(), setup->H.size());
-    KeyframeOptions ko;  // keyframes given by targets are authored on the same backend
-    ko.make_core = [&](const ShapeSetup& s) { return std::move(runtime::make_newton_core(s, runtime::parse_backend(o->backend)).core); };
+    // One core for both: keyframes given by targets are authored on the core that then
+    // interpolates (lent to the authoring), so its set-up is paid once.
+    runtime::NewtonCoreChoice core = runtime::make_newton_core(*setup, runtime::parse_backend(o->backend));
+    KeyframeOptions ko;
+    ko.make_core = [&](const ShapeSetup&) { return borrow_core(*core.core); };
     solve_scene_keyframes(scene, *setup, ko, false, [&](const SceneKeyframe& k) {
       if (k.solved)
         std::printf("keyframe %d solved from targets: %s\n", k.index, k.result.message.c_str());
@@ -96,7 +99,6 @@ void register_interpolate(CLI::App& app) {
     io.exact_hessian_when_definite = !o->projected_only;
     io.free_rotation = !o->gauged_rotation;
     io.timing = o->timing.empty() ? scene_timings(scene) : std::vector<KeyTiming>{*parse_key_timing(o->timing)};
-    runtime::NewtonCoreChoice core = runtime::make_newton_core(*setup, runtime::parse_backend(o->backend));
     std::printf("Newton core: %s\n", runtime::describe(core.choice).c_str());
     Interpolator interp(*setup, times, maps, io, std::move(core.core), std::move(core.boundary));
 

@@ -38,36 +38,6 @@ namespace {
 using Clock = std::chrono::steady_clock;
 double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
 
-// A worker's core lent to one of its interpolators (an Interpolator owns its core; the
-// worker keeps one core per setup for all its sequences of that setup).
-class BorrowedCore final : public NewtonCore {
- public:
-  explicit BorrowedCore(NewtonCore& core) : core_(core) {}
-  int n() const override { return core_.n(); }
-  const char* name() const override { return core_.name(); }
-  void set_targets(const std::vector<Metric>& g) override { core_.set_targets(g); }
-  void set_coefficients(const Eigen::VectorXd& v) override { core_.set_coefficients(v); }
-  double energy() override { return core_.energy(); }
-  Eigen::VectorXd gradient() override { return core_.gradient(); }
-  Eigen::MatrixXd hessian(HessianProjection projection, bool exact, bool all_samples) override {
-    return core_.hessian(projection, exact, all_samples);
-  }
-  void set_direction(const Eigen::VectorXd& dv) override { core_.set_direction(dv); }
-  double max_safe_step() override { return core_.max_safe_step(); }
-  double energy_at(double s) override { return core_.energy_at(s); }
-  std::uint64_t set_target_keys(std::vector<std::vector<Metric>> keys, std::vector<std::vector<Metric>> log_keys) override {
-    return core_.set_target_keys(std::move(keys), std::move(log_keys));
-  }
-  bool blend_targets(std::uint64_t token, std::span<const double> w, bool exponential) override {
-    return core_.blend_targets(token, w, exponential);
-  }
-  std::unique_ptr<NewtonStepper> make_stepper(const MapSpace& space, const Certifier* certifier, const QuadraticTerm* quad) override {
-    return core_.make_stepper(space, certifier, quad);
-  }
-
- private:
-  NewtonCore& core_;
-};
 
 struct Run {
   int sequence = 0, begin = 0, end = 0;
@@ -263,7 +233,7 @@ BatchResult solve_batch(const std::vector<BatchSequence>& sequences, const Batch
             if (!core) throw InputError("the core factory made no core");
             ++cores_made;
           }
-          interp = std::make_unique<Interpolator>(*q.setup, q.key_times, q.keyframes, q.options, std::make_unique<BorrowedCore>(*core));
+          interp = std::make_unique<Interpolator>(*q.setup, q.key_times, q.keyframes, q.options, borrow_core(*core));
           interp_sequence = run.sequence;
           ++built;
           set_up_s += seconds_since(ts);

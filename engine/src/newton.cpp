@@ -526,4 +526,38 @@ bool NewtonCore::blend_targets(std::uint64_t token, std::span<const double> w, b
   return true;
 }
 
+namespace {
+// A core lent (borrow_core): every call forwarded.
+class BorrowedCore final : public NewtonCore {
+ public:
+  explicit BorrowedCore(NewtonCore& core) : core_(core) {}
+  int n() const override { return core_.n(); }
+  const char* name() const override { return core_.name(); }
+  void set_targets(const std::vector<Metric>& g) override { core_.set_targets(g); }
+  void set_coefficients(const Eigen::VectorXd& v) override { core_.set_coefficients(v); }
+  double energy() override { return core_.energy(); }
+  Eigen::VectorXd gradient() override { return core_.gradient(); }
+  Eigen::MatrixXd hessian(HessianProjection projection, bool exact, bool all_samples) override {
+    return core_.hessian(projection, exact, all_samples);
+  }
+  void set_direction(const Eigen::VectorXd& dv) override { core_.set_direction(dv); }
+  double max_safe_step() override { return core_.max_safe_step(); }
+  double energy_at(double s) override { return core_.energy_at(s); }
+  std::uint64_t set_target_keys(std::vector<std::vector<Metric>> keys, std::vector<std::vector<Metric>> log_keys) override {
+    return core_.set_target_keys(std::move(keys), std::move(log_keys));
+  }
+  bool blend_targets(std::uint64_t token, std::span<const double> w, bool exponential) override {
+    return core_.blend_targets(token, w, exponential);
+  }
+  std::unique_ptr<NewtonStepper> make_stepper(const MapSpace& space, const Certifier* certifier, const QuadraticTerm* quad) override {
+    return core_.make_stepper(space, certifier, quad);
+  }
+
+ private:
+  NewtonCore& core_;
+};
+}  // namespace
+
+std::unique_ptr<NewtonCore> borrow_core(NewtonCore& core) { return std::make_unique<BorrowedCore>(core); }
+
 }  // namespace hsi

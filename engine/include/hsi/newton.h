@@ -139,6 +139,11 @@ std::unique_ptr<NewtonStepper> make_host_stepper(NewtonCore& core, const MapSpac
 // D: the active basis rows D(w) at the samples G (|G| × n); H: indices into G.
 std::unique_ptr<NewtonCore> make_cpu_newton_core(MatrixXcd D, std::vector<int> H);
 
+// A core that forwards every call to `core`, which must outlive it: lends one core to
+// owners that each want their own (an Interpolator, authoring's make_core, a batch
+// worker's sequences), so that its set-up is paid once.
+std::unique_ptr<NewtonCore> borrow_core(NewtonCore& core);
+
 // ½ xᵀ Q x + cᵀ x + k over the reduced variables.
 struct QuadraticTerm {
   Eigen::MatrixXd Q;
