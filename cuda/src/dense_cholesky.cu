@@ -223,6 +223,9 @@ __global__ void __launch_bounds__(kFactorThreads) factor_step(int m, double* A, 
 //  3. the owner of column tile k + 1 factors it (its diagonal tile by one warp, then its
 //     rows below, one per thread);
 //  4. cluster.sync(): panel k + 1 is final and visible to the cluster.
+// With b (cholesky_factor_solve), b is row m of the lower triangle (the bordered matrix
+// [A b; bᵀ 1]): the factor leaves L⁻¹ b in that row, i.e. forward substitution rides
+// along, and b gets it back; the bordered pivot m + 1 is not reported.
 // Panel k is never written after it is final and a block writes only its own columns, so
 // the one cluster barrier per panel is the only synchronisation between blocks.
 namespace cg = cooperative_groups;
@@ -254,9 +257,10 @@ static_assert(cluster_shared_bytes(kClusterMaxTiles) <= 227 * 1024, "sm_90's sha
 // Factor column tile j, held by this block at `col` (leading dimension ld = 32(T − j)):
 // its diagonal tile by warp 0 (lane r holds row r, column q's pivot and multipliers by
 // shuffle), then its rows below by all threads, one row each (x Lᵀ = a, forward). Sets
-// *fail to the 1-based global column of the first bad pivot if *fail is still 0. Every
+// *fail to the 1-based global column of the first bad pivot if *fail is still 0 and that
+// column is inside the m × m matrix (the fused solve's pivot m + 1 is not A's). Every
 // thread of the block calls it; it ends with a barrier.
-__device__ void factor_column(double* col, int ld, int j, double* inv_diag, int* fail) {
+__device__ void factor_column(double* col, int ld, int j, double* inv_diag, int* fail, int m) {
   const int tid = static_cast<int>(threadIdx.x);
   if (tid < 32) {
     const int lane = tid;
@@ -277,7 +281,7 @@ __device__ void factor_column(double* col, int ld, int j, double* inv_diag, int*
     }
 #pragma unroll
     for (int c = 0; c < kT; ++c) col[lane + c * ld] = c <= lane ? v[c] : 0.0;
-    if (lane == 0 && f != 0 && *fail == 0) *fail = j * kT + f;
+    if (lane == 0 && f != 0 && *fail == 0 && j * kT + f <= m) *fail = j * kT + f;  // not the row of b (column m + 1)
   }
   __syncthreads();
   for (int r = kT + tid; r < ld; r += kClusterThreads) {
@@ -297,7 +301,7 @@ __device__ void factor_column(double* col, int ld, int j, double* inv_diag, int*
 }
 
 __global__ void __cluster_dims__(kClusterBlocks, 1, 1) __launch_bounds__(kClusterThreads)
-    factor_cluster(int m, double* A, int lda, int* info, int T) {
+    factor_cluster(int m, double* A, int lda, double* b, int* info, int T) {
   extern __shared__ double smem[];
   __shared__ int fail;
   const cg::cluster_group cluster = cg::this_cluster();
@@ -318,12 +322,13 @@ __global__ void __cluster_dims__(kClusterBlocks, 1, 1) __launch_bounds__(kCluste
       const int gr = j * kT + e % ld, gc = j * kT + e / ld;
       double v = gr == gc ? 1.0 : 0.0;
       if (gr < m && gc < m && gr >= gc) v = A[static_cast<size_t>(gr) + static_cast<size_t>(gc) * lda];
+      else if (b != nullptr && gr == m && gc < m) v = b[gc];  // [A | b] factored: row m of L becomes (L⁻¹ b)ᵀ
       col[e] = v;
     }
   }
   if (tid == 0) fail = 0;
   __syncthreads();
-  if (rank == 0) factor_column(smem, height(0), 0, inv_diag, &fail);
+  if (rank == 0) factor_column(smem, height(0), 0, inv_diag, &fail, m);
   cluster.sync();
 
   for (int k = 0; k + 1 < T; ++k) {
@@ -369,7 +374,7 @@ __global__ void __cluster_dims__(kClusterBlocks, 1, 1) __launch_bounds__(kCluste
     // 3. The owner of column tile k + 1 factors it.
     if ((k + 1) % kClusterBlocks == rank) {
       const int q = (k + 1) / kClusterBlocks;
-      factor_column(smem + column_offset(T, rank, q), height(k + 1), k + 1, inv_diag, &fail);
+      factor_column(smem + column_offset(T, rank, q), height(k + 1), k + 1, inv_diag, &fail, m);
     }
     // 4. Panel k + 1 final; every block is also done reading panel k.
     cluster.sync();
@@ -382,6 +387,7 @@ __global__ void __cluster_dims__(kClusterBlocks, 1, 1) __launch_bounds__(kCluste
     for (int e = tid; e < ld * kT; e += kClusterThreads) {
       const int gr = j * kT + e % ld, gc = j * kT + e / ld;
       if (gr < m && gc < m && gr >= gc) A[static_cast<size_t>(gr) + static_cast<size_t>(gc) * lda] = col[e];
+      else if (b != nullptr && gr == m && gc < m) b[gc] = col[e];
     }
   }
   // *info: the first failing column over the cluster (a failure leaves only later
@@ -445,7 +451,9 @@ __device__ __forceinline__ double row_times_warp_vector(const double (&x)[kT], d
   return s0 + s1;
 }
 
-__global__ void __launch_bounds__(kSolveThreads) solve_kernel(int m, const double* __restrict__ L, int lda, double* b, int T) {
+// forward = false: b already holds L⁻¹ b (cholesky_factor_solve), only back substitution.
+__global__ void __launch_bounds__(kSolveThreads)
+    solve_kernel(int m, const double* __restrict__ L, int lda, double* b, int T, bool forward) {
   extern __shared__ double y[];  // 32T entries (zero past m), then the forward and back flags
   int* const ready_fwd = reinterpret_cast<int*>(y + kT * T);
   int* const ready_bwd = ready_fwd + T;
@@ -458,7 +466,7 @@ __global__ void __launch_bounds__(kSolveThreads) solve_kernel(int m, const doubl
   // Forward: y_i = L_ii⁻¹ (b_i − Σ_{s<i} L_is y_s); lane r holds row 32i + r. L_ii⁻¹ is
   // made before the first wait, off the critical path, so that a tile's last step is
   // one update and one 32 × 32 product instead of 32 dependent substitution steps.
-  for (int i = warp; i < T; i += kSolveWarps) {
+  for (int i = warp; forward && i < T; i += kSolveWarps) {
     const int row = i * kT + lane;
     const bool valid = row < m;
 #pragma unroll
@@ -523,7 +531,7 @@ cudaError_t cholesky_factor(int m, double* A, int lda, int* info, cudaStream_t s
                                                    static_cast<int>(bytes));
         e != cudaSuccess)
       return e;
-    factor_cluster<<<kClusterBlocks, kClusterThreads, bytes, stream>>>(m, A, lda, info, T);
+    factor_cluster<<<kClusterBlocks, kClusterThreads, bytes, stream>>>(m, A, lda, nullptr, info, T);
     return cudaGetLastError();
   }
   for (int c = 0; c < T; ++c) {
@@ -542,7 +550,26 @@ cudaError_t cholesky_solve(int m, const double* L, int lda, double* b, cudaStrea
   static_assert(kCholeskySolveMaxOrder % kT == 0);
   static_assert((kCholeskySolveMaxOrder / kT) * (kT * sizeof(double) + 2 * sizeof(int)) <= 48 * 1024,
                 "the solve's shared memory must fit the default 48 KiB");
-  solve_kernel<<<1, kSolveThreads, solve_shared_bytes(T), stream>>>(m, L, lda, b, T);
+  solve_kernel<<<1, kSolveThreads, solve_shared_bytes(T), stream>>>(m, L, lda, b, T, true);
+  return cudaGetLastError();
+}
+
+cudaError_t cholesky_factor_solve(int m, double* A, int lda, double* b, int* info, cudaStream_t stream) {
+  if (m < 0 || lda < (m > 1 ? m : 1) || m > kCholeskySolveMaxOrder) return cudaErrorInvalidValue;
+  if (m == 0) return cudaMemsetAsync(info, 0, sizeof(int), stream);
+  if (m + 1 > kCholeskyClusterMaxOrder) {  // [A | b] does not fit the cluster: factor, then solve
+    if (const cudaError_t e = cholesky_factor(m, A, lda, info, stream); e != cudaSuccess) return e;
+    return cholesky_solve(m, A, lda, b, stream);
+  }
+  const int T = tiles(m + 1);  // b is row m
+  const size_t bytes = cluster_shared_bytes(T);
+  if (const cudaError_t e = cudaFuncSetAttribute(factor_cluster, cudaFuncAttributeMaxDynamicSharedMemorySize,
+                                                 static_cast<int>(bytes));
+      e != cudaSuccess)
+    return e;
+  factor_cluster<<<kClusterBlocks, kClusterThreads, bytes, stream>>>(m, A, lda, b, info, T);
+  if (const cudaError_t e = cudaGetLastError(); e != cudaSuccess) return e;
+  solve_kernel<<<1, kSolveThreads, solve_shared_bytes(tiles(m)), stream>>>(m, A, lda, b, tiles(m), false);
   return cudaGetLastError();
 }
 

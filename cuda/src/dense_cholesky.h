@@ -43,4 +43,13 @@ cudaError_t cholesky_factor(int m, double* A, int lda, int* info, cudaStream_t s
 // m > kCholeskySolveMaxOrder; otherwise the launch status.
 cudaError_t cholesky_solve(int m, const double* L, int lda, double* b, cudaStream_t stream);
 
+// cholesky_factor, then b ← (L Lᵀ)⁻¹ b, with the forward substitution fused into the
+// factorisation: for m < kCholeskyClusterMaxOrder the cluster kernel factors [A | b]
+// (b as row m of the lower triangle, so it leaves L⁻¹ b there) and one back
+// substitution kernel follows (2 kernels in all); above, cholesky_factor then
+// cholesky_solve. A and *info as cholesky_factor leaves them (L bit for bit the same);
+// b is garbage when *info ≠ 0. cudaErrorInvalidValue for m < 0, lda < max(1, m) or
+// m > kCholeskySolveMaxOrder; otherwise the launch status.
+cudaError_t cholesky_factor_solve(int m, double* A, int lda, double* b, int* info, cudaStream_t stream);
+
 }  // namespace hsi::cuda::kernels
