@@ -99,6 +99,7 @@ cudaGraphExec_t capture(cudaStream_t stream, const std::function<void()>& body) 
 struct Row {
   double potrf = 0, factor = 0, potrs = 0, solve = 0, cusolver_graph = -1, ours_graph = -1, max_rel_diff = 0;
   double xpotrf = 0, xpotrs = 0, potrf_batched = 0, potrs_batched = 0;  // cuSOLVER's other entry points
+  double factor_solve = 0;  // ours, fused (cholesky_factor_solve)
   int cusolver_info = -1, ours_info = -1;
 };
 
@@ -183,6 +184,9 @@ Row time_order(int m, int reps) {
   // Ours, the same way.
   row.factor = median_us(stream, reps, restore_A, factor);
   row.solve = median_us(stream, reps, restore_b, solve);
+  row.factor_solve = median_us(stream, reps, restore, [&] {
+    HSI_CUDA_CHECK(hk::cholesky_factor_solve(m, A.get(), m, b.get(), info.get(), stream));
+  });
   restore();
   factor();
   solve();
@@ -253,21 +257,22 @@ int main(int argc, char** argv) {
               "max |x_ours − x_cuSOLVER| / max |x_cuSOLVER|. A = B Bᵀ/m + I, random B. Our factor is one "
               "kernel (a cluster of 8 blocks) up to m = %d, ceil(m/32) launches above; the caller prefers cuSOLVER "
               "above m = %d (kCholeskyPreferredMaxOrder). Xpotrf/Xpotrs: cuSOLVER's 64-bit API (default params); "
-              "batched: cusolverDnDpotrfBatched/DpotrsBatched at batch 1 (timed, not wired).\n\n",
+              "batched: cusolverDnDpotrfBatched/DpotrsBatched at batch 1 (timed, not wired); our factor_solve: "
+              "cholesky_factor_solve, factor with the forward substitution fused, then back substitution (A and b restored).\n\n",
               reps, hk::kCholeskyClusterMaxOrder, hk::kCholeskyPreferredMaxOrder);
   std::printf("| scene | m | potrf µs | our factor µs | potrf / ours | potrs µs | our solve µs | potrs / ours | "
               "cuSOLVER graph µs | our graph µs | cuSOLVER / ours (graph) | max rel diff | info (cuSOLVER, ours) | "
-              "Xpotrf µs | Xpotrs µs | potrfBatched µs | potrsBatched µs |\n"
-              "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
+              "Xpotrf µs | Xpotrs µs | potrfBatched µs | potrsBatched µs | our factor_solve µs |\n"
+              "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
   for (const auto& [name, m] : rows) {
     std::fprintf(stderr, "m = %d%s%s\n", m, name.empty() ? "" : ": ", name.c_str());
     const Row r = time_order(m, reps);
     const std::string graph_ratio =
         r.cusolver_graph > 0 && r.ours_graph > 0 ? us_or_na(r.cusolver_graph / r.ours_graph).append("x") : "n/a";
-    std::printf("| %s | %d | %.1f | %.1f | %.1fx | %.1f | %.1f | %.1fx | %s | %s | %s | %.1e | %d, %d | %.1f | %.1f | %.1f | %.1f |\n",
+    std::printf("| %s | %d | %.1f | %.1f | %.1fx | %.1f | %.1f | %.1fx | %s | %s | %s | %.1e | %d, %d | %.1f | %.1f | %.1f | %.1f | %.1f |\n",
                 name.empty() ? "-" : name.c_str(), m, r.potrf, r.factor, r.potrf / r.factor, r.potrs, r.solve, r.potrs / r.solve,
                 us_or_na(r.cusolver_graph).c_str(), us_or_na(r.ours_graph).c_str(), graph_ratio.c_str(), r.max_rel_diff,
-                r.cusolver_info, r.ours_info, r.xpotrf, r.xpotrs, r.potrf_batched, r.potrs_batched);
+                r.cusolver_info, r.ours_info, r.xpotrf, r.xpotrs, r.potrf_batched, r.potrs_batched, r.factor_solve);
     std::fflush(stdout);
   }
   return 0;

@@ -16,6 +16,7 @@
 
 #include <cooperative_groups.h>
 
+#include <atomic>
 #include <cfloat>
 #include <cstddef>
 
@@ -517,6 +518,30 @@ __global__ void __launch_bounds__(kSolveThreads)
 
 int tiles(int m) { return (m + kT - 1) / kT; }
 
+// Whether the current device can run one cluster of factor_cluster at the largest
+// shared memory it asks for (sm_90 and up; a GPU partition or MPS share may not place 8
+// such blocks in one GPC): otherwise the tiled kernels factor every m. Asked once per
+// device; a host query only, so it is allowed while a stream is being captured.
+bool cluster_factor_available() {
+  static std::atomic<int> known[64] = {};  // 0 unknown, 1 yes, 2 no (per device ordinal); racing askers agree
+  int device = 0;
+  if (cudaGetDevice(&device) != cudaSuccess || device < 0 || device >= 64) return false;
+  if (known[device] == 0) {
+    const size_t bytes = cluster_shared_bytes(kClusterMaxTiles);
+    int clusters = 0;
+    cudaLaunchConfig_t config = {};
+    config.gridDim = dim3(kClusterBlocks);
+    config.blockDim = dim3(kClusterThreads);
+    config.dynamicSmemBytes = bytes;
+    const bool ok = cudaFuncSetAttribute(factor_cluster, cudaFuncAttributeMaxDynamicSharedMemorySize, static_cast<int>(bytes)) ==
+                        cudaSuccess &&
+                    cudaOccupancyMaxActiveClusters(&clusters, factor_cluster, &config) == cudaSuccess && clusters >= 1;
+    (void)cudaGetLastError();  // a refused query leaves no error behind
+    known[device] = ok ? 1 : 2;
+  }
+  return known[device] == 1;
+}
+
 size_t solve_shared_bytes(int T) { return static_cast<size_t>(T) * (kT * sizeof(double) + 2 * sizeof(int)); }
 
 }  // namespace
@@ -525,12 +550,9 @@ cudaError_t cholesky_factor(int m, double* A, int lda, int* info, cudaStream_t s
   if (m < 0 || lda < (m > 1 ? m : 1)) return cudaErrorInvalidValue;
   if (m == 0) return cudaMemsetAsync(info, 0, sizeof(int), stream);
   const int T = tiles(m);
-  if (m <= kCholeskyClusterMaxOrder) {
+  if (m <= kCholeskyClusterMaxOrder && cluster_factor_available()) {
+    // cluster_factor_available() set the attribute for the largest T.
     const size_t bytes = cluster_shared_bytes(T);
-    if (const cudaError_t e = cudaFuncSetAttribute(factor_cluster, cudaFuncAttributeMaxDynamicSharedMemorySize,
-                                                   static_cast<int>(bytes));
-        e != cudaSuccess)
-      return e;
     factor_cluster<<<kClusterBlocks, kClusterThreads, bytes, stream>>>(m, A, lda, nullptr, info, T);
     return cudaGetLastError();
   }
@@ -557,16 +579,12 @@ cudaError_t cholesky_solve(int m, const double* L, int lda, double* b, cudaStrea
 cudaError_t cholesky_factor_solve(int m, double* A, int lda, double* b, int* info, cudaStream_t stream) {
   if (m < 0 || lda < (m > 1 ? m : 1) || m > kCholeskySolveMaxOrder) return cudaErrorInvalidValue;
   if (m == 0) return cudaMemsetAsync(info, 0, sizeof(int), stream);
-  if (m + 1 > kCholeskyClusterMaxOrder) {  // [A | b] does not fit the cluster: factor, then solve
+  if (m + 1 > kCholeskyClusterMaxOrder || !cluster_factor_available()) {  // [A | b] does not fit: factor, then solve
     if (const cudaError_t e = cholesky_factor(m, A, lda, info, stream); e != cudaSuccess) return e;
     return cholesky_solve(m, A, lda, b, stream);
   }
   const int T = tiles(m + 1);  // b is row m
   const size_t bytes = cluster_shared_bytes(T);
-  if (const cudaError_t e = cudaFuncSetAttribute(factor_cluster, cudaFuncAttributeMaxDynamicSharedMemorySize,
-                                                 static_cast<int>(bytes));
-      e != cudaSuccess)
-    return e;
   factor_cluster<<<kClusterBlocks, kClusterThreads, bytes, stream>>>(m, A, lda, b, info, T);
   if (const cudaError_t e = cudaGetLastError(); e != cudaSuccess) return e;
   solve_kernel<<<1, kSolveThreads, solve_shared_bytes(tiles(m)), stream>>>(m, A, lda, b, tiles(m), false);

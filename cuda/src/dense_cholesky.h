@@ -16,7 +16,8 @@ constexpr int kCholeskyTile = 32;
 // Up to this order the factorisation is ONE kernel: a cluster of 8 thread blocks that
 // holds the lower triangle in their shared memory (distributed shared memory) and
 // synchronises once per 32-column panel (cluster.sync()). Above it (the matrix no longer
-// fits 8 × 227 KiB), ceil(m / 32) launches of the tiled kernel, one per column tile.
+// fits 8 × 227 KiB), or where the device cannot place such a cluster (checked once per
+// device), ceil(m / 32) launches of the tiled kernel, one per column tile.
 constexpr int kCholeskyClusterMaxOrder = 512;
 
 // Above this order the caller should prefer cuSOLVER (cusolverDnDpotrf/potrs): the
