@@ -274,14 +274,16 @@ TEST_CASE("dense Cholesky: the calls captured into a CUDA graph give the same re
   HSI_REQUIRE_GPU();
   hc::Stream stream;
   for (const int m : {1, 33, 305, 700}) {
-    for (const bool fails : {false, true}) {
-      INFO("m = " << m << (fails ? ", pivot " + std::to_string(m / 2 + 1) + " negative" : ", SPD"));
+    for (const bool fails : {false, true})
+    for (const bool fused : {false, true}) {  // factor + solve, or cholesky_factor_solve
+      INFO("m = " << m << (fails ? ", pivot " + std::to_string(m / 2 + 1) + " negative" : ", SPD") << (fused ? ", fused" : ""));
       Eigen::MatrixXd A = well_conditioned(m, 21u);
       if (fails) A(m / 2, m / 2) = -1.0;
       const Eigen::VectorXd b = random_vector(m, 22u);
       // Direct calls: the reference.
       DeviceSystem direct(A, m, b);
-      direct.factor_and_solve(stream);
+      if (fused) HSI_CUDA_CHECK(hk::cholesky_factor_solve(m, direct.A.get(), m, direct.b.get(), direct.info.get(), stream));
+      else direct.factor_and_solve(stream);
       HSI_CUDA_CHECK(cudaStreamSynchronize(stream));
       const std::vector<double> want_A = direct.matrix();
       const Eigen::VectorXd want_x = direct.solution();
@@ -297,8 +299,9 @@ TEST_CASE("dense Cholesky: the calls captured into a CUDA graph give the same re
       HSI_CUDA_CHECK(cudaStreamBeginCapture(stream, cudaStreamCaptureModeThreadLocal));
       HSI_CUDA_CHECK(cudaMemcpyAsync(sys.A.get(), A0.get(), sys.A.bytes(), cudaMemcpyDeviceToDevice, stream));
       HSI_CUDA_CHECK(cudaMemcpyAsync(sys.b.get(), b0.get(), sys.b.bytes(), cudaMemcpyDeviceToDevice, stream));
-      const cudaError_t factor = hk::cholesky_factor(m, sys.A.get(), m, sys.info.get(), stream);
-      const cudaError_t solve = hk::cholesky_solve(m, sys.A.get(), m, sys.b.get(), stream);
+      const cudaError_t factor = fused ? hk::cholesky_factor_solve(m, sys.A.get(), m, sys.b.get(), sys.info.get(), stream)
+                                       : hk::cholesky_factor(m, sys.A.get(), m, sys.info.get(), stream);
+      const cudaError_t solve = fused ? cudaSuccess : hk::cholesky_solve(m, sys.A.get(), m, sys.b.get(), stream);
       HSI_CUDA_CHECK(cudaStreamEndCapture(stream, &graph));
       REQUIRE(factor == cudaSuccess);
       REQUIRE(solve == cudaSuccess);
