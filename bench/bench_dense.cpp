@@ -98,6 +98,8 @@ cudaGraphExec_t capture(cudaStream_t stream, const std::function<void()>& body) 
 
 struct Row {
   double potrf = 0, factor = 0, potrs = 0, solve = 0, cusolver_graph = -1, ours_graph = -1, max_rel_diff = 0;
+  double xpotrf = 0, xpotrs = 0, potrf_batched = 0, potrs_batched = 0;  // cuSOLVER's other entry points
+  double factor_solve = 0;  // ours, fused (cholesky_factor_solve)
   int cusolver_info = -1, ours_info = -1;
 };
 
@@ -129,6 +131,33 @@ Row time_order(int m, int reps) {
     HSI_CUDA_CHECK(cusolverDnDpotrf(solver, CUBLAS_FILL_MODE_LOWER, m, A.get(), m, work.get(), lwork, info.get()));
   };
   const auto potrs = [&] { HSI_CUDA_CHECK(cusolverDnDpotrs(solver, CUBLAS_FILL_MODE_LOWER, m, 1, A.get(), m, b.get(), m, info.get())); };
+  // The 64-bit API (default parameters) and the batched API at batch 1.
+  cusolverDnParams_t params = nullptr;
+  HSI_CUDA_CHECK(cusolverDnCreateParams(&params));
+  size_t x_device_bytes = 0, x_host_bytes = 0;
+  HSI_CUDA_CHECK(cusolverDnXpotrf_bufferSize(solver, params, CUBLAS_FILL_MODE_LOWER, m, CUDA_R_64F, A.get(), m, CUDA_R_64F,
+                                             &x_device_bytes, &x_host_bytes));
+  hc::DeviceArray<unsigned char> x_work(std::max<size_t>(x_device_bytes, 1));
+  std::vector<unsigned char> x_host_work(std::max<size_t>(x_host_bytes, 1));
+  const auto xpotrf = [&] {
+    HSI_CUDA_CHECK(cusolverDnXpotrf(solver, params, CUBLAS_FILL_MODE_LOWER, m, CUDA_R_64F, A.get(), m, CUDA_R_64F, x_work.get(),
+                                    x_device_bytes, x_host_work.data(), x_host_bytes, info.get()));
+  };
+  const auto xpotrs = [&] {
+    HSI_CUDA_CHECK(cusolverDnXpotrs(solver, params, CUBLAS_FILL_MODE_LOWER, m, 1, CUDA_R_64F, A.get(), m, CUDA_R_64F, b.get(), m,
+                                    info.get()));
+  };
+  hc::DeviceArray<double*> A_array(1), b_array(1);
+  double* const A_ptr = A.get();
+  double* const b_ptr = b.get();
+  HSI_CUDA_CHECK(cudaMemcpy(A_array.get(), &A_ptr, sizeof A_ptr, cudaMemcpyHostToDevice));
+  HSI_CUDA_CHECK(cudaMemcpy(b_array.get(), &b_ptr, sizeof b_ptr, cudaMemcpyHostToDevice));
+  const auto potrf_batched = [&] {
+    HSI_CUDA_CHECK(cusolverDnDpotrfBatched(solver, CUBLAS_FILL_MODE_LOWER, m, A_array.get(), m, info.get(), 1));
+  };
+  const auto potrs_batched = [&] {
+    HSI_CUDA_CHECK(cusolverDnDpotrsBatched(solver, CUBLAS_FILL_MODE_LOWER, m, 1, A_array.get(), m, b_array.get(), m, info.get(), 1));
+  };
   const auto factor = [&] { HSI_CUDA_CHECK(hk::cholesky_factor(m, A.get(), m, info.get(), stream)); };
   const auto solve = [&] { HSI_CUDA_CHECK(hk::cholesky_solve(m, A.get(), m, b.get(), stream)); };
   const auto read_back = [&](std::vector<double>& x, int& inf) {
@@ -141,6 +170,12 @@ Row time_order(int m, int reps) {
   // cuSOLVER: factor (A restored before each call), then solve on the factor (b restored).
   row.potrf = median_us(stream, reps, restore_A, potrf);
   row.potrs = median_us(stream, reps, restore_b, potrs);
+  row.xpotrf = median_us(stream, reps, restore_A, xpotrf);
+  row.xpotrs = median_us(stream, reps, restore_b, xpotrs);
+  row.potrf_batched = median_us(stream, reps, restore_A, potrf_batched);
+  row.potrs_batched = median_us(stream, reps, restore_b, potrs_batched);
+  HSI_CUDA_CHECK(cudaStreamSynchronize(stream));
+  HSI_CUDA_CHECK(cusolverDnDestroyParams(params));
   std::vector<double> x_cusolver, x_ours;
   restore();
   potrf();
@@ -149,6 +184,9 @@ Row time_order(int m, int reps) {
   // Ours, the same way.
   row.factor = median_us(stream, reps, restore_A, factor);
   row.solve = median_us(stream, reps, restore_b, solve);
+  row.factor_solve = median_us(stream, reps, restore, [&] {
+    HSI_CUDA_CHECK(hk::cholesky_factor_solve(m, A.get(), m, b.get(), info.get(), stream));
+  });
   restore();
   factor();
   solve();
@@ -216,21 +254,25 @@ int main(int argc, char** argv) {
   std::printf("## Dense Cholesky, FP64, one right-hand side: ours (cuda/src/dense_cholesky.h) against cuSOLVER\n\n"
               "Median µs over %d calls (CUDA events, after 3 untimed calls; A and b restored outside the timed "
               "region). graph: factor + solve captured into one CUDA graph, per replay. max rel diff: "
-              "max |x_ours − x_cuSOLVER| / max |x_cuSOLVER|. A = B Bᵀ/m + I, random B. Our factor makes "
-              "ceil(m/32) launches; the caller prefers cuSOLVER above m = %d (kCholeskyPreferredMaxOrder).\n\n",
-              reps, hk::kCholeskyPreferredMaxOrder);
+              "max |x_ours − x_cuSOLVER| / max |x_cuSOLVER|. A = B Bᵀ/m + I, random B. Our factor is one "
+              "kernel (a cluster of 8 blocks) up to m = %d, ceil(m/32) launches above; the caller prefers cuSOLVER "
+              "above m = %d (kCholeskyPreferredMaxOrder). Xpotrf/Xpotrs: cuSOLVER's 64-bit API (default params); "
+              "batched: cusolverDnDpotrfBatched/DpotrsBatched at batch 1 (timed, not wired); our factor_solve: "
+              "cholesky_factor_solve, factor with the forward substitution fused, then back substitution (A and b restored).\n\n",
+              reps, hk::kCholeskyClusterMaxOrder, hk::kCholeskyPreferredMaxOrder);
   std::printf("| scene | m | potrf µs | our factor µs | potrf / ours | potrs µs | our solve µs | potrs / ours | "
-              "cuSOLVER graph µs | our graph µs | cuSOLVER / ours (graph) | max rel diff | info (cuSOLVER, ours) |\n"
-              "|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
+              "cuSOLVER graph µs | our graph µs | cuSOLVER / ours (graph) | max rel diff | info (cuSOLVER, ours) | "
+              "Xpotrf µs | Xpotrs µs | potrfBatched µs | potrsBatched µs | our factor_solve µs |\n"
+              "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
   for (const auto& [name, m] : rows) {
     std::fprintf(stderr, "m = %d%s%s\n", m, name.empty() ? "" : ": ", name.c_str());
     const Row r = time_order(m, reps);
     const std::string graph_ratio =
         r.cusolver_graph > 0 && r.ours_graph > 0 ? us_or_na(r.cusolver_graph / r.ours_graph).append("x") : "n/a";
-    std::printf("| %s | %d | %.1f | %.1f | %.1fx | %.1f | %.1f | %.1fx | %s | %s | %s | %.1e | %d, %d |\n",
+    std::printf("| %s | %d | %.1f | %.1f | %.1fx | %.1f | %.1f | %.1fx | %s | %s | %s | %.1e | %d, %d | %.1f | %.1f | %.1f | %.1f | %.1f |\n",
                 name.empty() ? "-" : name.c_str(), m, r.potrf, r.factor, r.potrf / r.factor, r.potrs, r.solve, r.potrs / r.solve,
                 us_or_na(r.cusolver_graph).c_str(), us_or_na(r.ours_graph).c_str(), graph_ratio.c_str(), r.max_rel_diff,
-                r.cusolver_info, r.ours_info);
+                r.cusolver_info, r.ours_info, r.xpotrf, r.xpotrs, r.potrf_batched, r.potrs_batched, r.factor_solve);
     std::fflush(stdout);
   }
   return 0;

@@ -167,6 +167,10 @@ TEST_CASE("dense Cholesky: bad arguments are refused before any launch", "[cuda]
   CHECK(hk::cholesky_factor(10, A, 9, info, nullptr) == cudaErrorInvalidValue);
   CHECK(hk::cholesky_factor(0, A, 0, info, nullptr) == cudaErrorInvalidValue);
   CHECK(hk::cholesky_solve(-1, A, 1, A, nullptr) == cudaErrorInvalidValue);
+  CHECK(hk::cholesky_factor_solve(-1, A, 1, A, info, nullptr) == cudaErrorInvalidValue);
+  CHECK(hk::cholesky_factor_solve(10, A, 9, A, info, nullptr) == cudaErrorInvalidValue);
+  CHECK(hk::cholesky_factor_solve(hk::kCholeskySolveMaxOrder + 1, A, hk::kCholeskySolveMaxOrder + 1, A, info, nullptr) ==
+        cudaErrorInvalidValue);
   CHECK(hk::cholesky_solve(10, A, 9, A, nullptr) == cudaErrorInvalidValue);
   CHECK(hk::cholesky_solve(hk::kCholeskySolveMaxOrder + 1, A, hk::kCholeskySolveMaxOrder + 1, A, nullptr) ==
         cudaErrorInvalidValue);
@@ -200,6 +204,18 @@ TEST_CASE("dense Cholesky: the factor matches Eigen's LLT and the solve's residu
         CHECK(rel < (ill ? 1e-15 * cond : 1e-13));
         const Eigen::VectorXd x = sys.solution();
         CHECK(residual(A, x, b) < 1e-12);
+        // The fused call: the same factor bit for bit (the extra row of b changes no
+        // entry of L's arithmetic), and a solution at rounding level.
+        DeviceSystem fused(A, m + pad, b);
+        HSI_CUDA_CHECK(hk::cholesky_factor_solve(m, fused.A.get(), fused.lda, fused.b.get(), fused.info.get(), stream));
+        HSI_CUDA_CHECK(cudaStreamSynchronize(stream));
+        CHECK(fused.info_value() == 0);
+        CHECK(fused.outside_lower_untouched());
+        const std::vector<double> want_A = sys.matrix(), got_A = fused.matrix();
+        CHECK(std::memcmp(got_A.data(), want_A.data(), got_A.size() * sizeof(double)) == 0);
+        const Eigen::VectorXd x_fused = fused.solution();
+        CHECK(residual(A, x_fused, b) < 1e-12);
+        if (!ill) CHECK((x_fused - x).cwiseAbs().maxCoeff() <= 1e-12 * x.cwiseAbs().maxCoeff());
       }
     }
   }
@@ -237,6 +253,11 @@ TEST_CASE("dense Cholesky: a matrix that is not positive definite gives LAPACK's
     HSI_CUDA_CHECK(hk::cholesky_factor(c.m, sys.A.get(), c.m, sys.info.get(), stream));
     HSI_CUDA_CHECK(cudaStreamSynchronize(stream));
     CHECK(sys.info_value() == c.want);
+    // The fused factor and solve reports the same column (not the bordered pivot of b).
+    DeviceSystem fused(A, c.m, random_vector(c.m, 3u));
+    HSI_CUDA_CHECK(hk::cholesky_factor_solve(c.m, fused.A.get(), c.m, fused.b.get(), fused.info.get(), stream));
+    HSI_CUDA_CHECK(cudaStreamSynchronize(stream));
+    CHECK(fused.info_value() == c.want);
     // The same info buffer is reset by the next, successful, factorisation.
     sys.host.assign(sys.host.size(), kNaN);
     const Eigen::MatrixXd good = well_conditioned(c.m, 12u);
@@ -253,14 +274,16 @@ TEST_CASE("dense Cholesky: the calls captured into a CUDA graph give the same re
   HSI_REQUIRE_GPU();
   hc::Stream stream;
   for (const int m : {1, 33, 305, 700}) {
-    for (const bool fails : {false, true}) {
-      INFO("m = " << m << (fails ? ", pivot " + std::to_string(m / 2 + 1) + " negative" : ", SPD"));
+    for (const bool fails : {false, true})
+    for (const bool fused : {false, true}) {  // factor + solve, or cholesky_factor_solve
+      INFO("m = " << m << (fails ? ", pivot " + std::to_string(m / 2 + 1) + " negative" : ", SPD") << (fused ? ", fused" : ""));
       Eigen::MatrixXd A = well_conditioned(m, 21u);
       if (fails) A(m / 2, m / 2) = -1.0;
       const Eigen::VectorXd b = random_vector(m, 22u);
       // Direct calls: the reference.
       DeviceSystem direct(A, m, b);
-      direct.factor_and_solve(stream);
+      if (fused) HSI_CUDA_CHECK(hk::cholesky_factor_solve(m, direct.A.get(), m, direct.b.get(), direct.info.get(), stream));
+      else direct.factor_and_solve(stream);
       HSI_CUDA_CHECK(cudaStreamSynchronize(stream));
       const std::vector<double> want_A = direct.matrix();
       const Eigen::VectorXd want_x = direct.solution();
@@ -276,8 +299,9 @@ TEST_CASE("dense Cholesky: the calls captured into a CUDA graph give the same re
       HSI_CUDA_CHECK(cudaStreamBeginCapture(stream, cudaStreamCaptureModeThreadLocal));
       HSI_CUDA_CHECK(cudaMemcpyAsync(sys.A.get(), A0.get(), sys.A.bytes(), cudaMemcpyDeviceToDevice, stream));
       HSI_CUDA_CHECK(cudaMemcpyAsync(sys.b.get(), b0.get(), sys.b.bytes(), cudaMemcpyDeviceToDevice, stream));
-      const cudaError_t factor = hk::cholesky_factor(m, sys.A.get(), m, sys.info.get(), stream);
-      const cudaError_t solve = hk::cholesky_solve(m, sys.A.get(), m, sys.b.get(), stream);
+      const cudaError_t factor = fused ? hk::cholesky_factor_solve(m, sys.A.get(), m, sys.b.get(), sys.info.get(), stream)
+                                       : hk::cholesky_factor(m, sys.A.get(), m, sys.info.get(), stream);
+      const cudaError_t solve = fused ? cudaSuccess : hk::cholesky_solve(m, sys.A.get(), m, sys.b.get(), stream);
       HSI_CUDA_CHECK(cudaStreamEndCapture(stream, &graph));
       REQUIRE(factor == cudaSuccess);
       REQUIRE(solve == cudaSuccess);

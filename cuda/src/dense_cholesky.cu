@@ -1,7 +1,8 @@
 // Dense Cholesky factor and solve for the Newton system (see dense_cholesky.h).
 //
-// Factor: right-looking over 32-column tiles with a look-ahead of one, one launch per
-// column tile c. Launch c (a) factors column tile c: every block of tile row i ≥ c
+// Factor, m ≤ kCholeskyClusterMaxOrder: one kernel, a cluster of 8 blocks holding the
+// matrix in shared memory (factor_cluster below). Factor, larger m: right-looking over
+// 32-column tiles with a look-ahead of one, one launch per column tile c. Launch c (a) factors column tile c: every block of tile row i ≥ c
 // applies panel c − 1's update to A_cc and A_ic itself, factors A_cc in registers of
 // one warp (redundantly in each block, 32 × 32 is cheap) and solves its A_ic against it;
 // (b) applies panel c − 1 to the trailing tiles (i, j), j ≥ c + 1; (c) stores L_c−1,c−1,
@@ -13,6 +14,9 @@
 // tiles are applied as explicit inverses, made by each owner before it waits.
 #include "dense_cholesky.h"
 
+#include <cooperative_groups.h>
+
+#include <atomic>
 #include <cfloat>
 #include <cstddef>
 
@@ -207,6 +211,201 @@ __global__ void __launch_bounds__(kFactorThreads) factor_step(int m, double* A, 
   store_tile(B, A, lda, m, i, c, false);
 }
 
+// ---- One-kernel factorisation for m ≤ kCholeskyClusterMaxOrder: a cluster of 8 blocks.
+// Block r of the cluster owns column tiles j ≡ r (mod 8), and keeps each one's lower part
+// (tile rows j..T−1: 32(T − j) rows × 32 columns, column-major, leading dimension
+// 32(T − j)) in its shared memory for the whole factorisation. Rows past m hold zero
+// (a unit diagonal), so the padding factors to I and fails nothing. Step k (k = 0..T−2),
+// with panel k (column tile k, factored) final in its owner's shared memory:
+//  1. every block copies L_jk (32 × 32) for each of its own columns j > k from the
+//     owner's shared memory (distributed shared memory) into its own;
+//  2. every block applies A_ij −= L_ik L_jkᵀ to its own tiles j > k, i ≥ j (L_ik read
+//     from the owner's shared memory straight into registers);
+//  3. the owner of column tile k + 1 factors it (its diagonal tile by one warp, then its
+//     rows below, one per thread);
+//  4. cluster.sync(): panel k + 1 is final and visible to the cluster.
+// With b (cholesky_factor_solve), b is row m of the lower triangle (the bordered matrix
+// [A b; bᵀ 1]): the factor leaves L⁻¹ b in that row, i.e. forward substitution rides
+// along, and b gets it back; the bordered pivot m + 1 is not reported.
+// Panel k is never written after it is final and a block writes only its own columns, so
+// the one cluster barrier per panel is the only synchronisation between blocks.
+namespace cg = cooperative_groups;
+
+constexpr int kClusterBlocks = 8;  // the portable maximum of a thread-block cluster
+constexpr int kClusterThreads = 256;
+constexpr int kClusterWarps = kClusterThreads / 32;
+constexpr int kClusterMaxTiles = kCholeskyClusterMaxOrder / kT;
+static_assert(kCholeskyClusterMaxOrder % kT == 0);
+
+// Column tiles block `rank` owns (j = rank, rank + 8, ... < T).
+__host__ __device__ constexpr int owned_columns(int T, int rank) {
+  return rank < T ? (T - 1 - rank) / kClusterBlocks + 1 : 0;
+}
+// Offset (doubles) of block `rank`'s q-th column tile in its shared memory.
+__host__ __device__ constexpr int column_offset(int T, int rank, int q) {
+  int offset = 0;
+  for (int p = 0; p < q; ++p) offset += kT * kT * (T - rank - kClusterBlocks * p);
+  return offset;
+}
+// Dynamic shared memory of every block: rank 0 owns the most (and the tallest) columns;
+// then one 32 × 32 buffer per own column (its L_jk) and 32 reciprocal pivots.
+__host__ __device__ constexpr size_t cluster_shared_bytes(int T) {
+  const int own = owned_columns(T, 0);
+  return sizeof(double) * static_cast<size_t>(column_offset(T, 0, own) + own * kT * kT + kT);
+}
+static_assert(cluster_shared_bytes(kClusterMaxTiles) <= 227 * 1024, "sm_90's shared memory per block (opt-in)");
+
+// Factor column tile j, held by this block at `col` (leading dimension ld = 32(T − j)):
+// its diagonal tile by warp 0 (lane r holds row r, column q's pivot and multipliers by
+// shuffle), then its rows below by all threads, one row each (x Lᵀ = a, forward). Sets
+// *fail to the 1-based global column of the first bad pivot if *fail is still 0 and that
+// column is inside the m × m matrix (the fused solve's pivot m + 1 is not A's). Every
+// thread of the block calls it; it ends with a barrier.
+__device__ void factor_column(double* col, int ld, int j, double* inv_diag, int* fail, int m) {
+  const int tid = static_cast<int>(threadIdx.x);
+  if (tid < 32) {
+    const int lane = tid;
+    double v[kT];
+#pragma unroll
+    for (int c = 0; c < kT; ++c) v[c] = c <= lane ? col[lane + c * ld] : 0.0;
+    int f = 0;
+#pragma unroll
+    for (int q = 0; q < kT; ++q) {
+      const double pivot = __shfl_sync(kFull, v[q], q);  // A_qq − Σ_{p<q} L_qp²
+      if (f == 0 && !(pivot > 0.0 && pivot <= DBL_MAX)) f = q + 1;  // NaN fails both tests
+      const double inv = rsqrt(pivot);
+      const double l = lane == q ? pivot * inv : v[q] * inv;
+      v[q] = l;
+      if (lane == q) inv_diag[q] = inv;
+#pragma unroll
+      for (int c = q + 1; c < kT; ++c) v[c] -= l * __shfl_sync(kFull, l, c);  // A_rc −= L_rq L_cq
+    }
+#pragma unroll
+    for (int c = 0; c < kT; ++c) col[lane + c * ld] = c <= lane ? v[c] : 0.0;
+    if (lane == 0 && f != 0 && *fail == 0 && j * kT + f <= m) *fail = j * kT + f;  // not the row of b (column m + 1)
+  }
+  __syncthreads();
+  for (int r = kT + tid; r < ld; r += kClusterThreads) {
+    double x[kT];
+#pragma unroll
+    for (int c = 0; c < kT; ++c) x[c] = col[r + c * ld];  // consecutive threads, consecutive rows
+#pragma unroll
+    for (int q = 0; q < kT; ++q) {
+      x[q] *= inv_diag[q];
+#pragma unroll
+      for (int p = q + 1; p < kT; ++p) x[p] -= x[q] * col[p + q * ld];  // broadcast reads of L_pq
+    }
+#pragma unroll
+    for (int c = 0; c < kT; ++c) col[r + c * ld] = x[c];
+  }
+  __syncthreads();
+}
+
+__global__ void __cluster_dims__(kClusterBlocks, 1, 1) __launch_bounds__(kClusterThreads)
+    factor_cluster(int m, double* A, int lda, double* b, int* info, int T) {
+  extern __shared__ double smem[];
+  __shared__ int fail;
+  const cg::cluster_group cluster = cg::this_cluster();
+  const int rank = static_cast<int>(cluster.block_rank());
+  const int tid = static_cast<int>(threadIdx.x), lane = tid & 31, warp = tid / 32;
+  const int own = owned_columns(T, rank);
+  double* const ybuf = smem + column_offset(T, rank, own);  // own × (32 × 32), column-major
+  double* const inv_diag = ybuf + own * kT * kT;
+  auto global_column = [&](int q) { return rank + kClusterBlocks * q; };
+  auto height = [&](int j) { return kT * (T - j); };
+
+  // Load the own columns' lower parts; zero above the diagonal and past m, 1 on the
+  // diagonal past m.
+  for (int q = 0; q < own; ++q) {
+    const int j = global_column(q), ld = height(j);
+    double* const col = smem + column_offset(T, rank, q);
+    for (int e = tid; e < ld * kT; e += kClusterThreads) {
+      const int gr = j * kT + e % ld, gc = j * kT + e / ld;
+      double v = gr == gc ? 1.0 : 0.0;
+      if (gr < m && gc < m && gr >= gc) v = A[static_cast<size_t>(gr) + static_cast<size_t>(gc) * lda];
+      else if (b != nullptr && gr == m && gc < m) v = b[gc];  // [A | b] factored: row m of L becomes (L⁻¹ b)ᵀ
+      col[e] = v;
+    }
+  }
+  if (tid == 0) fail = 0;
+  __syncthreads();
+  if (rank == 0) factor_column(smem, height(0), 0, inv_diag, &fail, m);
+  cluster.sync();
+
+  for (int k = 0; k + 1 < T; ++k) {
+    const int owner = k % kClusterBlocks, ldp = height(k);
+    const double* const panel = cluster.map_shared_rank(smem, owner) + column_offset(T, owner, k / kClusterBlocks);
+    // Own columns right of k: q0..own−1.
+    const int q0 = rank > k ? 0 : (k - rank) / kClusterBlocks + 1;
+    // 1. Y_q = L_jk (row c of tile j, column p at ybuf[q][c + 32p]).
+    for (int e = tid; e < (own - q0) * kT * kT; e += kClusterThreads) {
+      const int q = q0 + e / (kT * kT), c = e % kT, p = (e / kT) % kT;
+      ybuf[q * kT * kT + c + p * kT] = panel[(global_column(q) - k) * kT + c + p * ldp];
+    }
+    __syncthreads();
+    // 2. A_ij −= L_ik L_jkᵀ: items (q, i), i = j..T−1, over the warps; lane r: row 32i + r.
+    int items = 0;
+    for (int q = q0; q < own; ++q) items += T - global_column(q);
+    for (int item = warp; item < items; item += kClusterWarps) {
+      int q = q0, i = item;
+      while (i >= T - global_column(q)) {
+        i -= T - global_column(q);
+        ++q;
+      }
+      const int j = global_column(q);
+      i += j;
+      double x[kT];
+#pragma unroll
+      for (int p = 0; p < kT; ++p) x[p] = panel[(i - k) * kT + lane + p * ldp];  // L_ik, row `lane`
+      double* const c_tile = smem + column_offset(T, rank, q) + (i - j) * kT + lane;
+      const double* const y = ybuf + q * kT * kT;
+      const int ld = height(j);
+#pragma unroll 4
+      for (int c = 0; c < kT; ++c) {
+        double s0 = 0.0, s1 = 0.0;
+#pragma unroll
+        for (int p = 0; p < kT; p += 2) {
+          s0 += x[p] * y[c + p * kT];  // broadcast reads
+          s1 += x[p + 1] * y[c + (p + 1) * kT];
+        }
+        c_tile[c * ld] -= s0 + s1;
+      }
+    }
+    __syncthreads();
+    // 3. The owner of column tile k + 1 factors it.
+    if ((k + 1) % kClusterBlocks == rank) {
+      const int q = (k + 1) / kClusterBlocks;
+      factor_column(smem + column_offset(T, rank, q), height(k + 1), k + 1, inv_diag, &fail, m);
+    }
+    // 4. Panel k + 1 final; every block is also done reading panel k.
+    cluster.sync();
+  }
+
+  // Store the own columns' lower parts inside the matrix.
+  for (int q = 0; q < own; ++q) {
+    const int j = global_column(q), ld = height(j);
+    const double* const col = smem + column_offset(T, rank, q);
+    for (int e = tid; e < ld * kT; e += kClusterThreads) {
+      const int gr = j * kT + e % ld, gc = j * kT + e / ld;
+      if (gr < m && gc < m && gr >= gc) A[static_cast<size_t>(gr) + static_cast<size_t>(gc) * lda] = col[e];
+      else if (b != nullptr && gr == m && gc < m) b[gc] = col[e];
+    }
+  }
+  // *info: the first failing column over the cluster (a failure leaves only later
+  // columns garbage, so the smallest is the first). Block 0 reads the others' `fail`,
+  // which must stay alive until it has: a barrier on each side.
+  cluster.sync();
+  if (rank == 0 && tid == 0) {
+    int first = 0;
+    for (int r = 0; r < kClusterBlocks; ++r) {
+      const int f = *cluster.map_shared_rank(&fail, static_cast<unsigned>(r));
+      if (f != 0 && (first == 0 || f < first)) first = f;
+    }
+    *info = first;
+  }
+  cluster.sync();
+}
+
 // Ready flags between the solve's warps (shared memory, one block).
 __device__ __forceinline__ void wait_ready(const int* flag) {
   while (*static_cast<const volatile int*>(flag) == 0) {
@@ -253,7 +452,9 @@ __device__ __forceinline__ double row_times_warp_vector(const double (&x)[kT], d
   return s0 + s1;
 }
 
-__global__ void __launch_bounds__(kSolveThreads) solve_kernel(int m, const double* __restrict__ L, int lda, double* b, int T) {
+// forward = false: b already holds L⁻¹ b (cholesky_factor_solve), only back substitution.
+__global__ void __launch_bounds__(kSolveThreads)
+    solve_kernel(int m, const double* __restrict__ L, int lda, double* b, int T, bool forward) {
   extern __shared__ double y[];  // 32T entries (zero past m), then the forward and back flags
   int* const ready_fwd = reinterpret_cast<int*>(y + kT * T);
   int* const ready_bwd = ready_fwd + T;
@@ -266,7 +467,7 @@ __global__ void __launch_bounds__(kSolveThreads) solve_kernel(int m, const doubl
   // Forward: y_i = L_ii⁻¹ (b_i − Σ_{s<i} L_is y_s); lane r holds row 32i + r. L_ii⁻¹ is
   // made before the first wait, off the critical path, so that a tile's last step is
   // one update and one 32 × 32 product instead of 32 dependent substitution steps.
-  for (int i = warp; i < T; i += kSolveWarps) {
+  for (int i = warp; forward && i < T; i += kSolveWarps) {
     const int row = i * kT + lane;
     const bool valid = row < m;
 #pragma unroll
@@ -317,6 +518,30 @@ __global__ void __launch_bounds__(kSolveThreads) solve_kernel(int m, const doubl
 
 int tiles(int m) { return (m + kT - 1) / kT; }
 
+// Whether the current device can run one cluster of factor_cluster at the largest
+// shared memory it asks for (sm_90 and up; a GPU partition or MPS share may not place 8
+// such blocks in one GPC): otherwise the tiled kernels factor every m. Asked once per
+// device; a host query only, so it is allowed while a stream is being captured.
+bool cluster_factor_available() {
+  static std::atomic<int> known[64] = {};  // 0 unknown, 1 yes, 2 no (per device ordinal); racing askers agree
+  int device = 0;
+  if (cudaGetDevice(&device) != cudaSuccess || device < 0 || device >= 64) return false;
+  if (known[device] == 0) {
+    const size_t bytes = cluster_shared_bytes(kClusterMaxTiles);
+    int clusters = 0;
+    cudaLaunchConfig_t config = {};
+    config.gridDim = dim3(kClusterBlocks);
+    config.blockDim = dim3(kClusterThreads);
+    config.dynamicSmemBytes = bytes;
+    const bool ok = cudaFuncSetAttribute(factor_cluster, cudaFuncAttributeMaxDynamicSharedMemorySize, static_cast<int>(bytes)) ==
+                        cudaSuccess &&
+                    cudaOccupancyMaxActiveClusters(&clusters, factor_cluster, &config) == cudaSuccess && clusters >= 1;
+    (void)cudaGetLastError();  // a refused query leaves no error behind
+    known[device] = ok ? 1 : 2;
+  }
+  return known[device] == 1;
+}
+
 size_t solve_shared_bytes(int T) { return static_cast<size_t>(T) * (kT * sizeof(double) + 2 * sizeof(int)); }
 
 }  // namespace
@@ -325,6 +550,12 @@ cudaError_t cholesky_factor(int m, double* A, int lda, int* info, cudaStream_t s
   if (m < 0 || lda < (m > 1 ? m : 1)) return cudaErrorInvalidValue;
   if (m == 0) return cudaMemsetAsync(info, 0, sizeof(int), stream);
   const int T = tiles(m);
+  if (m <= kCholeskyClusterMaxOrder && cluster_factor_available()) {
+    // cluster_factor_available() set the attribute for the largest T.
+    const size_t bytes = cluster_shared_bytes(T);
+    factor_cluster<<<kClusterBlocks, kClusterThreads, bytes, stream>>>(m, A, lda, nullptr, info, T);
+    return cudaGetLastError();
+  }
   for (int c = 0; c < T; ++c) {
     const int rest = T - 1 - c;  // column tiles right of c
     const int blocks = (T - c) + (c > 0 ? 1 + rest * (rest + 1) / 2 : 0);  // panel, delayed L_c−1,c−1, trailing
@@ -341,7 +572,22 @@ cudaError_t cholesky_solve(int m, const double* L, int lda, double* b, cudaStrea
   static_assert(kCholeskySolveMaxOrder % kT == 0);
   static_assert((kCholeskySolveMaxOrder / kT) * (kT * sizeof(double) + 2 * sizeof(int)) <= 48 * 1024,
                 "the solve's shared memory must fit the default 48 KiB");
-  solve_kernel<<<1, kSolveThreads, solve_shared_bytes(T), stream>>>(m, L, lda, b, T);
+  solve_kernel<<<1, kSolveThreads, solve_shared_bytes(T), stream>>>(m, L, lda, b, T, true);
+  return cudaGetLastError();
+}
+
+cudaError_t cholesky_factor_solve(int m, double* A, int lda, double* b, int* info, cudaStream_t stream) {
+  if (m < 0 || lda < (m > 1 ? m : 1) || m > kCholeskySolveMaxOrder) return cudaErrorInvalidValue;
+  if (m == 0) return cudaMemsetAsync(info, 0, sizeof(int), stream);
+  if (m + 1 > kCholeskyClusterMaxOrder || !cluster_factor_available()) {  // [A | b] does not fit: factor, then solve
+    if (const cudaError_t e = cholesky_factor(m, A, lda, info, stream); e != cudaSuccess) return e;
+    return cholesky_solve(m, A, lda, b, stream);
+  }
+  const int T = tiles(m + 1);  // b is row m
+  const size_t bytes = cluster_shared_bytes(T);
+  factor_cluster<<<kClusterBlocks, kClusterThreads, bytes, stream>>>(m, A, lda, b, info, T);
+  if (const cudaError_t e = cudaGetLastError(); e != cudaSuccess) return e;
+  solve_kernel<<<1, kSolveThreads, solve_shared_bytes(tiles(m)), stream>>>(m, A, lda, b, tiles(m), false);
   return cudaGetLastError();
 }
 

@@ -13,10 +13,17 @@ namespace hsi::cuda::kernels {
 // Tile edge of the blocked factorisation and of the solve's substitutions.
 constexpr int kCholeskyTile = 32;
 
+// Up to this order the factorisation is ONE kernel: a cluster of 8 thread blocks that
+// holds the lower triangle in their shared memory (distributed shared memory) and
+// synchronises once per 32-column panel (cluster.sync()). Above it (the matrix no longer
+// fits 8 × 227 KiB), or where the device cannot place such a cluster (checked once per
+// device), ceil(m / 32) launches of the tiled kernel, one per column tile.
+constexpr int kCholeskyClusterMaxOrder = 512;
+
 // Above this order the caller should prefer cuSOLVER (cusolverDnDpotrf/potrs): the
-// factorisation below makes ceil(m / 32) launches, one per column tile, so its cost
-// grows with m while cuSOLVER's blocked kernels catch up. A tuning threshold only:
-// both functions are correct for every m (the solve up to kCholeskySolveMaxOrder).
+// tiled factorisation (m > kCholeskyClusterMaxOrder) makes ceil(m / 32) launches, so
+// its cost grows with m while cuSOLVER's blocked kernels catch up. A tuning threshold
+// only: both functions are correct for every m (the solve up to kCholeskySolveMaxOrder).
 // To be set from bench_dense's table on the H100.
 constexpr int kCholeskyPreferredMaxOrder = 1024;
 
@@ -27,7 +34,8 @@ constexpr int kCholeskySolveMaxOrder = 5632;
 // the strictly upper triangle is neither read nor written). *info (device memory) is
 // set to 0 on success, or to the 1-based column of the first pivot that is not > 0 or
 // not finite (LAPACK's and cuSOLVER's convention; the factor is then garbage from that
-// column on). Enqueues ceil(m / 32) kernels (one memset when m = 0).
+// column on). Enqueues one kernel (a cluster of 8 blocks) for m ≤ kCholeskyClusterMaxOrder,
+// ceil(m / 32) kernels above, one memset when m = 0.
 // cudaErrorInvalidValue for m < 0 or lda < max(1, m); otherwise the launch status.
 cudaError_t cholesky_factor(int m, double* A, int lda, int* info, cudaStream_t stream);
 
@@ -35,5 +43,14 @@ cudaError_t cholesky_factor(int m, double* A, int lda, int* info, cudaStream_t s
 // kernel of one thread block. cudaErrorInvalidValue for m < 0, lda < max(1, m) or
 // m > kCholeskySolveMaxOrder; otherwise the launch status.
 cudaError_t cholesky_solve(int m, const double* L, int lda, double* b, cudaStream_t stream);
+
+// cholesky_factor, then b ← (L Lᵀ)⁻¹ b, with the forward substitution fused into the
+// factorisation: for m < kCholeskyClusterMaxOrder the cluster kernel factors [A | b]
+// (b as row m of the lower triangle, so it leaves L⁻¹ b there) and one back
+// substitution kernel follows (2 kernels in all); above, cholesky_factor then
+// cholesky_solve. A and *info as cholesky_factor leaves them (L bit for bit the same);
+// b is garbage when *info ≠ 0. cudaErrorInvalidValue for m < 0, lda < max(1, m) or
+// m > kCholeskySolveMaxOrder; otherwise the launch status.
+cudaError_t cholesky_factor_solve(int m, double* A, int lda, double* b, int* info, cudaStream_t stream);
 
 }  // namespace hsi::cuda::kernels

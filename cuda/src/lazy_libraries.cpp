@@ -100,3 +100,26 @@ HSI_LAZY(kCusolver, cusolverStatus_t, cusolverDnDpotrf_bufferSize,
 HSI_LAZY(kCusolver, cusolverStatus_t, cusolverDnDpotrs,
          (cusolverDnHandle_t h, cublasFillMode_t uplo, int n, int nrhs, const double* A, int lda, double* B, int ldb, int* info),
          (h, uplo, n, nrhs, A, lda, B, ldb, info))
+// cuSOLVER's other Cholesky entry points, timed against ours in bench_dense (issue #23).
+HSI_LAZY(kCusolver, cusolverStatus_t, cusolverDnCreateParams, (cusolverDnParams_t * params), (params))
+HSI_LAZY(kCusolver, cusolverStatus_t, cusolverDnDestroyParams, (cusolverDnParams_t params), (params))
+HSI_LAZY(kCusolver, cusolverStatus_t, cusolverDnXpotrf_bufferSize,
+         (cusolverDnHandle_t h, cusolverDnParams_t params, cublasFillMode_t uplo, int64_t n, cudaDataType type_a, const void* A,
+          int64_t lda, cudaDataType compute_type, size_t* device_bytes, size_t* host_bytes),
+         (h, params, uplo, n, type_a, A, lda, compute_type, device_bytes, host_bytes))
+HSI_LAZY(kCusolver, cusolverStatus_t, cusolverDnXpotrf,
+         (cusolverDnHandle_t h, cusolverDnParams_t params, cublasFillMode_t uplo, int64_t n, cudaDataType type_a, void* A,
+          int64_t lda, cudaDataType compute_type, void* device_buffer, size_t device_bytes, void* host_buffer, size_t host_bytes,
+          int* info),
+         (h, params, uplo, n, type_a, A, lda, compute_type, device_buffer, device_bytes, host_buffer, host_bytes, info))
+HSI_LAZY(kCusolver, cusolverStatus_t, cusolverDnXpotrs,
+         (cusolverDnHandle_t h, cusolverDnParams_t params, cublasFillMode_t uplo, int64_t n, int64_t nrhs, cudaDataType type_a,
+          const void* A, int64_t lda, cudaDataType type_b, void* B, int64_t ldb, int* info),
+         (h, params, uplo, n, nrhs, type_a, A, lda, type_b, B, ldb, info))
+HSI_LAZY(kCusolver, cusolverStatus_t, cusolverDnDpotrfBatched,
+         (cusolverDnHandle_t h, cublasFillMode_t uplo, int n, double* A_array[], int lda, int* info_array, int batch),
+         (h, uplo, n, A_array, lda, info_array, batch))
+HSI_LAZY(kCusolver, cusolverStatus_t, cusolverDnDpotrsBatched,
+         (cusolverDnHandle_t h, cublasFillMode_t uplo, int n, int nrhs, double* A_array[], int lda, double* B_array[], int ldb,
+          int* info, int batch),
+         (h, uplo, n, nrhs, A_array, lda, B_array, ldb, info, batch))
