@@ -141,9 +141,10 @@ struct NewtonOptions {
   // system whose Newton decrement (the decrease of a full step, −gᵀd/2) is below it.
   double tolerance = 5e-8;
   HessianProjection projection = HessianProjection::PartProj;
-  // Once a full step was taken, use the unprojected Hessian whenever its reduced system
-  // is positive definite (quadratic convergence near the solution), and the projection
-  // above otherwise (and always in a solve's first iteration).
+  // Once a full step was taken (or, with exact_after_cut, a projected step that Armijo
+  // cut), use the unprojected Hessian whenever its reduced system is positive definite
+  // (quadratic convergence near the solution), and the projection above otherwise (and
+  // always in a solve's first iteration).
   bool exact_hessian_when_definite = true;
   // Also try the exact system after a projected step that Armijo cut (backtracks beyond
   // the certificate's rejections), not after full steps only: a projection can be too
