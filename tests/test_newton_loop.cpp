@@ -40,6 +40,12 @@ struct FakeStepper : NewtonStepper {
   // unless the system is built over all of G (HessianChoice::all_samples) or is exact.
   double subset_softness = 1;
   bool all_now = false;
+  // The projection's model over any samples: its curvature along each axis this many
+  // times the true one (A diagonal): < 1 too soft (Delete along cage modes), > 1 too stiff
+  // (a projection clamping negative curvature); and the exact model's, the same way.
+  Eigen::Vector2d projected_scale{1, 1};
+  double exact_scale = 1;
+  bool subset_exact_too = false;  // subset_softness applies to the exact system over H too
 
   double start(const Eigen::VectorXd& x0) override {
     x_ = x0;
@@ -57,8 +63,10 @@ struct FakeStepper : NewtonStepper {
     s.diagonal_max = A.diagonal().cwiseAbs().maxCoeff();
     if ((exact_now && !exact_definite) || (ridge == 0 && fail_factorisations-- > 0)) return s;
     const Eigen::Vector2d g = A * (x_ - a);
-    const double model = all_now || exact_now ? 1.0 : 1.0 / subset_softness;
-    d_ = -(model * A + ridge * Eigen::Matrix2d::Identity()).inverse() * g;
+    const double subset = all_now || (exact_now && !subset_exact_too) ? 1.0 : 1.0 / subset_softness;
+    const double model = (exact_now ? exact_scale : 1.0) * subset;
+    const Eigen::Matrix2d M = exact_now ? Eigen::Matrix2d(A) : Eigen::Matrix2d(projected_scale.asDiagonal() * A);
+    d_ = -(model * M + ridge * Eigen::Matrix2d::Identity()).inverse() * g;
     s.factored = true;
     s.slope = g.dot(d_);
     s.gradient_norm = g.norm();
@@ -415,6 +423,7 @@ TEST_CASE("newton_run: a subset Hessian whose steps Armijo keeps cutting is repl
   for (const int cuts : {2, 0}) {
     FakeStepper f;
     f.subset_softness = 20;
+    f.subset_exact_too = true;  // the exact Hessian over H is as wrong (exact_after_cut tries it after the cut steps)
     f.energy = [&f](const Eigen::Vector2d& x) { return 2 + 0.5 * (x - f.a).dot(f.A * (x - f.a)) + 0.1 * std::pow((x - f.a).norm(), 3); };
     NewtonOptions o;
     o.escalate_after_cuts = cuts;
@@ -447,9 +456,10 @@ TEST_CASE("newton_run: the exact system's ridge leaves soft modes alone (no line
     FakeStepper f;
     f.A << 1, 0, 0, 1e-14;
     f.a << 1, 1e6;  // the soft mode carries a decrease of ½·1e-14·1e12 = 5e-3
-    f.subset_softness = 0.5;  // the projected first step goes half way, the exact ones follow
+    f.subset_softness = 0.6;  // the projected first step goes 60% of the way (not past the step expansion's ratio), the exact ones follow
     NewtonOptions o;
     o.escalate_after_cuts = 0;
+    o.expand_ratio = 0;  // (a ridged exact step beats its model along the soft mode: expansion would hide the crawl)
     o.exact_ridge = ridge;
     o.max_iterations = 60;
     const NewtonResult r = newton_run(f, true, true, Eigen::Vector2d(0, 0), o);
@@ -460,4 +470,81 @@ TEST_CASE("newton_run: the exact system's ridge leaves soft modes alone (no line
       CHECK((r.stagnated || r.iterations >= 20));
     }
   }
+}
+
+TEST_CASE("newton_run: after a projected step Armijo cut, the exact system is tried; after a cut exact step, the projection",
+          "[newton][loop]") {
+  // Delete's projection far too soft along one mode (issue #20, grid_2/scale: steps cut
+  // to 1/64-1/1024 and stagnation while the exact system, gated on a full step, was never
+  // tried): with exact_after_cut the exact system takes over after the first cut step.
+  int iterations[2] = {0, 0};
+  for (const bool rule : {true, false}) {
+    FakeStepper f;
+    f.projected_scale << 1, 1e-3;
+    f.energy = [&f](const Eigen::Vector2d& x) { return 2 + 0.5 * (x - f.a).dot(f.A * (x - f.a)) + 0.01 * std::pow((x - f.a).norm(), 3); };
+    NewtonOptions o;
+    o.projection = HessianProjection::Delete;
+    o.exact_after_cut = rule;
+    const NewtonResult r = newton_run(f, true, true, Eigen::Vector2d(0, 0), o);
+    REQUIRE(!r.log.empty());
+    CHECK(r.log.front().backtracks >= 5);  // the projected step overshoots ~1000x
+    if (rule) {
+      CHECK(r.converged);
+      CHECK(r.iterations <= 6);
+      REQUIRE(r.log.size() >= 2);
+      CHECK(r.log[1].exact_hessian);
+    } else {
+      CHECK((!r.converged || r.iterations >= 30));  // a crawl of cut-down projected steps
+    }
+    iterations[rule ? 0 : 1] = r.iterations;
+  }
+  CHECK(3 * iterations[0] <= iterations[1]);
+
+  // The exact model wrong (too soft: its steps cut too) and the projection right: an exact
+  // step that Armijo cut is followed by the projection, not by the exact system again.
+  FakeStepper g;
+  g.exact_scale = 0.02;
+  g.projected_scale << 1.25, 1.25;  // full projected steps go 80% of the way (the exact system follows them)
+  g.energy = [&g](const Eigen::Vector2d& x) { return 2 + 0.5 * (x - g.a).dot(g.A * (x - g.a)) + 0.1 * std::pow((x - g.a).norm(), 3); };
+  g.A << 1, 0, 0, 1e-3;
+  NewtonOptions o;
+  o.escalate_after_cuts = 0;
+  const NewtonResult r = newton_run(g, true, true, Eigen::Vector2d(0, 0), o);
+  CHECK(r.converged);
+  int cut_exact = 0;
+  for (size_t k = 0; k + 1 < r.log.size(); ++k)
+    if (r.log[k].exact_hessian && r.log[k].step < 1 && r.log[k].backtracks > r.log[k].certificate_rejections) {
+      ++cut_exact;
+      CHECK_FALSE(r.log[k + 1].exact_hessian);
+    }
+  CHECK(cut_exact > 0);
+}
+
+TEST_CASE("newton_run: a full step beating its model's decrease is expanded (2, 4, 8, 16), within the certificate", "[newton][loop]") {
+  // A projection 20x too stiff and no definite exact system (issue #20, chain/spin with
+  // PartProj: full steps near a saddle, each lowering the energy ~2x what the model
+  // predicts, at a linear rate of 0.9-1 to the iteration cap).
+  auto run = [](double expand_ratio, bool certify_long) {
+    FakeStepper f;
+    f.projected_scale << 20, 20;
+    f.exact_definite = false;
+    if (!certify_long) f.certifies = [](double s) { return s <= 1; };
+    NewtonOptions o;
+    o.expand_ratio = expand_ratio;
+    return newton_run(f, true, true, Eigen::Vector2d(0, 0), o);
+  };
+  const NewtonResult with = run(NewtonOptions{}.expand_ratio, true);
+  const NewtonResult without = run(0, true);
+  const NewtonResult refused = run(NewtonOptions{}.expand_ratio, false);
+  INFO("iterations: expanded " << with.iterations << ", not " << without.iterations << ", refused by the certificate " << refused.iterations);
+  CHECK(with.converged);
+  CHECK(with.certified);
+  CHECK(with.iterations <= 10);
+  REQUIRE(!with.log.empty());
+  CHECK(with.log.front().step == 16);  // E(s) - 2 = 2.5 (1 - s/20)^2: the longest step is best
+  CHECK(3 * with.iterations <= without.iterations);
+  // Longer steps the certificate refuses: the full step is taken, and only certified maps.
+  CHECK(refused.certified);
+  for (const NewtonIteration& k : refused.log) CHECK(k.step <= 1);
+  CHECK(refused.iterations == without.iterations);
 }

@@ -376,8 +376,13 @@ NewtonResult newton_run(NewtonStepper& st, bool certify, bool rotation_invariant
       res.timing.solve += ms_since(t0);
     };
     // The exact Hessian is tried once Newton takes full steps (near the solution, where
-    // it is definite and converges quadratically); a first iteration seldom gets there.
-    if (opt.exact_hessian_when_definite && !res.log.empty() && res.log.back().step == 1.0) {
+    // it is definite and converges quadratically; a first iteration seldom gets there),
+    // and after a projected step that Armijo cut (the projection's model overshot; with
+    // an exact step that Armijo cut the projection comes next): NewtonOptions::exact_after_cut.
+    const NewtonIteration* prev = res.log.empty() ? nullptr : &res.log.back();
+    const bool prev_full = prev && prev->step >= 1.0;
+    const bool prev_cut = prev && opt.exact_after_cut && !prev->exact_hessian && prev->backtracks > prev->certificate_rejections;
+    if (opt.exact_hessian_when_definite && (prev_full || prev_cut)) {
       factor(opt.exact_ridge * build({true, opt.projection, rotation_invariant && opt.exact_modulo_rotation, all_samples}));
       log.exact_hessian = sys.factored;
     }
@@ -435,6 +440,34 @@ NewtonResult newton_run(NewtonStepper& st, bool certify, bool rotation_invariant
       if (!(E_new <= E + opt.armijo * s * slope)) {
         log.backtracks++;
         continue;
+      }
+      // A full step that beat its model's decrease −gᵀd/2 by expand_ratio: longer steps
+      // too (NewtonOptions::expand_ratio), the best one certified first.
+      if (bt == 0 && s == 1.0 && opt.expand_ratio > 0 && E - E_new > opt.expand_ratio * (-slope / 2)) {
+        std::array<double, kTrialBatch> longer{}, longer_E{};
+        size_t m = 0;
+        for (double sj = 2; m < longer.size() && static_cast<int>(m) < opt.expand_steps && sj <= opt.safe_fraction * sys.max_safe_step; sj *= 2)
+          longer[m++] = sj;
+        if (m > 0) {
+          st.trial_energies(std::span<const double>(longer.data(), m), std::span<double>(longer_E.data(), m));
+          size_t best = m;
+          for (size_t j = 0; j < m; ++j)
+            if (longer_E[j] < (best < m ? longer_E[best] : E_new) && longer_E[j] <= E + opt.armijo * longer[j] * slope) best = j;
+          if (best < m) {
+            res.timing.line_search += ms_since(t0);
+            CertificateResult c;
+            if (certify) c = timed_certify(longer[best], false);
+            t0 = Clock::now();
+            if (!certify || c.certified) {
+              if (certify) res.certificate = std::move(c);
+              s = longer[best];
+              E_new = longer_E[best];
+              accepted = true;
+              break;
+            }
+            // (rejected: the full step is certified next)
+          }
+        }
       }
       res.timing.line_search += ms_since(t0);
       if (certify) {

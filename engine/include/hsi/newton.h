@@ -164,10 +164,33 @@ struct NewtonOptions {
   // system whose Newton decrement (the decrease of a full step, −gᵀd/2) is below it.
   double tolerance = 5e-8;
   HessianProjection projection = HessianProjection::PartProj;
-  // Once a full step was taken, use the unprojected Hessian whenever its reduced system
-  // is positive definite (quadratic convergence near the solution), and the projection
-  // above otherwise (and always in a solve's first iteration).
+  // Once a full step was taken (or, with exact_after_cut, a projected step that Armijo
+  // cut), use the unprojected Hessian whenever its reduced system is positive definite
+  // (quadratic convergence near the solution), and the projection above otherwise (and
+  // always in a solve's first iteration).
   bool exact_hessian_when_definite = true;
+  // Also try the exact system after a projected step that Armijo cut (backtracks beyond
+  // the certificate's rejections), not after full steps only: a projection can be too
+  // soft along cage modes that barely change the metric (Delete's), every projected step
+  // then overshoots, Armijo cuts it to 1/64–1/1024 and the energy crawls into stagnation
+  // while the exact system, gated on a full step, is never tried (bench_stress --trace,
+  // issue #20: grid_2/scale with Delete, 7 of 99 frames stagnated, 37 iterations at
+  // t = 0.31; with this rule none, at most 6). After an exact step that Armijo cut the
+  // next system is the projection again: each model is tried after the other failed.
+  // (The same rule on an older loop, with the exact system over the subset H and a ridge
+  // of 1e-12, crawled on exact steps cut to 1/4–1/2 for 100 iterations in the cli_authoring
+  // test's posed scene; escalate_after_cuts and exact_ridge = 1e-15 end that frame in 3.)
+  bool exact_after_cut = true;
+  // Step expansion: when a full step lowered the energy by more than expand_ratio times
+  // what the system's quadratic model predicts (−gᵀd/2), the model is too stiff along d
+  // (a projection clamps negative or near-zero curvature to a positive one): the steps
+  // 2, 4, …, 2^expand_steps (up to safe_fraction · s_max) are tried too and the lowest
+  // energy that passes Armijo and the certificate is taken (else the full step). Near a
+  // saddle the projected Newton otherwise takes full steps, each ~2× what its model
+  // predicts, at a linear rate of 0.9–1 (bench_stress --trace, issue #20: chain/spin with
+  // PartProj, t = 0.59 at the iteration cap, the safe step 200–700). 0: never.
+  double expand_ratio = 1.5;
+  int expand_steps = 4;
   // The exact system is factored with this ridge (relative to max |diag H|): its
   // smallest eigenvalues lie near 0 (cage modes that barely move the boundary), where
   // round-off alone would decide whether a bare Cholesky succeeds; with the ridge only
