@@ -358,16 +358,13 @@ class DeviceStepper final : public NewtonStepper {
     // d = −g, solved in place: cuSOLVER's Cholesky, or with HSI_CUDA_CHOLESKY=own ours
     // (dense_cholesky.h) up to its preferred order.
     const bool own = S_.own_cholesky && m <= kernels::kCholeskyPreferredMaxOrder;
-    if (own)
-      HSI_CUDA_CHECK(kernels::cholesky_factor(m, S_.Hr.get(), m, S_.info.get(), st()));
-    else
-      HSI_CUDA_CHECK(cusolverDnDpotrf(c_.solver_, CUBLAS_FILL_MODE_LOWER, m, S_.Hr.get(), m, S_.work.get(), S_.lwork, S_.info.get()));
     HSI_CUDA_CHECK(cudaMemcpyAsync(S_.d.get(), S_.g.get(), sz(m) * sizeof(double), cudaMemcpyDeviceToDevice, st()));
     HSI_CUDA_CHECK(cublasDscal(c_.blas_, m, &kMinusOneD, S_.d.get(), 1));
-    if (own) {
-      HSI_CUDA_CHECK(kernels::cholesky_solve(m, S_.Hr.get(), m, S_.d.get(), st()));
+    if (own) {  // factor and forward substitution in one kernel, then back substitution
+      HSI_CUDA_CHECK(kernels::cholesky_factor_solve(m, S_.Hr.get(), m, S_.d.get(), S_.info.get(), st()));
       HSI_CUDA_CHECK(cudaMemsetAsync(S_.info.get() + 1, 0, sizeof(int), st()));  // the solve has no status of its own
     } else {
+      HSI_CUDA_CHECK(cusolverDnDpotrf(c_.solver_, CUBLAS_FILL_MODE_LOWER, m, S_.Hr.get(), m, S_.work.get(), S_.lwork, S_.info.get()));
       HSI_CUDA_CHECK(cusolverDnDpotrs(c_.solver_, CUBLAS_FILL_MODE_LOWER, m, 1, S_.Hr.get(), m, S_.d.get(), m, S_.info.get() + 1));
     }
     if (horizontal_)  // θ = −aᵀd / |u|² into d[dim] (0 from the decoupled solve)
