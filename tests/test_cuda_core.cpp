@@ -509,8 +509,8 @@ TEST_CASE("the CUDA core's target blend matches the host blend, linear and expon
 
 // The device stepper replays each call as a CUDA graph (device.h GraphCache): a value a
 // graph baked in at capture that should change between calls (a step, a ridge, a
-// pointer) would give other frames than launching the same work directly
-// (HSI_CUDA_GRAPHS=0). Frames and authored keyframes must be the same bit for bit, on a
+// pointer) would give other frames than launching the same work directly (graphs are
+// opt-in: HSI_CUDA_GRAPHS=1). Frames and authored keyframes must be the same bit for bit, on a
 // scene whose loop frees the rotation and uses the exact system, and in authoring (the
 // quadratic term's path).
 TEST_CASE("the device loop replayed as CUDA graphs gives the frames of direct launches", "[cuda][small]") {
@@ -520,10 +520,10 @@ TEST_CASE("the device loop replayed as CUDA graphs gives the frames of direct la
     INFO(p.filename().string());
     Scene scene = load_scene(p);
     const auto setup = make_shape_setup(scene, 4000, 0.2);
-    auto make = [&](bool graphs) {
-      if (!graphs) REQUIRE(setenv("HSI_CUDA_GRAPHS", "0", 1) == 0);
+    auto make = [&](bool graphs) {  // graphs are opt-in (device.h graphs_enabled)
+      REQUIRE(setenv("HSI_CUDA_GRAPHS", graphs ? "1" : "0", 1) == 0);
       auto core = hsi::cuda::make_newton_core(*setup);
-      if (!graphs) REQUIRE(unsetenv("HSI_CUDA_GRAPHS") == 0);
+      REQUIRE(unsetenv("HSI_CUDA_GRAPHS") == 0);
       return core;
     };
     std::vector<double> times;

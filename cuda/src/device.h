@@ -225,7 +225,7 @@ class GraphExec {
 // only (no synchronisation, allocation or host reads of device data), and everything it
 // passes by value the same on every run of its key; values that change between runs go
 // through device memory (or pinned host memory the graph copies from). Disabled, run()
-// just calls `enqueue` (the reference path: HSI_CUDA_GRAPHS=0).
+// just calls `enqueue` (the default: graphs_enabled()).
 class GraphCache {
  public:
   explicit GraphCache(bool enabled) : enabled_(enabled) {}
@@ -250,7 +250,11 @@ class GraphCache {
       }
       // A capture that fails (invalidated, or a call refused while capturing) runs the
       // same work directly instead, and is tried again next time, up to a limit.
-      HSI_CUDA_CHECK(cudaStreamBeginCapture(stream, cudaStreamCaptureModeThreadLocal));
+      // Relaxed: a library routine may load its kernel lazily inside the capture (cuBLAS
+      // can pick other kernels while capturing than in the direct run); in the stricter
+      // modes that load failed the capture whenever other threads' cores were busy
+      // (bench_stress, 16 workers on the H100).
+      HSI_CUDA_CHECK(cudaStreamBeginCapture(stream, cudaStreamCaptureModeRelaxed));
       std::string why;
       try {
         enqueue();
@@ -286,11 +290,15 @@ class GraphCache {
   std::string last_failure_;
 };
 
-// Whether the CUDA backend replays its recurring call sequences as graphs: yes unless
-// the environment sets HSI_CUDA_GRAPHS=0 (a switch for comparison and debugging).
+// Whether the CUDA backend replays its recurring call sequences as graphs: only with
+// HSI_CUDA_GRAPHS=1, and only for a process that drives one core at a time. With many
+// cores on many threads (bench_stress --jobs 16 on the H100) other threads' allocations
+// and frees invalidated captures in flight (cudaErrorStreamCaptureInvalidated, cuBLAS
+// launch failures inside the capture) and the process crashed; off, the same work is
+// launched directly (what GraphCache::run does when disabled).
 inline bool graphs_enabled() {
   const char* v = std::getenv("HSI_CUDA_GRAPHS");
-  return !(v && std::string(v) == "0");
+  return v && std::string(v) == "1";
 }
 
 // Whether the Newton system is factored by the backend's own dense Cholesky
