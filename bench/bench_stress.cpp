@@ -115,14 +115,21 @@ struct Stats {
   }
 };
 
-using RunKey = std::pair<int, HessianProjection>;  // frames per interval, projection
+using RunKey = std::pair<int, HessianProjection>;  // frames per interval (kMid: cold midpoints), projection
+
+// --frames mid: each keyframe interval's midpoint solved cold from the interval's first
+// keyframe (no warm start), the setting of the paper's Table 1 (t = 0.5 from keyframe 0),
+// where the projection decides how Newton gets from far away.
+constexpr int kMid = 0;
+std::string frames_label(int F) { return F == kMid ? "mid" : std::to_string(F); }
+json frames_json(int F) { return F == kMid ? json("mid") : json(F); }
 
 void print_header() {
   std::printf("| frames/interval | projection | runs | frames | mean it | p99 it | max it | at cap | certified | "
               "not converged | ms/frame |\n|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n");
 }
 void print_row(const RunKey& k, const Stats& s) {
-  std::printf("| %d | %s | %d%s | %ld | %.2f | %d | %d | %ld | %ld | %ld | %.1f |\n", k.first, projection_label(k.second), s.runs,
+  std::printf("| %s | %s | %d%s | %ld | %.2f | %d | %d | %ld | %ld | %ld | %.1f |\n", frames_label(k.first).c_str(), projection_label(k.second), s.runs,
               s.failed_runs ? (" (" + std::to_string(s.failed_runs) + " failed)").c_str() : "", s.frames(), s.mean(),
               s.quantile(0.99), s.max(), s.at_cap, s.certified, s.not_converged, s.ms_per_frame());
 }
@@ -153,7 +160,7 @@ void trace_run(Interpolator& interp, const ShapeSetup& setup, const std::vector<
     out += b;
     for (const NewtonIteration& k : r.log) {
       std::snprintf(b, sizeof b, "    E %.12f step %.3g %s %s dec2 %.3g |g| %.3g smax %.3g bt %d rej %d\n", k.energy, k.step,
-                    k.exact_hessian ? "exact" : "proj ", k.all_samples ? "G" : "H", k.decrement2, k.gradient_norm, k.max_safe_step, k.backtracks,
+                    k.shifted ? "shift" : k.exact_hessian ? "exact" : projection_label(k.projection), k.all_samples ? "G" : "H", k.decrement2, k.gradient_norm, k.max_safe_step, k.backtracks,
                     k.certificate_rejections);
       out += b;
     }
@@ -199,7 +206,9 @@ int main(int argc, char** argv) {
   app.add_option("--kinds", kinds_opt, "Only sequences of these kinds (hinge, bend_steps, ...)");
   app.add_option("--sequences", ids_opt, "Only these sequences (comma-separated ids, shape/kind)");
   app.add_option("--limit", limit, "At most this many sequences per shape (0: all)")->capture_default_str();
-  app.add_option("--frames", frames_opt, "Frames per keyframe interval (comma-separated)")->capture_default_str();
+  app.add_option("--frames", frames_opt,
+                 "Frames per keyframe interval (comma-separated); 'mid': each interval's midpoint solved cold from its "
+                 "first keyframe, the setting of the paper's Table 1")->capture_default_str();
   app.add_option("--projections", projections_opt, "Hessian projections (comma-separated)")->capture_default_str();
   app.add_option("--samples", samples, "|G| for every sequence (0: each sequence's own, 2,000 to 40,000)")->capture_default_str();
   app.add_option("--max-iterations", max_iterations, "Newton iteration cap per frame")->capture_default_str();
@@ -252,7 +261,16 @@ int main(int argc, char** argv) {
   std::vector<int> frame_counts;
   std::vector<HessianProjection> projections;
   try {
-    for (const std::string& f : split(frames_opt)) frame_counts.push_back(std::stoi(f));
+    for (const std::string& f : split(frames_opt)) {
+      if (f == "mid") {
+        frame_counts.push_back(kMid);
+        continue;
+      }
+      std::size_t used = 0;
+      const int F = std::stoi(f, &used);
+      if (used != f.size() || F < 1) throw std::invalid_argument("--frames: '" + f + "' is not a frame count >= 1 or 'mid'");
+      frame_counts.push_back(F);
+    }
     for (const std::string& p : split(projections_opt)) projections.push_back(projection_from(p));
   } catch (const std::exception& e) {
     std::fprintf(stderr, "bench_stress: %s\n", e.what());
@@ -316,7 +334,8 @@ int main(int argc, char** argv) {
               reverse_loops ? "; every shape's loops reversed (--reverse-loops)" : "");
   std::printf("Per run: F frames per keyframe interval, F x (keyframes - 1) + 1 frames in all, warm-started; the\n"
               "keyframes themselves are not counted. at cap: iterations >= cap or not converged. it: Newton\n"
-              "iterations per frame. ms/frame: the solve (Newton + certificate) per frame.\n");
+              "iterations per frame. ms/frame: the solve (Newton + certificate) per frame. F = mid: each\n"
+              "interval's midpoint solved cold from its first keyframe (the paper's Table 1), one frame per interval.\n");
   std::fflush(stdout);
   const auto t_start = Clock::now();
   auto in_time = [&] { return !(time_limit > 0 && s_since(t_start) > time_limit); };
@@ -501,7 +520,7 @@ int main(int argc, char** argv) {
   auto run_cost = [&](int r) {
     const Run& x = runs[static_cast<size_t>(r)];
     const Item& it = items[x.item];
-    return static_cast<double>(x.F) * static_cast<double>(it.a.times.size() - 1) * (2000.0 + it.samples);
+    return static_cast<double>(x.F == kMid ? 10 : x.F) * static_cast<double>(it.a.times.size() - 1) * (2000.0 + it.samples);
   };
   std::stable_sort(run_order.begin(), run_order.end(), [&](int x, int y) { return run_cost(x) > run_cost(y); });
   std::string core_name, core_description;
@@ -529,9 +548,16 @@ int main(int argc, char** argv) {
       }
       Interpolator interp(setup, it.a.times, it.a.maps, o, std::move(core.core));
       const int intervals = static_cast<int>(it.a.times.size()) - 1;
-      if (trace) trace_run(interp, setup, it.a.times, run.F * intervals + 1, it.q->id + " F=" + std::to_string(run.F) + " " + projection_label(run.p));
-      for (const FrameResult& f : interp.sequence(run.F * intervals + 1))
-        if (!f.keyframe) run.s.add(f, max_iterations);
+      if (run.F == kMid) {
+        for (int k = 0; k < intervals; ++k) {
+          const FrameResult f = interp.frame((it.a.times[static_cast<size_t>(k)] + it.a.times[static_cast<size_t>(k) + 1]) / 2);
+          if (!f.keyframe && !f.held) run.s.add(f, max_iterations);
+        }
+      } else {
+        if (trace) trace_run(interp, setup, it.a.times, run.F * intervals + 1, it.q->id + " F=" + std::to_string(run.F) + " " + projection_label(run.p));
+        for (const FrameResult& f : interp.sequence(run.F * intervals + 1))
+          if (!f.keyframe) run.s.add(f, max_iterations);
+      }
     } catch (const std::exception& e) {
       run.error = e.what();
       run.s.failed_runs = 1;
@@ -540,11 +566,11 @@ int main(int argc, char** argv) {
     const std::lock_guard<std::mutex> lock(mutex);
     const int k = ++runs_done;
     if (!run.error.empty())
-      std::fprintf(stderr, "[run %d/%zu] %s F=%d %s: failed: %s\n", k, runs.size(), it.q->id.c_str(), run.F, projection_label(run.p),
+      std::fprintf(stderr, "[run %d/%zu] %s F=%s %s: failed: %s\n", k, runs.size(), it.q->id.c_str(), frames_label(run.F).c_str(), projection_label(run.p),
                    run.error.c_str());
     else
-      std::fprintf(stderr, "[run %d/%zu] %s F=%d %-8s %4ld frames: mean %.2f it, max %d, at cap %ld, uncertified %ld  (%.1f s)\n", k,
-                   runs.size(), it.q->id.c_str(), run.F, projection_label(run.p), run.s.frames(), run.s.mean(), run.s.max(),
+      std::fprintf(stderr, "[run %d/%zu] %s F=%s %-8s %4ld frames: mean %.2f it, max %d, at cap %ld, uncertified %ld  (%.1f s)\n", k,
+                   runs.size(), it.q->id.c_str(), frames_label(run.F).c_str(), projection_label(run.p), run.s.frames(), run.s.mean(), run.s.max(),
                    run.s.at_cap, run.s.frames() - run.s.certified, run.seconds);
   });
   if (!core_description.empty()) std::printf("Newton core: %s\n", core_description.c_str());
@@ -616,7 +642,7 @@ int main(int argc, char** argv) {
         r["unreached_keyframes"] = it.a.unreached;
         r["max_target_error"] = it.a.max_target_error;
         r["keyframes_cached"] = it.cached;
-        r["frames_per_interval"] = run.F;
+        r["frames_per_interval"] = frames_json(run.F);
         r["projection"] = projection_label(run.p);
         if (!run.error.empty()) r["error"] = run.error;
         runs_json.push_back(r);
@@ -648,7 +674,7 @@ int main(int argc, char** argv) {
     json rows = json::array();
     for (const auto& [k, st] : mine) {
       json r = st.to_json();
-      r["frames_per_interval"] = k.first;
+      r["frames_per_interval"] = frames_json(k.first);
       r["projection"] = projection_label(k.second);
       rows.push_back(r);
     }
@@ -679,7 +705,7 @@ int main(int argc, char** argv) {
       std::string gs;
       for (int v : g.samples) gs += (gs.empty() ? "" : ",") + std::to_string(v);
       for (const auto& [k, s] : g.stats)
-        std::printf("| %d | %d | %s | %d | %s | %ld | %.2f | %.1f | %.2f |\n", h, g.n, gs.c_str(), k.first, projection_label(k.second),
+        std::printf("| %d | %d | %s | %s | %s | %ld | %.2f | %.1f | %.2f |\n", h, g.n, gs.c_str(), frames_label(k.first).c_str(), projection_label(k.second),
                     s.frames(), s.mean(), s.ms_per_frame(), s.iterations.empty() ? NAN : s.ms / std::max(1.0, s.mean() * static_cast<double>(s.frames())));
     }
   }
@@ -692,7 +718,7 @@ int main(int argc, char** argv) {
     for (int F : frame_counts) {
       const auto pp = m.find({F, HessianProjection::PartProj}), de = m.find({F, HessianProjection::Delete});
       if (pp != m.end() && de != m.end() && pp->second.frames() && de->second.frames() && pp->second.mean() > de->second.mean())
-        worse.push_back(shape + "@" + std::to_string(F));
+        worse.push_back(shape + "@" + frames_label(F));
     }
   auto mean_at = [&](int F) {
     const auto it = total.find({F, HessianProjection::PartProj});
@@ -728,7 +754,7 @@ int main(int argc, char** argv) {
     json tot = json::array();
     for (const auto& [k, s] : total) {
       json r = s.to_json();
-      r["frames_per_interval"] = k.first;
+      r["frames_per_interval"] = frames_json(k.first);
       r["projection"] = projection_label(k.second);
       tot.push_back(r);
     }

@@ -46,6 +46,11 @@ struct FakeStepper : NewtonStepper {
   Eigen::Vector2d projected_scale{1, 1};
   double exact_scale = 1;
   bool subset_exact_too = false;  // subset_softness applies to the exact system over H too
+  // The exact system's second eigenvalue is −exact_negative (> 0: indefinite, A diagonal):
+  // it factors only with a ridge above exact_negative (a shifted system).
+  double exact_negative = 0;
+  bool fullproj_right = false;   // FullProj systems are exact models (projected_scale ignored)
+  HessianProjection projection_now = HessianProjection::PartProj;
 
   double start(const Eigen::VectorXd& x0) override {
     x_ = x0;
@@ -55,6 +60,7 @@ struct FakeStepper : NewtonStepper {
     choices.push_back(c);
     exact_now = c.exact;
     all_now = c.all_samples;
+    projection_now = c.projection;
     return A.diagonal().cwiseAbs().maxCoeff();
   }
   NewtonSystem solve(double ridge) override {
@@ -62,10 +68,14 @@ struct FakeStepper : NewtonStepper {
     NewtonSystem s;
     s.diagonal_max = A.diagonal().cwiseAbs().maxCoeff();
     if ((exact_now && !exact_definite) || (ridge == 0 && fail_factorisations-- > 0)) return s;
+    if (exact_now && exact_negative > 0 && !(ridge > exact_negative)) return s;
     const Eigen::Vector2d g = A * (x_ - a);
     const double subset = all_now || (exact_now && !subset_exact_too) ? 1.0 : 1.0 / subset_softness;
     const double model = (exact_now ? exact_scale : 1.0) * subset;
-    const Eigen::Matrix2d M = exact_now ? Eigen::Matrix2d(A) : Eigen::Matrix2d(projected_scale.asDiagonal() * A);
+    Eigen::Matrix2d M = exact_now || (fullproj_right && projection_now == HessianProjection::FullProj)
+                            ? Eigen::Matrix2d(A)
+                            : Eigen::Matrix2d(projected_scale.asDiagonal() * A);
+    if (exact_now && exact_negative > 0) M(1, 1) = -exact_negative;
     d_ = -(model * M + ridge * Eigen::Matrix2d::Identity()).inverse() * g;
     s.factored = true;
     s.slope = g.dot(d_);
@@ -548,3 +558,116 @@ TEST_CASE("newton_run: a full step beating its model's decrease is expanded (2, 
   for (const NewtonIteration& k : refused.log) CHECK(k.step <= 1);
   CHECK(refused.iterations == without.iterations);
 }
+
+TEST_CASE("newton_run: a step Armijo cut is never convergence, however small its decrease", "[newton][loop]") {
+  // Every first offer overshoots; the step Armijo takes lowers E by 4e-8 < 5e-8·E, with a
+  // decrement of 4e-4 left (issue #20: fork/hinge_steps with Delete, frames called
+  // converged after one step cut to 1/2048). The old test took that as convergence.
+  struct Overshoot final : FakeStepper {
+    double E = 2;
+    double start(const Eigen::VectorXd& x0) override {
+      x_ = x0;
+      return E;
+    }
+    NewtonSystem solve(double) override {
+      NewtonSystem s;
+      s.factored = true;
+      s.slope = -4e-4;
+      s.gradient_norm = 1;
+      s.diagonal_max = 1;
+      s.max_safe_step = std::numeric_limits<double>::infinity();
+      d_ = Eigen::Vector2d(1, 0);
+      return s;
+    }
+    void trial_energies(std::span<const double> steps, std::span<double> out) override {
+      for (size_t j = 0; j < steps.size(); ++j) out[j] = steps[j] > 1.0 / 2048 ? E + 1 : E - 4e-8 * steps[j] * 2048;
+    }
+    void accept(double step) override {
+      E -= 4e-8 * step * 2048;
+      x_ += step * d_;
+    }
+  };
+  Overshoot f;
+  NewtonOptions o;
+  o.max_iterations = 40;
+  const NewtonResult r = newton_run(f, true, false, Eigen::Vector2d(0, 0), o);
+  REQUIRE(!r.log.empty());
+  CHECK(r.log.front().backtracks == 11);
+  CHECK(r.iterations > 1);
+  CHECK_FALSE(r.converged);  // a crawl of cut steps: stagnation
+  CHECK(r.stagnated);
+}
+
+TEST_CASE("newton_run: a projection Armijo keeps cutting over all samples gives way to FullProj", "[newton][loop]") {
+  // Delete far too soft along one mode and the exact system indefinite (issue #20:
+  // fork/hinge_steps, every Delete step cut to 1/4096-1/8192): after the escalation to all
+  // samples the next cut escalates the projection too.
+  int iterations[2] = {0, 0};
+  for (const bool rule : {true, false}) {
+    FakeStepper f;
+    f.projected_scale << 1, 1e-4;
+    f.exact_definite = false;
+    f.fullproj_right = true;
+    f.energy = [&f](const Eigen::Vector2d& x) { return 2 + 0.5 * (x - f.a).dot(f.A * (x - f.a)) + 0.01 * std::pow((x - f.a).norm(), 3); };
+    NewtonOptions o;
+    o.projection = HessianProjection::Delete;
+    o.shift_after = 0;
+    o.max_iterations = 60;
+    if (!rule) o.escalate_projection = HessianProjection::Delete;
+    const NewtonResult r = newton_run(f, true, true, Eigen::Vector2d(0, 0), o);
+    REQUIRE(r.log.size() >= 2);
+    CHECK(r.log[0].projection == HessianProjection::Delete);
+    CHECK(r.log[1].projection == HessianProjection::Delete);  // over all samples now, still Delete
+    CHECK(r.log[1].all_samples);
+    if (rule) {
+      CHECK(r.converged);
+      REQUIRE(r.log.size() >= 3);
+      for (size_t k = 2; k < r.log.size(); ++k) CHECK(r.log[k].projection == HessianProjection::FullProj);
+      CHECK(r.iterations <= 6);
+    } else {
+      CHECK((!r.converged || r.iterations >= 30));
+    }
+    iterations[rule ? 0 : 1] = r.iterations;
+  }
+  CHECK(3 * iterations[0] <= iterations[1]);
+}
+
+TEST_CASE("newton_run: an exact system indefinite for shift_after iterations is shifted past its lowest eigenvalue",
+          "[newton][loop]") {
+  // A projection 20x too stiff, step expansion off, and an exact system with an eigenvalue
+  // of −3e-4 (issue #20: grid_3/hinge_posed with PartProj, 100 full projected steps near a
+  // saddle): from iteration 6 on the exact system factors with μ = 1e-3 (1e-9, 1e-8, …
+  // fail) and is solved with 2μ.
+  int iterations[2] = {0, 0};
+  for (const int after : {6, 0}) {
+    FakeStepper f;
+    f.A << 1, 0, 0, 1e-3;
+    f.projected_scale << 20, 20;
+    f.exact_negative = 3e-4;
+    NewtonOptions o;
+    o.expand_ratio = 0;
+    o.shift_after = after;
+    const NewtonResult r = newton_run(f, true, true, Eigen::Vector2d(0, 0), o);
+    INFO("shift_after " << after << ": " << r.iterations << " iterations, " << r.message);
+    REQUIRE(r.log.size() >= 2);
+    if (after) {
+      CHECK(r.converged);
+      REQUIRE(r.log.size() > 6);
+      for (size_t k = 0; k < r.log.size(); ++k) CHECK(r.log[k].shifted == (k >= 6));
+      CHECK(r.message.find("decrement") == std::string::npos);  // a shifted decrement ends nothing
+      // The ridges of iteration 6: the exact ridge, then 1e-9 … 1e-3 (the first above 3e-4), then 2e-3.
+      std::vector<double> tail;
+      for (double x : f.ridges)
+        if (x >= 1e-9) tail.push_back(x);
+      REQUIRE(tail.size() >= 8);
+      CHECK(tail[0] == Approx(1e-9));
+      CHECK(tail[6] == Approx(1e-3));
+      CHECK(tail[7] == Approx(2e-3));
+    } else {
+      for (const NewtonIteration& k : r.log) CHECK_FALSE(k.shifted);
+    }
+    iterations[after ? 0 : 1] = r.iterations;
+  }
+  CHECK(2 * iterations[0] <= iterations[1]);
+}
+

@@ -356,10 +356,12 @@ NewtonResult newton_run(NewtonStepper& st, bool certify, bool rotation_invariant
   double dE_prev = -1;  // the previous step's decrease (none yet)
   int crawling = 0;     // accepted steps in a row at a linear rate ≥ stagnation_rate
   bool all_samples = false;  // the subset H's model failed: Hessians over all of G from now on
+  HessianProjection projection = opt.projection;  // NewtonOptions::escalate_projection once it failed too
 
   for (int it = 0; it < opt.max_iterations; ++it) {
     const auto t_it = Clock::now();
     NewtonIteration log;
+    log.projection = projection;
     const double scale = std::max(1.0, std::abs(E));
     // 1. The system: the exact Hessian where it is positive definite, else the projection
     //    (with the rotation freed), with a ridge when round-off makes it singular.
@@ -383,12 +385,23 @@ NewtonResult newton_run(NewtonStepper& st, bool certify, bool rotation_invariant
     const bool prev_full = prev && prev->step >= 1.0;
     const bool prev_cut = prev && opt.exact_after_cut && !prev->exact_hessian && prev->backtracks > prev->certificate_rejections;
     if (opt.exact_hessian_when_definite && (prev_full || prev_cut)) {
-      factor(opt.exact_ridge * build({true, opt.projection, rotation_invariant && opt.exact_modulo_rotation, all_samples}));
+      const double diagonal_max = build({true, projection, rotation_invariant && opt.exact_modulo_rotation, all_samples});
+      factor(opt.exact_ridge * diagonal_max);
       log.exact_hessian = sys.factored;
+      // Indefinite, and the projections have not converged in shift_after iterations: the
+      // exact system shifted past its lowest eigenvalue (NewtonOptions::shift_after).
+      if (!sys.factored && opt.shift_after > 0 && it >= opt.shift_after) {
+        double shift = 1e-9 * std::max(diagonal_max, 1e-300);
+        for (int attempt = 0; attempt < 9; ++attempt, shift *= 10) {
+          factor(shift);
+          if (sys.factored) break;
+        }
+        if (sys.factored) factor(2 * shift);
+        log.exact_hessian = log.shifted = sys.factored;
+      }
     }
     if (!sys.factored) {
-      build({false, opt.projection, rotation_invariant && opt.free_rotation && opt.projection != HessianProjection::Delete,
-             all_samples});
+      build({false, projection, rotation_invariant && opt.free_rotation && projection != HessianProjection::Delete, all_samples});
       double ridge = 0;
       for (int attempt = 0; attempt < opt.max_ridge_attempts; ++attempt) {
         factor(ridge);
@@ -412,7 +425,7 @@ NewtonResult newton_run(NewtonStepper& st, bool certify, bool rotation_invariant
     // With the exact Hessian the Newton decrement is the decrease a full step would
     // bring (−gᵀd / 2): below the tolerance there is nothing left to take. (A projected
     // Hessian overestimates curvature, so its decrement can understate what is left.)
-    if (log.exact_hessian && -slope / 2 < opt.tolerance * std::max(std::abs(E), 1e-300)) {
+    if (log.exact_hessian && !log.shifted && -slope / 2 < opt.tolerance * std::max(std::abs(E), 1e-300)) {
       res.converged = true;
       res.message = "converged (Newton decrement below tolerance)";
       break;
@@ -501,8 +514,11 @@ NewtonResult newton_run(NewtonStepper& st, bool certify, bool rotation_invariant
     res.iterations++;
     // The model overshot: the subset's Hessian is wrong (or the step is near a fold,
     // where all of G is the better model too).
-    if (!all_samples && opt.escalate_after_cuts > 0 && log.backtracks - log.certificate_rejections >= opt.escalate_after_cuts)
+    // Over all of G and still cut: the projection is the wrong model (escalate_projection).
+    if (opt.escalate_after_cuts > 0 && log.backtracks - log.certificate_rejections >= opt.escalate_after_cuts) {
+      if (all_samples && !log.exact_hessian) projection = opt.escalate_projection;
       all_samples = true;
+    }
 
     // 3. Stopping: a small decrease that is not a slow linear crawl (the decrease still
     //    to come at rate ρ is ΔE ρ/(1 − ρ)); a long crawl is stagnation.
@@ -510,7 +526,9 @@ NewtonResult newton_run(NewtonStepper& st, bool certify, bool rotation_invariant
     dE_prev = dE;
     const double to_come = rate < 1 ? dE * rate / (1 - rate) : std::numeric_limits<double>::infinity();
     const double tol = opt.tolerance * std::max(std::abs(E), 1e-300);
-    if (dE + to_come < tol) {  // (dE > 0: the step passed Armijo with slope < 0)
+    // Only a step the line search took as first offered counts: a cut one's small
+    // decrease says nothing about what is left (NewtonOptions::tolerance).
+    if (log.backtracks == 0 && dE + to_come < tol) {  // (dE > 0: the step passed Armijo with slope < 0)
       res.converged = true;
       res.message = "converged (energy decrease below tolerance)";
       break;

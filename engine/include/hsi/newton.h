@@ -157,11 +157,15 @@ struct QuadraticTerm {
 // authoring energy adds a positional term).
 struct NewtonOptions {
   int max_iterations = 100;
-  // Converged when a step lowers the energy by less than tolerance·|E| and the
-  // decrease is not a slow linear crawl: with ρ = ΔE_k / ΔE_{k−1} (0 for the first
-  // step), the decrease still to come, ΔE ρ/(1 − ρ), counts too. 5e-8 is the paper's
-  // absolute 1e-7 at E = 2, the isometric energy's minimum. Also converged: an exact
-  // system whose Newton decrement (the decrease of a full step, −gᵀd/2) is below it.
+  // Converged when a step the line search took as first offered (min(1, safe_fraction ·
+  // s_max), or longer: not cut by Armijo or the certificate) lowers the energy by less than tolerance·|E| and the decrease is not a slow
+  // linear crawl: with ρ = ΔE_k / ΔE_{k−1} (0 for the first step), the decrease still to
+  // come, ΔE ρ/(1 − ρ), counts too. 5e-8 is the paper's absolute 1e-7 at E = 2, the
+  // isometric energy's minimum. Also converged: an exact system whose Newton decrement
+  // (the decrease of a full step, −gᵀd/2) is below it. A cut step's small decrease
+  // says nothing about what is left (issue #20: a first Delete step cut to 1/2048
+  // lowered the energy by 4e-8 with a decrement of 3e-4 left, and the frame was called
+  // converged).
   double tolerance = 5e-8;
   HessianProjection projection = HessianProjection::PartProj;
   // Once a full step was taken (or, with exact_after_cut, a projected step that Armijo
@@ -234,6 +238,33 @@ struct NewtonOptions {
   // certificate's rejections not counted), the rest of the solve builds its Hessians
   // over all of G (HessianChoice::all_samples). 0: never.
   int escalate_after_cuts = 2;
+  // Once the Hessians are built over all of G (above), a projected step that Armijo again
+  // cut escalate_after_cuts times switches the rest of the solve to this projection, the
+  // one nearest the exact Hessian (each sample's own Hessian with its negative eigenvalues
+  // clamped). Delete (H2 alone) drops curvature along directions where the exact Hessian
+  // is large but indefinite elsewhere, so the exact system cannot stand in: every Delete
+  // step overshot ~10^4 times, Armijo cut it to 1/4096-1/8192 and the energy crawled to
+  // stagnation (bench_stress --trace, issue #20: fork/hinge_steps, 10 of 198 frames
+  // stopped after 17-33 iterations; FullProj 2 at most). Set it to the solve's own
+  // projection to never switch.
+  HessianProjection escalate_projection = HessianProjection::FullProj;
+  // From this iteration of a solve on (0: never), an exact system that is indefinite is
+  // shifted instead of replaced by the projection: factored with ridges μ = 1e-9, 1e-8,
+  // …, 1e-1 · max|diag H| until it is positive definite, then solved with 2μ, so its
+  // lowest eigenvalue λ gets a curvature 2μ + λ ≥ |λ| and every other mode keeps its own
+  // (a Levenberg–Marquardt step on the true curvature). Near a saddle of the energy a
+  // projection gives the negative-curvature direction a positive curvature, each step
+  // moves the map only a little along it and Newton crawls (bench_stress --trace, issue
+  // #20: grid_3/hinge_posed with PartProj at t = 0.70, 100 full steps lowering the energy
+  // by 3-8e-6 each, the exact system indefinite in every one). Its decrement is not the
+  // Newton decrement: a shifted system never ends a solve as converged.
+  // Off by default: measured on that frame (CPU core, 100 frames per interval), it did not
+  // end it (PartProj still at the cap with shift_after = 6) and it put FullProj's frame
+  // there too (79 iterations without it): the decade-coarse shift, doubled, damps every
+  // mode by up to 20× the negative eigenvalue, and the shifted steps, taken in full,
+  // crawl along the valley that the projection's expanded steps (step expansion above)
+  // cross faster. Kept as an option (newton_run's tests drive it).
+  int shift_after = 0;
   bool certify = true;            // accept a step only if the certificate passes
   // The certificate of x0's map when the caller has it already (a warm start from the
   // previous frame's solution): not computed again. Must be of space.expand(x0) exactly.
@@ -244,7 +275,11 @@ struct NewtonIteration {
   double energy = 0, gradient_norm = 0, step = 0, max_safe_step = 0;
   double decrement2 = 0;          // −gᵀd: the squared Newton decrement (predicted decrease of a full step ×2)
   bool exact_hessian = false;     // the system used the unprojected Hessian
+  bool shifted = false;           // … shifted to be definite (NewtonOptions::shift_after)
   bool all_samples = false;       // the Hessian was built over all of G (escalated), not the subset H
+  // The projection a projected system used (NewtonOptions::escalate_projection once the
+  // solve's own failed).
+  HessianProjection projection = HessianProjection::PartProj;
   int backtracks = 0, certificate_rejections = 0;
   double ms = 0;
 };
