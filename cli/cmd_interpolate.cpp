@@ -29,7 +29,7 @@ void register_interpolate(CLI::App& app) {
     std::string scene, out = "out";
     int frames = 500, samples = 0, png_count = 16, max_iterations = 100, per_interval = 0;
     double ratio = 0, tolerance = 5e-8;
-    std::string projection = "partproj";
+    std::string projection = "fullproj";
     std::string backend = "auto";
     std::string timing;  // empty: the scene's keyframe timings
     bool projected_only = false, gauged_rotation = false;
@@ -51,7 +51,7 @@ void register_interpolate(CLI::App& app) {
   cmd->add_option("--ratio", o->ratio, "Hessian sample ratio r (default: the scene's, 0.2)")->check(CLI::Range(1e-6, 1.0));
   cmd->add_option("--tolerance", o->tolerance, "Stop a frame when its energy decreases by less than this fraction of itself (and not in a slow linear crawl)")->capture_default_str();
   cmd->add_option("--max-iterations", o->max_iterations, "Newton iterations per frame at most")->capture_default_str();
-  cmd->add_option("--projection", o->projection, "Hessian PSD projection: partproj, fullproj or delete")->capture_default_str();
+  cmd->add_option("--projection", o->projection, "Hessian PSD projection: fullproj, partproj (the paper's) or delete")->capture_default_str();
   cmd->add_option("--timing", o->timing,
                   "How every keyframe interval is travelled: linear (the paper's), smooth (C1 through the keyframes), ease "
                   "(in and out) or hold (default: each keyframe's \"timing\" in the scene, else linear)")

@@ -410,7 +410,7 @@ void hsi_interpolation_options_default(hsi_interpolation_options* o) {
   const InterpolationOptions d;
   o->tolerance = d.tolerance;
   o->max_iterations = d.max_iterations;
-  o->projection = HSI_PROJECTION_PARTPROJ;
+  o->projection = HSI_PROJECTION_FULLPROJ;
   o->backend = HSI_BACKEND_CPU;
   o->timing = HSI_TIMING_SCENE;
 }

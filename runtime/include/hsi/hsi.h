@@ -185,7 +185,7 @@ typedef enum hsi_timing {
 typedef struct hsi_interpolation_options {
   double tolerance;        /* stop a frame when E_k - E_k+1 < tolerance * E_k (relative); default 5e-8 */
   int max_iterations;      /* Newton iterations per frame; default 100 */
-  hsi_projection projection; /* default HSI_PROJECTION_PARTPROJ */
+  hsi_projection projection; /* default HSI_PROJECTION_FULLPROJ (fewest iterations over the stress corpus); PARTPROJ is the paper's */
   hsi_backend backend;     /* default HSI_BACKEND_CPU (0.1's only core) */
   hsi_timing timing;       /* default HSI_TIMING_SCENE */
 } hsi_interpolation_options;
