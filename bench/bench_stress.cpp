@@ -267,8 +267,13 @@ int main(int argc, char** argv) {
         continue;
       }
       std::size_t used = 0;
-      const int F = std::stoi(f, &used);
-      if (used != f.size() || F < 1) throw std::invalid_argument("--frames: '" + f + "' is not a frame count >= 1 or 'mid'");
+      int F = 0;
+      try {
+        F = std::stoi(f, &used);
+      } catch (const std::exception&) {
+        used = 0;
+      }
+      if (used == 0 || used != f.size() || F < 1) throw std::invalid_argument("--frames: '" + f + "' is not a frame count >= 1 or 'mid'");
       frame_counts.push_back(F);
     }
     for (const std::string& p : split(projections_opt)) projections.push_back(projection_from(p));
