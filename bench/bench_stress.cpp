@@ -138,13 +138,7 @@ void print_row(const RunKey& k, const Stats& s) {
 // newton_solve warm-started from the previous frame), each Newton iteration printed.
 void trace_run(Interpolator& interp, const ShapeSetup& setup, const std::vector<double>& key_times, int frames,
                const std::string& what) {
-  const InterpolationOptions& io = interp.options();
-  NewtonOptions no;
-  no.tolerance = io.tolerance;
-  no.max_iterations = io.max_iterations;
-  no.projection = io.projection;
-  no.exact_hessian_when_definite = io.exact_hessian_when_definite;
-  no.free_rotation = io.free_rotation;
+  const NewtonOptions no = frame_newton_options(interp.options());
   const std::vector<double> times = sequence_times({interp.t_begin(), interp.t_end()}, frames);
   Eigen::VectorXd x;
   std::string out = "trace " + what + "\n";
@@ -540,6 +534,7 @@ int main(int argc, char** argv) {
       const ShapeSetup& setup = setup_of(it, true);
       InterpolationOptions o;
       o.exact_hessian_when_definite = o.free_rotation = !paper_newton;
+      if (paper_newton) o.escalate_after_iterations = 0;  // the paper's projection throughout
       o.projection = run.p;
       o.max_iterations = max_iterations;
       runtime::NewtonCoreChoice core = runtime::make_newton_core(setup, runtime::parse_backend(backend), cuda);

@@ -57,7 +57,7 @@ void register_interpolate(CLI::App& app) {
                   "(in and out) or hold (default: each keyframe's \"timing\" in the scene, else linear)")
       ->check(CLI::IsMember({"linear", "smooth", "ease", "hold"}));
   cmd->add_flag("--projected-only", o->projected_only,
-                "Always use the projected Hessian (the paper's method), not the exact one where it is positive definite");
+                "Always use the projected Hessian (the paper's method), not the exact one where it is positive definite, and never switch to FullProj in a long solve");
   cmd->add_flag("--gauged-rotation", o->gauged_rotation,
                 "Keep the global rotation pinned by its gauge in projected systems instead of solving for it (the paper's method)");
   cmd->add_option("--backend", o->backend, runtime::kBackendHelp)
@@ -97,6 +97,7 @@ void register_interpolate(CLI::App& app) {
     io.max_iterations = o->max_iterations;
     io.projection = parse_projection(o->projection);
     io.exact_hessian_when_definite = !o->projected_only;
+    if (o->projected_only) io.escalate_after_iterations = 0;  // the chosen projection throughout
     io.free_rotation = !o->gauged_rotation;
     io.timing = o->timing.empty() ? scene_timings(scene) : std::vector<KeyTiming>{*parse_key_timing(o->timing)};
     std::printf("Newton core: %s\n", runtime::describe(core.choice).c_str());

@@ -238,12 +238,7 @@ TEST_CASE("frames are those of the plain frame loop: set-up certificates and the
       continue;
     }
     core->set_targets(I.blended_metric(f.t));
-    NewtonOptions no;
-    no.tolerance = io.tolerance;
-    no.max_iterations = io.max_iterations;
-    no.projection = io.projection;
-    no.exact_hessian_when_definite = io.exact_hessian_when_definite;
-    no.free_rotation = io.free_rotation;
+    NewtonOptions no = frame_newton_options(io);
     no.start_certificate = previous;
     const NewtonResult n = newton_solve(*core, setup.metric_space, &setup.certifier, nullptr, frames[i - 1].x, no);
     CHECK(f.x == n.x);

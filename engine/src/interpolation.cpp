@@ -331,12 +331,7 @@ FrameResult Interpolator::frame_before_crossings(double t, const Eigen::VectorXd
     }
   }
   r.parts.targets = ms_since(tp);
-  NewtonOptions no;
-  no.tolerance = options_.tolerance;
-  no.max_iterations = options_.max_iterations;
-  no.projection = options_.projection;
-  no.exact_hessian_when_definite = options_.exact_hessian_when_definite;
-  no.free_rotation = options_.free_rotation;
+  NewtonOptions no = frame_newton_options(options_);
   const Eigen::VectorXd& x0 = warm_start.size() ? warm_start : key_x_[static_cast<size_t>(k)];
   const CertificateResult* start = warm_start.size() ? warm_certificate : nullptr;
   for (size_t j = 0; !start && j < key_x_.size(); ++j)  // a keyframe's own coefficients: its start certificate
@@ -437,6 +432,17 @@ std::vector<FrameResult> Interpolator::sequence(const std::vector<double>& times
   }
   if (pending >= 0) complete(pending);
   return out;
+}
+
+NewtonOptions frame_newton_options(const InterpolationOptions& o) {
+  NewtonOptions no;
+  no.tolerance = o.tolerance;
+  no.max_iterations = o.max_iterations;
+  no.projection = o.projection;
+  no.exact_hessian_when_definite = o.exact_hessian_when_definite;
+  no.free_rotation = o.free_rotation;
+  no.escalate_after_iterations = o.escalate_after_iterations;
+  return no;
 }
 
 std::vector<double> frame_times(const std::vector<double>& key_times, int per_interval) {

@@ -519,6 +519,8 @@ NewtonResult newton_run(NewtonStepper& st, bool certify, bool rotation_invariant
       if (all_samples && !log.exact_hessian) projection = opt.escalate_projection;
       all_samples = true;
     }
+    // Still running: the projection may be too stiff (NewtonOptions::escalate_after_iterations).
+    if (opt.escalate_after_iterations > 0 && res.iterations >= opt.escalate_after_iterations) projection = opt.escalate_projection;
 
     // 3. Stopping: a small decrease that is not a slow linear crawl (the decrease still
     //    to come at rate ρ is ΔE ρ/(1 − ρ)); a long crawl is stagnation.

@@ -32,6 +32,9 @@ struct InterpolationOptions {
   // paper's plain projected Newton (which crawls on some inputs, issue #20).
   bool exact_hessian_when_definite = true;
   bool free_rotation = true;
+  // NewtonOptions::escalate_after_iterations: a frame still solving after this many
+  // iterations switches to FullProj (0: never).
+  int escalate_after_iterations = 20;
   // How each keyframe interval is travelled (timing.h): one per keyframe (the interval
   // leaving it; the last is unused), or one for all; empty: Linear everywhere (the
   // paper's linear blend of the metrics and the pose).
@@ -127,6 +130,11 @@ Distortion certified_distortion(const CertificateResult& c);
 // keyframes, so that every keyframe time is a frame time exactly (and its frame is the
 // keyframe itself): (keys − 1)·per_interval + 1 times. Throws InputError for
 // per_interval < 1 or fewer than two keyframe times.
+// The Newton options a frame is solved with (Interpolator; the start certificate aside):
+// one mapping, so that a caller replaying a frame's solve (a trace, a test) cannot miss
+// an option.
+NewtonOptions frame_newton_options(const InterpolationOptions& o);
+
 std::vector<double> frame_times(const std::vector<double>& key_times, int per_interval);
 // The frame times a front-end asks for, one rule for hsi interpolate, bake, export and
 // interpolate_scene: per_interval > 0: frame_times(key_times, per_interval); else

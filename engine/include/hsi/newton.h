@@ -248,6 +248,15 @@ struct NewtonOptions {
   // stopped after 17-33 iterations; FullProj 2 at most). Set it to the solve's own
   // projection to never switch.
   HessianProjection escalate_projection = HessianProjection::FullProj;
+  // A solve still running after this many iterations switches to escalate_projection too
+  // (0: never): a projection stiffer than the energy (PartProj: H2 plus H1's positive
+  // part, where H1's negative part softens the energy) takes full steps that fall short,
+  // never cut, so the rule above never fires (issue #20: grid_3/hinge_posed with PartProj
+  // at t = 0.70, a basin change, at the cap where FullProj ends in 79 iterations; with
+  // the switch after 20: 77 iterations, no frame of the sequence at the cap). Off here
+  // (keyframe authoring, whose long solves were not measured with it); interpolation
+  // turns it on (InterpolationOptions::escalate_after_iterations).
+  int escalate_after_iterations = 0;
   // From this iteration of a solve on (0: never), an exact system that is indefinite is
   // shifted instead of replaced by the projection: factored with ridges μ = 1e-9, 1e-8,
   // …, 1e-1 · max|diag H| until it is positive definite, then solved with 2μ, so its
