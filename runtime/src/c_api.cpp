@@ -410,7 +410,9 @@ void hsi_interpolation_options_default(hsi_interpolation_options* o) {
   const InterpolationOptions d;
   o->tolerance = d.tolerance;
   o->max_iterations = d.max_iterations;
-  o->projection = HSI_PROJECTION_FULLPROJ;
+  o->projection = d.projection == HessianProjection::FullProj ? HSI_PROJECTION_FULLPROJ
+                  : d.projection == HessianProjection::Delete ? HSI_PROJECTION_DELETE
+                                                              : HSI_PROJECTION_PARTPROJ;  // the engine's default
   o->backend = HSI_BACKEND_CPU;
   o->timing = HSI_TIMING_SCENE;
 }

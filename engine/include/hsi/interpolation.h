@@ -126,15 +126,15 @@ struct FrameResult {
 // NaN in every field when not certified.
 Distortion certified_distortion(const CertificateResult& c);
 
-// Frame times with `per_interval` equal steps between each pair of neighbouring
-// keyframes, so that every keyframe time is a frame time exactly (and its frame is the
-// keyframe itself): (keys − 1)·per_interval + 1 times. Throws InputError for
-// per_interval < 1 or fewer than two keyframe times.
 // The Newton options a frame is solved with (Interpolator; the start certificate aside):
 // one mapping, so that a caller replaying a frame's solve (a trace, a test) cannot miss
 // an option.
 NewtonOptions frame_newton_options(const InterpolationOptions& o);
 
+// Frame times with `per_interval` equal steps between each pair of neighbouring
+// keyframes, so that every keyframe time is a frame time exactly (and its frame is the
+// keyframe itself): (keys − 1)·per_interval + 1 times. Throws InputError for
+// per_interval < 1 or fewer than two keyframe times.
 std::vector<double> frame_times(const std::vector<double>& key_times, int per_interval);
 // The frame times a front-end asks for, one rule for hsi interpolate, bake, export and
 // interpolate_scene: per_interval > 0: frame_times(key_times, per_interval); else

@@ -158,9 +158,10 @@ struct QuadraticTerm {
 struct NewtonOptions {
   int max_iterations = 100;
   // Converged when a step the line search took as first offered (min(1, safe_fraction ·
-  // s_max), or longer: not cut by Armijo or the certificate) lowers the energy by less than tolerance·|E| and the decrease is not a slow
-  // linear crawl: with ρ = ΔE_k / ΔE_{k−1} (0 for the first step), the decrease still to
-  // come, ΔE ρ/(1 − ρ), counts too. 5e-8 is the paper's absolute 1e-7 at E = 2, the
+  // s_max), or longer: not cut by Armijo or the certificate) lowers the energy by less
+  // than tolerance·|E| and the decrease is not a slow linear crawl: with
+  // ρ = ΔE_k / ΔE_{k−1} (0 for the first step), the decrease still to come, ΔE ρ/(1 − ρ),
+  // counts too. 5e-8 is the paper's absolute 1e-7 at E = 2, the
   // isometric energy's minimum. Also converged: an exact system whose Newton decrement
   // (the decrease of a full step, −gᵀd/2) is below it. A cut step's small decrease
   // says nothing about what is left (issue #20: a first Delete step cut to 1/2048
