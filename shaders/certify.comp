@@ -22,14 +22,13 @@
 //
 // Double precision only (shaderFloat64): a float version could not keep the bounds
 // sound at the margins the certificate works with. The piece test is the
-// reference's, with explicit rounding allowances added on the conservative side
-// (the CPU ignores rounding): evaluated values carry an error bound from a running
-// sum of term magnitudes, distances are lowered and Lipschitz constants raised by
-// their rounding, and every bound formula gets an absolute allowance for its own few
-// operations. So a piece passes here only if it passes the reference's exact-math
-// test with room to spare for the difference between the two evaluations; the
-// verdicts differ only where the reference's margin is within ~1e-11 of zero
-// relative to |f_z|. Assumes IEEE double +, -, *, /, sqrt (lavapipe, NVIDIA, AMD)
+// reference's, rounding allowances included: evaluated values carry an error bound
+// from a running sum of term magnitudes, distances are lowered and Lipschitz
+// constants raised by their rounding, and every bound formula gets an absolute
+// allowance for its own few operations. The two evaluate f_z differently (the
+// reference per cage vertex, this per cage edge) and so carry different error
+// bounds; the verdicts differ only where the reference's margin is within ~1e-11 of
+// zero relative to |f_z|. Assumes IEEE double +, -, *, /, sqrt (lavapipe, NVIDIA, AMD)
 // and hsi_ln / hsi_atan2 good to a few ulps (hsi_complex.glsl).
 #version 460
 #extension GL_GOOGLE_include_directive : require

@@ -74,6 +74,34 @@ TEST_CASE("identity and affine maps certify, with bounds that hold", "[certifica
   }
 }
 
+TEST_CASE("a margin at the level of round-off is not certified; a small clear one is", "[certificate]") {
+  // f = z + b conj(z) with |b| = 1 − δ: locally injective for every δ > 0 in exact
+  // arithmetic, σ2 = δ everywhere. A δ below what the double-precision evaluation of
+  // f_z and f_zbar can resolve (sums over every cage column) proves nothing: the
+  // certificate must not pass it, however the round-off falls. (Without its rounding
+  // allowances it certified 8 of these 9 maps.)
+  for (const Shape& s : {test::annulus(), test::bar_with_holes(), test::disc()}) {
+    const Cage cage = build_cage(s);
+    const Certifier cert(s, cage, sample_boundary(s, 1000));
+    for (const double delta : {1e-13, 1e-14, 1e-15}) {
+      INFO("delta " << delta);
+      const CertificateResult r = cert.certify(affine_map(cage, 1.0, std::polar(1 - delta, 0.7), 0.0));
+      CHECK_FALSE(r.certified);
+      CHECK_THAT(r.reason, Contains("could not be proved"));
+    }
+    for (const double delta : {1e-3, 1e-6}) {
+      INFO("delta " << delta);
+      const CertificateResult r = cert.certify(affine_map(cage, 1.0, std::polar(1 - delta, 0.7), 0.0));
+      REQUIRE(r.certified);
+      CHECK(r.sigma2_min > 0);
+      CHECK(r.sigma2_min <= delta);  // a lower bound of the true σ2 = δ
+      CHECK(r.sigma2_min > 0.5 * delta);
+      CHECK(r.k_max >= 1 - delta);
+      CHECK(r.k_max < 1);
+    }
+  }
+}
+
 TEST_CASE("an orientation-reversing map fails and says where", "[certificate]") {
   const Shape s = test::annulus();
   const Cage cage = build_cage(s);

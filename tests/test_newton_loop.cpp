@@ -217,7 +217,15 @@ TEST_CASE("newton_run: a step the certificate rejects is halved; the start must 
   h.certifies = [](double s) { return s == 0; };
   const NewtonResult stuck = newton_run(h, true, true, Eigen::Vector2d(0, 0), {});
   CHECK_FALSE(stuck.converged);
-  CHECK(stuck.message == "line search found no certified decrease");
+  // Armijo passed and the certificate refused: the message says so and where.
+  CHECK_THAT(stuck.message, Catch::Matchers::StartsWith("line search found no certified decrease: the certificate refused") &&
+                                Catch::Matchers::Contains("more samples") &&
+                                Catch::Matchers::EndsWith("last refusal: scripted failure"));
+  FakeStepper flat;  // certified everywhere, but every step raises the energy (Armijo refuses)
+  flat.energy = [](const Eigen::Vector2d& x) { return 2.0 + x.norm(); };
+  const NewtonResult armijo = newton_run(flat, true, true, Eigen::Vector2d(0, 0), {});
+  CHECK_FALSE(armijo.converged);
+  CHECK(armijo.message == "line search found no certified decrease");
   CHECK(stuck.x.isApprox(Eigen::Vector2d(0, 0)));
 }
 

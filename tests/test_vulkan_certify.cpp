@@ -108,12 +108,15 @@ void check_agree(const CertificateResult& cpu, const CertificateResult& gpu, Agr
                  << gpu.sigma1_max << ", sigma2 " << cpu.sigma2_min << " / " << gpu.sigma2_min << ", k " << cpu.k_max
                  << " / " << gpu.k_max);
   CHECK(worst <= kBoundTol);
-  if (cpu.certified && gpu.certified && gpu.subdivisions == cpu.subdivisions) {
-    // The same pieces: the GPU's rounding allowances make its bounds the more conservative.
-    CHECK(gpu.sigma1_max >= cpu.sigma1_max);
-    CHECK(gpu.sigma2_min <= cpu.sigma2_min);
-    CHECK(gpu.min_margin <= cpu.min_margin);
-    CHECK(gpu.k_max >= cpu.k_max);
+  // Both carry rounding allowances (of different evaluations: the CPU's sums per cage
+  // vertex, the GPU's per cage edge), so neither is the more conservative by
+  // construction; each certified bound contains what the map does at the breakpoints.
+  for (const CertificateResult* r : {&cpu, &gpu}) {
+    if (!r->certified) continue;
+    CHECK(r->sigma1_max >= r->observed_sigma1_max);
+    CHECK(r->sigma2_min <= r->observed_sigma2_min);
+    CHECK(r->min_margin <= r->observed_sigma2_min);
+    CHECK(r->k_max >= r->observed_k_max);
   }
 }
 

@@ -13,6 +13,8 @@ constexpr int kThreads = 128;      // segment kernel: long-running threads, smal
 constexpr int kReduceThreads = 512;  // 9 × 512 doubles of shared memory, under 48 KiB
 
 __device__ __forceinline__ double inf() { return __longlong_as_double(0x7ff0000000000000LL); }
+constexpr double kU = DBL_EPSILON / 2;  // unit roundoff 2^-53 (hsi::kCertificateRoundoff)
+constexpr double kInv2Pi = 1 / (2 * 3.14159265358979323846);
 
 // Complex arithmetic on double2 (x = real, y = imaginary).
 __device__ __forceinline__ double2 operator+(double2 a, double2 b) { return make_double2(a.x + b.x, a.y + b.y); }
@@ -34,21 +36,15 @@ __device__ __forceinline__ double2 cdiv(double2 a, double2 b) {
 __device__ __forceinline__ double2 clog(double2 a) { return make_double2(log(cabs(a)), atan2(a.y, a.x)); }
 __device__ __forceinline__ double carg(double2 a) { return atan2(a.y, a.x); }
 
-__device__ double segment_distance(double2 p, double2 a, double2 b) {
-  const double2 ab = b - a;
-  const double len2 = ab.x * ab.x + ab.y * ab.y;
-  double t = len2 > 0 ? ((p.x - a.x) * ab.x + (p.y - a.y) * ab.y) / len2 : 0.0;
-  t = fmin(fmax(t, 0.0), 1.0);
-  return cabs(p - (a + scale(ab, t)));
-}
-
 struct Values {
-  double2 a, b, a1, b1;  // f_z, conj f_zbar and their z-derivatives
+  double2 a, b, a1, b1;        // f_z, conj f_zbar and their z-derivatives
+  double ea, eb, ea1, eb1;     // bounds on the absolute rounding error of each
 };
 
-// f_z, conj f_zbar and their derivatives at w straight from the cage (math.md §2).
+// f_z, conj f_zbar and their derivatives at w straight from the cage (math.md §2), with
+// error bounds from the rounding weights of hsi::certificate_weights.
 __device__ Values values_at(const CageView& cage, const double2* __restrict__ coef, int M, double2 w) {
-  const double2 inv2pii = make_double2(0, -1.0 / (2.0 * 3.14159265358979323846));  // 1 / (2πi)
+  const double2 inv2pii = make_double2(0, -kInv2Pi);  // 1 / (2πi)
   Values v{};
   for (int l = 0; l < cage.loops; ++l) {
     const int begin = cage.loop_begin[l], k = cage.loop_begin[l + 1] - begin;
@@ -67,11 +63,21 @@ __device__ Values values_at(const CageView& cage, const double2* __restrict__ co
       v.b = v.b + D * psi;
       v.a1 = v.a1 + E * phi;
       v.b1 = v.b1 + E * psi;
+      const double wd = (1 + cabs(Lm)) / cabs(A0) + (1 + cabs(L0)) / cabs(A1);
+      const double we = (cabs(Bp) + cabs(Bm)) / (cabs(Bm) * cabs(B0) * cabs(Bp));
+      v.ea += wd * cabs(phi);
+      v.eb += wd * cabs(psi);
+      v.ea1 += we * cabs(phi);
+      v.eb1 += we * cabs(psi);
       Bm = B0;
       B0 = Bp;
       Lm = L0;
     }
   }
+  v.ea *= kInv2Pi;
+  v.eb *= kInv2Pi;
+  v.ea1 *= kInv2Pi;
+  v.eb1 *= kInv2Pi;
   for (int h = 0; h < cage.N; ++h) {
     const double2 d = w - cage.holes[h];
     const double2 phi = coef[cage.m + h], psi = coef[M + cage.m + h];
@@ -80,17 +86,29 @@ __device__ Values values_at(const CageView& cage, const double2* __restrict__ co
     const double2 d2 = d * d;
     v.a1 = v.a1 - cdiv(phi, d2);
     v.b1 = v.b1 - cdiv(psi, d2);
+    const double r = 1 / cabs(d);
+    v.ea += cabs(phi) * r;
+    v.eb += cabs(psi) * r;
+    v.ea1 += cabs(phi) * r * r;
+    v.eb1 += cabs(psi) * r * r;
   }
+  const double c = (2.0 * M + 72) * kU;
+  v.ea *= c;
+  v.eb *= c;
+  v.ea1 *= c;
+  v.eb1 *= c;
   return v;
 }
 
-__global__ void jumps_kernel(CageView cage, const double2* __restrict__ coef, double* __restrict__ jumps) {
+__global__ void jumps_kernel(CageView cage, const double2* __restrict__ coef, double* __restrict__ jumps,
+                             double* __restrict__ abs_coef) {
   const int M = cage.m + cage.N;
-  const double inv2pi = 1 / (2 * 3.14159265358979323846);
   for (int i = static_cast<int>(blockIdx.x * blockDim.x + threadIdx.x); i < M; i += static_cast<int>(gridDim.x * blockDim.x)) {
-    if (i >= cage.m) {  // the log terms: 2 |φ_log| and 2 |ψ_log| (equal in the map space)
-      jumps[i] = 2 * cabs(coef[i]);
-      jumps[M + i] = 2 * cabs(coef[M + i]);
+    abs_coef[i] = cabs(coef[i]);
+    abs_coef[M + i] = cabs(coef[M + i]);
+    if (i >= cage.m) {  // the log terms: 2 |φ_log| and 2 |ψ_log| (equal in the map space), rounded up
+      jumps[i] = 2 * cabs(coef[i]) * (1 + 4 * kU);
+      jumps[M + i] = 2 * cabs(coef[M + i]) * (1 + 4 * kU);
       continue;
     }
     int l = 0;
@@ -104,24 +122,10 @@ __global__ void jumps_kernel(CageView cage, const double2* __restrict__ coef, do
         const int jm = jj == 0 ? k - 1 : jj - 1;
         return cdiv(cc[jj] - cc[jm], z[jj] - z[jm]);
       };
-      jumps[c * M + i] = inv2pi * cabs(delta(j + 1 == k ? 0 : j + 1) - delta(j));
-    }
-  }
-}
-
-__global__ void weights_kernel(CageView cage, SegmentsView seg, double* __restrict__ WWh) {
-  const int M = cage.m + cage.N;
-  const long long total = static_cast<long long>(seg.S) * M;
-  for (long long t = blockIdx.x * static_cast<long long>(blockDim.x) + threadIdx.x; t < total;
-       t += static_cast<long long>(gridDim.x) * blockDim.x) {
-    const int i = static_cast<int>(t % seg.S), j = static_cast<int>(t / seg.S);
-    const double2 p = seg.points[i], q = seg.points[seg.next[i]];
-    if (j < cage.m) {
-      const double d = segment_distance(cage.z[j], p, q);
-      WWh[t] = 1 / (d * d);
-    } else {
-      const double d = segment_distance(cage.holes[j - cage.m], p, q);
-      WWh[t] = 1 / (d * d * d);
+      const double2 d0 = delta(j), d1 = delta(j + 1 == k ? 0 : j + 1);
+      const double s = cabs(d1 - d0);
+      // An upper bound of |S_j| (hsi::certificate_jumps' rounding), over 2π.
+      jumps[c * M + i] = kInv2Pi * (s + 16 * kU * (cabs(d0) + cabs(d1)) + 4 * kU * s) * (1 + 2 * kU);
     }
   }
 }
@@ -133,7 +137,8 @@ struct Piece {
 };
 
 __global__ void __launch_bounds__(kThreads) segments_kernel(CageView cage, SegmentsView seg, const double2* __restrict__ coef,
-                                                            const double2* __restrict__ values, const double* __restrict__ lip,
+                                                            const double2* __restrict__ values, const double* __restrict__ errs,
+                                                            const double* __restrict__ lip, const char* __restrict__ touches,
                                                             int max_depth, long long max_pieces, int* stop,
                                                             SegmentOutcome* __restrict__ out) {
   const int i = static_cast<int>(blockIdx.x * blockDim.x + threadIdx.x);
@@ -154,27 +159,37 @@ __global__ void __launch_bounds__(kThreads) segments_kernel(CageView cage, Segme
   }
   const int u = i, v = seg.next[i];
   double2 p = seg.points[u], q = seg.points[v];
-  Values vp{values[u], values[2 * S + u], values[S + u], values[3 * S + u]};
-  Values vq{values[v], values[2 * S + v], values[S + v], values[3 * S + v]};
-  const double lipA = lip[i], lipB = lip[S + i];
+  const double value_err = (2.0 * M + 72) * kU;
+  Values vp{values[u], values[2 * S + u], values[S + u], values[3 * S + u],
+            value_err * errs[u], value_err * errs[2 * S + u], value_err * errs[S + u], value_err * errs[3 * S + u]};
+  Values vq{values[v], values[2 * S + v], values[S + v], values[3 * S + v],
+            value_err * errs[v], value_err * errs[2 * S + v], value_err * errs[S + v], value_err * errs[3 * S + v]};
+  const double lip_up = 1 + (2.0 * M + 32) * kU;
+  const double lipA = touches[i] ? inf() : lip[i] * lip_up, lipB = touches[i] ? inf() : lip[S + i] * lip_up;
   Piece stack[kMaxCertifyDepth];
   int top = 0, depth = 0;
   for (;;) {
-    const double len = cabs(q - p);
-    const double fzz_max = (cabs(vp.a1) + cabs(vq.a1)) / 2 + lipA * len / 2;
-    const double bz_max = (cabs(vp.b1) + cabs(vq.b1)) / 2 + lipB * len / 2;
-    const double a_lo = (cabs(vp.a) + cabs(vq.a)) / 2 - fzz_max * len / 2;
-    const double a_hi = (cabs(vp.a) + cabs(vq.a)) / 2 + fzz_max * len / 2;
-    const double b_hi = (cabs(vp.b) + cabs(vq.b)) / 2 + bz_max * len / 2;
-    const bool arg_ok = fzz_max * len < cabs(vp.a);
-    const bool folds_here = cabs(vp.b) >= cabs(vp.a) || cabs(vq.b) >= cabs(vq.a);
+    // certificate.cpp's bounds, rounding on the conservative side.
+    const double abs_ap = cabs(vp.a), abs_aq = cabs(vq.a), abs_bp = cabs(vp.b), abs_bq = cabs(vq.b);
+    const double len = cabs(q - p) * (1 + 4 * kU);
+    const double fzz_max = (((cabs(vp.a1) + vp.ea1) + (cabs(vq.a1) + vq.ea1)) / 2 + lipA * len / 2) * (1 + 8 * kU);
+    const double bz_max = (((cabs(vp.b1) + vp.eb1) + (cabs(vq.b1) + vq.eb1)) / 2 + lipB * len / 2) * (1 + 8 * kU);
+    const double a_avg_lo = ((abs_ap - vp.ea) + (abs_aq - vq.ea)) / 2;
+    const double a_avg_hi = ((abs_ap + vp.ea) + (abs_aq + vq.ea)) / 2;
+    const double b_avg_hi = ((abs_bp + vp.eb) + (abs_bq + vq.eb)) / 2;
+    const double tol = 8 * kU * (a_avg_hi + b_avg_hi + fzz_max * len + bz_max * len);
+    const double a_lo = a_avg_lo - fzz_max * len / 2 - tol;
+    const double a_hi = a_avg_hi + fzz_max * len / 2 + tol;
+    const double b_hi = b_avg_hi + bz_max * len / 2 + tol;
+    const bool arg_ok = fzz_max * len + vp.ea + tol < abs_ap;
+    const bool folds_here = abs_bp >= abs_ap || abs_bq >= abs_aq;
     if (a_lo > b_hi && arg_ok) {
       o.pieces++;
       o.arg += carg(cdiv(vq.a, vp.a));
       o.margin = fmin(o.margin, a_lo - b_hi);
       o.sigma1 = fmax(o.sigma1, a_hi + b_hi);
       o.sigma2 = fmin(o.sigma2, a_lo - b_hi);
-      o.k = fmax(o.k, b_hi / a_lo);
+      o.k = fmax(o.k, b_hi / a_lo * (1 + 2 * kU));
       if (top == 0) break;
       // The next piece starts where this one ended.
       p = q;
@@ -321,21 +336,17 @@ unsigned blocks(long long count, int threads) {
 
 }  // namespace
 
-cudaError_t lipschitz_jumps(CageView cage, const double2* coef, double* jumps, cudaStream_t stream) {
-  jumps_kernel<<<blocks(cage.m + cage.N, 128), 128, 0, stream>>>(cage, coef, jumps);
+cudaError_t lipschitz_jumps(CageView cage, const double2* coef, double* jumps, double* abs_coef, cudaStream_t stream) {
+  jumps_kernel<<<blocks(cage.m + cage.N, 128), 128, 0, stream>>>(cage, coef, jumps, abs_coef);
   return cudaGetLastError();
 }
 
-cudaError_t lipschitz_weights(CageView cage, SegmentsView seg, double* WWh, cudaStream_t stream) {
-  weights_kernel<<<blocks(static_cast<long long>(seg.S) * (cage.m + cage.N), 256), 256, 0, stream>>>(cage, seg, WWh);
-  return cudaGetLastError();
-}
-
-cudaError_t certify_segments(CageView cage, SegmentsView seg, const double2* coef, const double2* values, const double* lip,
-                             int max_depth, long long max_pieces, int* stop, SegmentOutcome* out, cudaStream_t stream) {
+cudaError_t certify_segments(CageView cage, SegmentsView seg, const double2* coef, const double2* values, const double* errs,
+                             const double* lip, const char* touches, int max_depth, long long max_pieces, int* stop,
+                             SegmentOutcome* out, cudaStream_t stream) {
   if (max_depth > kMaxCertifyDepth) return cudaErrorInvalidValue;
-  segments_kernel<<<blocks(seg.S, kThreads), kThreads, 0, stream>>>(cage, seg, coef, values, lip, max_depth, max_pieces, stop,
-                                                                   out);
+  segments_kernel<<<blocks(seg.S, kThreads), kThreads, 0, stream>>>(cage, seg, coef, values, errs, lip, touches, max_depth,
+                                                                   max_pieces, stop, out);
   return cudaGetLastError();
 }
 

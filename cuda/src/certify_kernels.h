@@ -48,16 +48,22 @@ struct CertifySummary {
 };
 
 // jumps (M × 2, column-major: [|S_j(φ)| ; |S_j(ψ)|] scaled, then the log terms):
-// rows 0..m−1: |S_j(c)| / 2π for c = φ (column 0) and ψ (column 1); rows m..m+N−1:
-// 2 |c_log,h|, so that [W | Wh] · jumps = (La, Lb) per segment (certificate.cpp).
+// rows 0..m−1: upper bounds of |S_j(c)| / 2π (hsi::certificate_jumps with its rounding)
+// for c = φ (column 0) and ψ (column 1); rows m..m+N−1: 2 |c_log,h| rounded up, so that
+// [W | Wh] · jumps = (La, Lb) per segment before the sum's rounding (certificate.cpp).
+// abs_coef (M × 2): |φ| and |ψ|, for the values' error bounds.
 // coef: [φ | ψ] full, M × 2 complex, column-major.
-cudaError_t lipschitz_jumps(CageView cage, const double2* coef, double* jumps, cudaStream_t stream);
+cudaError_t lipschitz_jumps(CageView cage, const double2* coef, double* jumps, double* abs_coef, cudaStream_t stream);
 
 // values (S × 4, column-major, as [D; E] · [φ | ψ] leaves them): f_z, f_zz, conj f_zbar,
-// (conj f_zbar)' at the breakpoints ([a | a1 | b | b1]); lip: S × 2 (La, Lb). stop: device flag, set by a
-// failing segment when stop_at_first_failure, read by all (may be null otherwise).
-cudaError_t certify_segments(CageView cage, SegmentsView seg, const double2* coef, const double2* values, const double* lip,
-                             int max_depth, long long max_pieces, int* stop, SegmentOutcome* out, cudaStream_t stream);
+// (conj f_zbar)' at the breakpoints ([a | a1 | b | b1]); errs (the same layout):
+// [WD; WE] · [|φ| | |ψ|], their rounding weights (hsi::certificate_weights); lip: S × 2
+// (La, Lb) before rounding up; touches: per segment, 1 where a distance bound is not
+// positive. stop: device flag, set by a failing segment when stop_at_first_failure,
+// read by all (may be null otherwise).
+cudaError_t certify_segments(CageView cage, SegmentsView seg, const double2* coef, const double2* values, const double* errs,
+                             const double* lip, const char* touches, int max_depth, long long max_pieces, int* stop,
+                             SegmentOutcome* out, cudaStream_t stream);
 
 // The summary of all outcomes plus the observed values at the breakpoints: two passes
 // (up to kReducePartials blocks, then one), deterministic. partials: device scratch of
@@ -66,9 +72,5 @@ constexpr int kReducePartials = 64;
 size_t reduce_partials_bytes();
 cudaError_t reduce_certificate(int S, const SegmentOutcome* outcomes, const double2* values, void* partials, CertifySummary* out,
                                cudaStream_t stream);
-
-// W (S × m) = 1/dist(z_j, σ_i)², Wh (S × N) = 1/dist(ρ_h, σ_i)³, as one S × (m+N)
-// column-major matrix [W | Wh] (built once per shape).
-cudaError_t lipschitz_weights(CageView cage, SegmentsView seg, double* WWh, cudaStream_t stream);
 
 }  // namespace hsi::cuda::kernels

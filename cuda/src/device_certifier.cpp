@@ -34,6 +34,11 @@ DeviceCertifier::DeviceCertifier(const Shape& shape, const Cage& cage, const Bou
   const BasisRows rows = evaluate_basis(cage, seg.points, kBasisD | kBasisE);
   MatrixXcd DE(2 * static_cast<Eigen::Index>(S_), M_);
   DE << rows.D, rows.E;
+  // The rounding allowances' weights, as the CPU reference's.
+  const CertificateWeights w = certificate_weights(cage, seg);
+  Eigen::MatrixXd WDE(2 * static_cast<Eigen::Index>(S_), M_), WWh(static_cast<Eigen::Index>(S_), M_);
+  WDE << w.WD, w.WE;
+  WWh << w.W, w.Wh;
 
   z_ = DeviceArray<double2>(z.size());
   holes_ = DeviceArray<double2>(std::max<size_t>(1, cage.hole_points.size()));
@@ -41,10 +46,14 @@ DeviceCertifier::DeviceCertifier(const Shape& shape, const Cage& cage, const Bou
   loop_begin_ = DeviceArray<int>(begin.size());
   next_ = DeviceArray<int>(sz(S_));
   DE_ = DeviceArray<double2>(2 * sz(S_) * sz(M_));
+  WDE_ = DeviceArray<double>(2 * sz(S_) * sz(M_));
   WWh_ = DeviceArray<double>(sz(S_) * sz(M_));
+  touches_ = DeviceArray<char>(sz(S_));
   coef_ = DeviceArray<double2>(2 * sz(M_));
   values_ = DeviceArray<double2>(4 * sz(S_));
+  errs_ = DeviceArray<double>(4 * sz(S_));
   jumps_ = DeviceArray<double>(2 * sz(M_));
+  abs_coef_ = DeviceArray<double>(2 * sz(M_));
   lip_ = DeviceArray<double>(2 * sz(S_));
   outcomes_ = DeviceArray<kernels::SegmentOutcome>(sz(S_));
   summary_ = DeviceArray<kernels::CertifySummary>(1);
@@ -61,7 +70,9 @@ DeviceCertifier::DeviceCertifier(const Shape& shape, const Cage& cage, const Bou
   HSI_CUDA_CHECK(cudaMemcpyAsync(loop_begin_.get(), begin.data(), loop_begin_.bytes(), cudaMemcpyHostToDevice, stream_));
   HSI_CUDA_CHECK(cudaMemcpyAsync(next_.get(), seg.next.data(), next_.bytes(), cudaMemcpyHostToDevice, stream_));
   HSI_CUDA_CHECK(cudaMemcpyAsync(DE_.get(), DE.data(), DE_.bytes(), cudaMemcpyHostToDevice, stream_));
-  HSI_CUDA_CHECK(kernels::lipschitz_weights(cage_view(), segments_view(), WWh_.get(), stream_));
+  HSI_CUDA_CHECK(cudaMemcpyAsync(WDE_.get(), WDE.data(), WDE_.bytes(), cudaMemcpyHostToDevice, stream_));
+  HSI_CUDA_CHECK(cudaMemcpyAsync(WWh_.get(), WWh.data(), WWh_.bytes(), cudaMemcpyHostToDevice, stream_));
+  HSI_CUDA_CHECK(cudaMemcpyAsync(touches_.get(), w.touches.data(), touches_.bytes(), cudaMemcpyHostToDevice, stream_));
   // The host vectors above are pageable: done with them before they go.
   HSI_CUDA_CHECK(cudaStreamSynchronize(stream_));
 }
@@ -78,18 +89,22 @@ void DeviceCertifier::enqueue(const double2* coef, const CertificateOptions& opt
   const cudaStream_t s = stream_;
   // Values at the breakpoints: [a | a1 | b | b1] = [D; E] · [φ | ψ] (a tall product).
   HSI_CUDA_CHECK(kernels::tall_times_two(2 * S_, M_, DE_.get(), coef, values_.get(), s));
-  // Lipschitz constants of f_zz and (conj f_zbar)' per segment: [W | Wh] · jumps.
-  HSI_CUDA_CHECK(kernels::lipschitz_jumps(cage_view(), coef, jumps_.get(), s));
+  // Lipschitz constants of f_zz and (conj f_zbar)' per segment: [W | Wh] · jumps; the
+  // values' rounding weights: [WD; WE] · [|φ| | |ψ|].
+  HSI_CUDA_CHECK(kernels::lipschitz_jumps(cage_view(), coef, jumps_.get(), abs_coef_.get(), s));
   const double one = 1, zero = 0;
   HSI_CUDA_CHECK(cublasDgemm(blas_, CUBLAS_OP_N, CUBLAS_OP_N, S_, 2, M_, &one, WWh_.get(), S_, jumps_.get(), M_, &zero,
                              lip_.get(), S_));
+  HSI_CUDA_CHECK(cublasDgemm(blas_, CUBLAS_OP_N, CUBLAS_OP_N, 2 * S_, 2, M_, &one, WDE_.get(), 2 * S_, abs_coef_.get(), M_,
+                             &zero, errs_.get(), 2 * S_));
   int* stop = nullptr;
   if (options.stop_at_first_failure) {
     HSI_CUDA_CHECK(cudaMemsetAsync(stop_.get(), 0, sizeof(int), s));
     stop = stop_.get();
   }
-  HSI_CUDA_CHECK(kernels::certify_segments(cage_view(), segments_view(), coef, values_.get(), lip_.get(), options.max_depth,
-                                           options.max_pieces_per_segment, stop, outcomes_.get(), s));
+  HSI_CUDA_CHECK(kernels::certify_segments(cage_view(), segments_view(), coef, values_.get(), errs_.get(), lip_.get(),
+                                           touches_.get(), options.max_depth, options.max_pieces_per_segment, stop,
+                                           outcomes_.get(), s));
   HSI_CUDA_CHECK(kernels::reduce_certificate(S_, outcomes_.get(), values_.get(), partials_.get(), summary_.get(), s));
   HSI_CUDA_CHECK(cudaMemcpyAsync(summary_down_.get(), summary_.get(), sizeof(kernels::CertifySummary), cudaMemcpyDeviceToHost, s));
 }

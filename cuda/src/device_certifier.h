@@ -36,10 +36,14 @@ class DeviceCertifier {
   DeviceArray<double2> z_, holes_, points_;
   DeviceArray<int> loop_begin_, next_;
   DeviceArray<double2> DE_;        // [D; E] at the breakpoints, 2S × M
-  DeviceArray<double> WWh_;        // [W | Wh], S × M
+  DeviceArray<double> WDE_;        // [WD; WE], the rounding weights of [D; E], 2S × M
+  DeviceArray<double> WWh_;        // [W | Wh], S × M (hsi::certificate_weights)
+  DeviceArray<char> touches_;      // per segment: a distance bound is not positive
   DeviceArray<double2> coef_;      // upload target of certify()
   DeviceArray<double2> values_;    // [a | a1 | b | b1], S × 4 (= 2S × 2)
+  DeviceArray<double> errs_;       // their rounding weights, the same layout
   DeviceArray<double> jumps_;      // M × 2
+  DeviceArray<double> abs_coef_;   // [|φ| | |ψ|], M × 2
   DeviceArray<double> lip_;        // S × 2
   DeviceArray<kernels::SegmentOutcome> outcomes_;
   DeviceArray<kernels::CertifySummary> summary_;

@@ -61,37 +61,78 @@ Eigen::VectorXd certificate_jumps(const Cage& cage, const VectorXcd& c, Eigen::V
   return out;
 }
 
+namespace {
+
+constexpr double kU = kCertificateRoundoff;
+
+}  // namespace
+
+double distance_lower(cd z, cd p, cd q) {
+  return segment_distance(z, p, q) - 16 * kU * (std::abs(z) + std::abs(p) + std::abs(q));
+}
+
+CertificateWeights certificate_weights(const Cage& cage, const CertificateSegments& seg) {
+  const int m = cage.vertex_count(), N = cage.hole_count();
+  const Eigen::Index S = static_cast<Eigen::Index>(seg.size());
+  CertificateWeights g;
+  g.W.resize(S, m);
+  g.Wh.resize(S, N);
+  g.WD.resize(S, m + N);
+  g.WE.resize(S, m + N);
+  g.touches.assign(static_cast<size_t>(S), 0);
+  std::vector<cd> z;
+  for (const Loop& l : cage.loops) z.insert(z.end(), l.begin(), l.end());
+  const double inv2pi = 1 / (2 * std::numbers::pi);
+#pragma omp parallel for schedule(static)
+  for (Eigen::Index i = 0; i < S; ++i) {
+    const cd p = seg.points[static_cast<size_t>(i)], q = seg.points[static_cast<size_t>(seg.next[static_cast<size_t>(i)])];
+    for (int j = 0; j < m; ++j) {
+      const double d = distance_lower(z[static_cast<size_t>(j)], p, q);
+      g.W(i, j) = d > 0 ? 1 / (d * d) : 0;
+      if (!(d > 0)) g.touches[static_cast<size_t>(i)] = 1;
+    }
+    for (int h = 0; h < N; ++h) {
+      const double d = distance_lower(cage.hole_points[static_cast<size_t>(h)], p, q);
+      g.Wh(i, h) = d > 0 ? 1 / (d * d * d) : 0;
+      if (!(d > 0)) g.touches[static_cast<size_t>(i)] = 1;
+    }
+    int col = 0;
+    for (const Loop& loop : cage.loops) {
+      const size_t k = loop.size();
+      for (size_t j = 0; j < k; ++j) {
+        const size_t jm = (j + k - 1) % k, jp = (j + 1) % k;
+        const cd Bm = loop[jm] - p, B0 = loop[j] - p, Bp = loop[jp] - p;
+        const double lm = std::abs(std::log(B0 / Bm)), l0 = std::abs(std::log(Bp / B0));
+        g.WD(i, col + static_cast<Eigen::Index>(j)) =
+            inv2pi * ((1 + lm) / std::abs(loop[j] - loop[jm]) + (1 + l0) / std::abs(loop[jp] - loop[j]));
+        g.WE(i, col + static_cast<Eigen::Index>(j)) =
+            inv2pi * (std::abs(Bp) + std::abs(Bm)) / (std::abs(Bm) * std::abs(B0) * std::abs(Bp));
+      }
+      col += static_cast<int>(k);
+    }
+    for (int h = 0; h < N; ++h) {
+      const double r = 1 / std::abs(p - cage.hole_points[static_cast<size_t>(h)]);
+      g.WD(i, m + h) = r;
+      g.WE(i, m + h) = r * r;
+    }
+  }
+  return g;
+}
+
 struct Certifier::Impl {
   const Cage cage;
   int m = 0, N = 0;
-  CertificateSegments seg;      // breakpoints; segment i joins breakpoint i to its successor in the loop
-  MatrixXcd D, E;               // basis rows at the breakpoints (full columns)
-  Eigen::MatrixXd W;            // segments × m: 1 / dist(z_j, σ)²
-  Eigen::MatrixXd Wh;           // segments × N: 1 / dist(ρ_i, σ)³
+  CertificateSegments seg;  // breakpoints; segment i joins breakpoint i to its successor in the loop
+  MatrixXcd D, E;           // basis rows at the breakpoints (full columns)
+  CertificateWeights weights;
 
-  Impl(const Shape& shape, const Cage& c, const BoundarySamples& s) : cage(c), seg(certificate_segments(shape, s)) {
+  Impl(const Shape& shape, const Cage& c, const BoundarySamples& s)
+      : cage(c), seg(certificate_segments(shape, s)), weights(certificate_weights(c, seg)) {
     m = cage.vertex_count();
     N = cage.hole_count();
     const BasisRows rows = evaluate_basis(cage, seg.points, kBasisD | kBasisE);
     D = rows.D;
     E = rows.E;
-    const Eigen::Index S = static_cast<Eigen::Index>(seg.size());
-    W.resize(S, m);
-    Wh.resize(S, N);
-    std::vector<cd> z;
-    for (const Loop& l : cage.loops) z.insert(z.end(), l.begin(), l.end());
-#pragma omp parallel for schedule(static)
-    for (Eigen::Index i = 0; i < S; ++i) {
-      const cd p = seg.points[static_cast<size_t>(i)], q = seg.points[static_cast<size_t>(seg.next[static_cast<size_t>(i)])];
-      for (int j = 0; j < m; ++j) {
-        const double d = segment_distance(z[static_cast<size_t>(j)], p, q);
-        W(i, j) = 1 / (d * d);
-      }
-      for (int h = 0; h < N; ++h) {
-        const double d = segment_distance(cage.hole_points[static_cast<size_t>(h)], p, q);
-        Wh(i, h) = 1 / (d * d * d);
-      }
-    }
   }
 };
 
@@ -106,7 +147,8 @@ const CertificateSegments& Certifier::segments() const { return impl_->seg; }
 namespace {
 
 struct Values {
-  cd a, b, a1, b1;  // f_z, conj f_zbar and their z-derivatives
+  cd a, b, a1, b1;     // f_z, conj f_zbar and their z-derivatives
+  double ea, eb, ea1, eb1;  // bounds on the absolute rounding error of each
 };
 
 }  // namespace
@@ -122,26 +164,47 @@ CertificateResult Certifier::certify(const HarmonicMap& map, const CertificateOp
     return r;
   }
   const VectorXcd a = I.D * map.phi, b = I.D * map.psi, a1 = I.E * map.phi, b1 = I.E * map.psi;
-  // Lipschitz constants of f_zz and of (conj f_zbar)' per segment (bounds on the third derivatives).
+  // Rounding: a computed value is within (2 M + 72) u of its weighted sum of magnitudes
+  // (Impl::WD, WE) of the exact one: 16 u per entry, the product and a sum of M terms.
+  const int M = I.m + I.N;
+  const double value_err = (2.0 * M + 72) * kU;
+  Eigen::MatrixXd abs_coef(M, 2);  // [|φ| |ψ|]: one pass over each weight matrix
+  abs_coef << map.phi.cwiseAbs(), map.psi.cwiseAbs();
+  const auto abs_phi = abs_coef.col(0), abs_psi = abs_coef.col(1);
+  const Eigen::MatrixXd eD = value_err * (I.weights.WD * abs_coef), eE = value_err * (I.weights.WE * abs_coef);
+  const auto ea = eD.col(0), eb = eD.col(1), ea1 = eE.col(0), eb1 = eE.col(1);
+  // Lipschitz constants of f_zz and of (conj f_zbar)' per segment (bounds on the third
+  // derivatives), from upper bounds of |S_j| and lower bounds of the distances, raised
+  // by the rounding of the sums.
   const double inv2pi = 1 / (2 * std::numbers::pi);
   // The log columns contribute −φ_log/(w − ρ)² to f_zz and −ψ_log/(w − ρ)² to (conj f_zbar)'.
   Eigen::VectorXd logmag_phi(I.N), logmag_psi(I.N);
   for (int h = 0; h < I.N; ++h) {
-    logmag_phi(h) = std::abs(map.phi(I.m + h));
-    logmag_psi(h) = std::abs(map.psi(I.m + h));
+    logmag_phi(h) = std::abs(map.phi(I.m + h)) * (1 + 4 * kU);
+    logmag_psi(h) = std::abs(map.psi(I.m + h)) * (1 + 4 * kU);
   }
-  const Eigen::VectorXd La = inv2pi * (I.W * certificate_jumps(I.cage, map.phi)) + 2 * (I.Wh * logmag_phi);
-  const Eigen::VectorXd Lb = inv2pi * (I.W * certificate_jumps(I.cage, map.psi)) + 2 * (I.Wh * logmag_psi);
+  Eigen::VectorXd err_phi, err_psi;
+  Eigen::MatrixXd jumps(I.m, 2);  // upper bounds of |S_j| for φ and ψ
+  jumps << certificate_jumps(I.cage, map.phi, &err_phi) + err_phi, certificate_jumps(I.cage, map.psi, &err_psi) + err_psi;
+  jumps *= 1 + 2 * kU;
+  Eigen::MatrixXd logmag(I.N, 2);
+  logmag << logmag_phi, logmag_psi;
+  const double lip_up = 1 + (2.0 * M + 32) * kU;
+  const Eigen::MatrixXd L = lip_up * (inv2pi * (I.weights.W * jumps) + 2 * (I.weights.Wh * logmag));
+  Eigen::VectorXd La = L.col(0), Lb = L.col(1);
+  for (size_t i = 0; i < I.weights.touches.size(); ++i)
+    if (I.weights.touches[i]) La(static_cast<Eigen::Index>(i)) = Lb(static_cast<Eigen::Index>(i)) = std::numeric_limits<double>::infinity();
 
   const Eigen::Index S = static_cast<Eigen::Index>(I.seg.size());
   std::vector<SegmentCertificate> out(static_cast<size_t>(S));
   std::atomic<bool> stop{false};
 
   // f_z, conj f_zbar and their derivatives at one point, straight from the cage
-  // (math.md §2), without forming basis rows: the subdivision's inner loop.
+  // (math.md §2), without forming basis rows: the subdivision's inner loop. The error
+  // bounds sum the same weights as Impl::WD, WE.
   const cd inv2pii = 1.0 / (2.0 * std::numbers::pi * cd(0, 1));
   auto values_at = [&](cd w) {
-    Values v{0, 0, 0, 0};
+    Values v{0, 0, 0, 0, 0, 0, 0, 0};
     int col = 0;
     for (const Loop& loop : I.cage.loops) {
       const size_t k = loop.size();
@@ -159,19 +222,38 @@ CertificateResult Certifier::certify(const HarmonicMap& map, const CertificateOp
         v.b += D * map.psi(c);
         v.a1 += E * map.phi(c);
         v.b1 += E * map.psi(c);
+        const double wd = (1 + std::abs(Lm)) / std::abs(A0) + (1 + std::abs(L0)) / std::abs(A1);
+        const double we = (std::abs(Bp) + std::abs(Bm)) / (std::abs(Bm) * std::abs(B0) * std::abs(Bp));
+        v.ea += wd * abs_phi(c);
+        v.eb += wd * abs_psi(c);
+        v.ea1 += we * abs_phi(c);
+        v.eb1 += we * abs_psi(c);
         Bm = B0;
         B0 = Bp;
         Lm = L0;
       }
       col += static_cast<int>(k);
     }
+    v.ea *= inv2pi;
+    v.eb *= inv2pi;
+    v.ea1 *= inv2pi;
+    v.eb1 *= inv2pi;
     for (int h = 0; h < I.N; ++h) {
       const cd d = w - I.cage.hole_points[static_cast<size_t>(h)];
       v.a += map.phi(I.m + h) / d;
       v.b += map.psi(I.m + h) / d;
       v.a1 -= map.phi(I.m + h) / (d * d);
       v.b1 -= map.psi(I.m + h) / (d * d);
+      const double inv_d = 1 / std::abs(d);
+      v.ea += abs_phi(I.m + h) * inv_d;
+      v.eb += abs_psi(I.m + h) * inv_d;
+      v.ea1 += abs_phi(I.m + h) * inv_d * inv_d;
+      v.eb1 += abs_psi(I.m + h) * inv_d * inv_d;
     }
+    v.ea *= value_err;
+    v.eb *= value_err;
+    v.ea1 *= value_err;
+    v.eb1 *= value_err;
     return v;
   };
 
@@ -179,24 +261,33 @@ CertificateResult Certifier::certify(const HarmonicMap& map, const CertificateOp
   // (new basis rows at midpoints; the parent's Lipschitz constants stay valid).
   auto prove = [&](auto&& self, cd p, cd q, const Values& vp, const Values& vq, double lipA, double lipB, int depth,
                    SegmentCertificate& o) -> void {
-    const double len = std::abs(q - p);
-    const double fzz_max = (std::abs(vp.a1) + std::abs(vq.a1)) / 2 + lipA * len / 2;  // bound of |f_zz| on σ
-    const double bz_max = (std::abs(vp.b1) + std::abs(vq.b1)) / 2 + lipB * len / 2;
-    const double a_lo = (std::abs(vp.a) + std::abs(vq.a)) / 2 - fzz_max * len / 2;
-    const double a_hi = (std::abs(vp.a) + std::abs(vq.a)) / 2 + fzz_max * len / 2;
-    const double b_hi = (std::abs(vp.b) + std::abs(vq.b)) / 2 + bz_max * len / 2;
+    // The bounds of math.md §6 with every rounding on the conservative side: the values'
+    // error bounds, and an absolute allowance for the few operations here (as
+    // certify.comp). So a piece passes only with room to spare for round-off: a map
+    // whose margin is at the level of its own rounding is not certified.
+    const double abs_ap = std::abs(vp.a), abs_aq = std::abs(vq.a), abs_bp = std::abs(vp.b), abs_bq = std::abs(vq.b);
+    const double len = std::abs(q - p) * (1 + 4 * kU);
+    const double fzz_max = (((std::abs(vp.a1) + vp.ea1) + (std::abs(vq.a1) + vq.ea1)) / 2 + lipA * len / 2) * (1 + 8 * kU);
+    const double bz_max = (((std::abs(vp.b1) + vp.eb1) + (std::abs(vq.b1) + vq.eb1)) / 2 + lipB * len / 2) * (1 + 8 * kU);
+    const double a_avg_lo = ((abs_ap - vp.ea) + (abs_aq - vq.ea)) / 2;
+    const double a_avg_hi = ((abs_ap + vp.ea) + (abs_aq + vq.ea)) / 2;
+    const double b_avg_hi = ((abs_bp + vp.eb) + (abs_bq + vq.eb)) / 2;
+    const double tol = 8 * kU * (a_avg_hi + b_avg_hi + fzz_max * len + bz_max * len);
+    const double a_lo = a_avg_lo - fzz_max * len / 2 - tol;  // bounds of |f_z|, |f_zbar| on σ
+    const double a_hi = a_avg_hi + fzz_max * len / 2 + tol;
+    const double b_hi = b_avg_hi + bz_max * len / 2 + tol;
     // The image of σ under f_z stays in the disc |w − f_z(p)| ≤ fzz_max·len, which must exclude 0
     // for the principal arg increment to be the true one.
-    const bool arg_ok = fzz_max * len < std::abs(vp.a);
+    const bool arg_ok = fzz_max * len + vp.ea + tol < abs_ap;
     // A point where |f_zbar| ≥ |f_z| is a real fold: no subdivision can help.
-    const bool folds_here = std::abs(vp.b) >= std::abs(vp.a) || std::abs(vq.b) >= std::abs(vq.a);
+    const bool folds_here = abs_bp >= abs_ap || abs_bq >= abs_aq;
     if (a_lo > b_hi && arg_ok) {
       o.pieces++;
       o.arg += std::arg(vq.a / vp.a);
       o.margin = std::min(o.margin, a_lo - b_hi);
       o.sigma1 = std::max(o.sigma1, a_hi + b_hi);
       o.sigma2 = std::min(o.sigma2, a_lo - b_hi);
-      o.k = std::max(o.k, b_hi / a_lo);
+      o.k = std::max(o.k, b_hi / a_lo * (1 + 2 * kU));
       return;
     }
     if (folds_here || depth >= opt.max_depth || o.pieces >= opt.max_pieces_per_segment ||
@@ -218,9 +309,9 @@ CertificateResult Certifier::certify(const HarmonicMap& map, const CertificateOp
   for (Eigen::Index i = 0; i < S; ++i) {
     if (stop.load(std::memory_order_relaxed)) continue;
     const size_t u = static_cast<size_t>(i), v = static_cast<size_t>(I.seg.next[u]);
-    const Values vp{a(i), b(i), a1(i), b1(i)};
+    const Values vp{a(i), b(i), a1(i), b1(i), ea(i), eb(i), ea1(i), eb1(i)};
     const Eigen::Index j = static_cast<Eigen::Index>(v);
-    const Values vq{a(j), b(j), a1(j), b1(j)};
+    const Values vq{a(j), b(j), a1(j), b1(j), ea(j), eb(j), ea1(j), eb1(j)};
     SegmentCertificate& o = out[u];
     prove(prove, I.seg.points[u], I.seg.points[v], vp, vq, La(i), Lb(i), 0, o);
     if (!o.ok && opt.stop_at_first_failure) stop.store(true, std::memory_order_relaxed);

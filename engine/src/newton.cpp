@@ -438,6 +438,7 @@ NewtonResult newton_run(NewtonStepper& st, bool certify, bool rotation_invariant
     double s = std::min(1.0, opt.safe_fraction * sys.max_safe_step);
     double E_new = E;
     bool accepted = false;
+    std::string last_refusal;  // the certificate's reason for the last step it refused
     std::array<double, kTrialBatch> steps{}, energies{};
     int batch_begin = 0, batch_size = 0;
     for (int bt = 0; bt <= opt.max_backtracks; ++bt, s *= opt.shrink) {
@@ -489,6 +490,7 @@ NewtonResult newton_run(NewtonStepper& st, bool certify, bool rotation_invariant
         if (!c.certified) {
           log.backtracks++;
           log.certificate_rejections++;
+          last_refusal = std::move(c.reason);
           continue;
         }
         res.certificate = std::move(c);
@@ -499,7 +501,19 @@ NewtonResult newton_run(NewtonStepper& st, bool certify, bool rotation_invariant
     res.timing.line_search += ms_since(t0);
     if (!accepted) {
       res.converged = std::abs(slope) < 1e-12 * scale;
-      res.message = res.converged ? "converged (no further decrease at round-off level)" : "line search found no certified decrease";
+      if (res.converged) {
+        res.message = "converged (no further decrease at round-off level)";
+      } else if (log.certificate_rejections > 0) {
+        // The energy falls along the step, but every step that lowers it enough folds
+        // (or comes within round-off of folding) where the energy has no sample: the
+        // solve is pressed against the certificate between samples.
+        res.message = "line search found no certified decrease: the certificate refused " +
+                      std::to_string(log.certificate_rejections) +
+                      " step(s) that lowered the energy enough (the map is close to folding between boundary samples, where "
+                      "the energy does not look; more samples let it see there); last refusal: " + last_refusal;
+      } else {
+        res.message = "line search found no certified decrease";
+      }
       break;
     }
     t0 = Clock::now();

@@ -2,7 +2,12 @@
 // §6). A harmonic map on Ω is locally injective iff f_z has no zero in Ω (the
 // argument principle on ∂Ω) and |f_z| > |f_zbar| on all of ∂Ω. Condition (b) is
 // proved between samples with a Lipschitz bound on every boundary segment and
-// adaptive subdivision; nothing is certified that the bound does not prove.
+// adaptive subdivision; nothing is certified that the bound does not prove. The bound
+// is evaluated in double precision with every rounding on the conservative side (error
+// bounds on the values at the breakpoints and midpoints, distances rounded down,
+// Lipschitz constants and a few operations' rounding rounded up), so a map whose margin
+// |f_z| − |f_zbar| is at the level of its own round-off (~1e-13 relative) is not
+// certified: it may fold, and no floating-point evaluation can tell.
 //
 // This is the CPU reference that every other backend is checked against.
 #pragma once
@@ -61,6 +66,28 @@ CertificateSegments certificate_segments(const Shape& shape, const BoundarySampl
 // loop: S_j = δ_{j+1} − δ_j, δ_j = (c_j − c_{j−1}) / (z_j − z_{j−1}) (math.md §6).
 // With `rounding`: also an upper bound on the floating-point error of each |S_j|.
 Eigen::VectorXd certificate_jumps(const Cage& cage, const VectorXcd& coefficients, Eigen::VectorXd* rounding = nullptr);
+
+// The rounding allowances' building blocks, shared by the CPU and CUDA certifiers.
+constexpr double kCertificateRoundoff = std::numeric_limits<double>::epsilon() / 2;  // u = 2^-53
+// segment_distance rounded down by a bound on its rounding error: never above the true
+// distance from z to [p, q].
+double distance_lower(cd z, cd p, cd q);
+// Per shape, per segment i (breakpoint i to its successor) and column j:
+//   W (S × m) = 1/dist(z_j, σ_i)², Wh (S × N) = 1/dist(ρ_h, σ_i)³ from distance_lower,
+//     0 where that bound is not positive, and touches[i] = 1 then (the segment's
+//     Lipschitz constants are infinite: it cannot be certified);
+//   WD, WE (S × (m + N)): rounding weights of the basis rows D and E at breakpoint i.
+//     A computed entry is within 16 u of its weight of the exact one, and the weight
+//     bounds the entry's magnitude, so a computed value Σ_j D_ij c_j is within
+//     (2 (m + N) + 72) u Σ_j WD_ij |c_j| of the exact one (the same for E). WD:
+//     ((1 + |log(B_j/B_{j−1})|)/|A_j| + (1 + |log(B_{j+1}/B_j)|)/|A_{j+1}|) / 2π,
+//     WE: (|B_{j+1}| + |B_{j−1}|) / |B_{j−1} B_j B_{j+1}| / 2π (B_j = z_j − w, A_j =
+//     z_j − z_{j−1}); hole columns 1/|w − ρ| and 1/|w − ρ|².
+struct CertificateWeights {
+  Eigen::MatrixXd W, Wh, WD, WE;
+  std::vector<char> touches;
+};
+CertificateWeights certificate_weights(const Cage& cage, const CertificateSegments& segments);
 
 // What the Lipschitz test with adaptive subdivision found on one segment: its pieces
 // in depth-first order, up to the first one that failed.

@@ -11,13 +11,12 @@
 // Certifier there. A float version is not offered because it could not keep the
 // certificate sound.
 //
-// Soundness: the GPU test is the CPU's with explicit rounding allowances (error
-// bounds on the evaluated f_z, f_zbar and derivatives, on the distances, Lipschitz
-// constants and the few operations of each bound), all on the conservative side. So
-// it never certifies a piece the CPU's exact-math test would reject. The allowances
-// cost ~1e-11 of σ1 max in the bounds (at most 1e-10 seen on the test corpus; tests
-// demand 1e-9), and a verdict can differ only for a map whose CPU margin is within
-// about that of zero, where the GPU answers "not certified".
+// Soundness: the GPU test is the CPU's, rounding allowances included (error bounds on
+// the evaluated f_z, f_zbar and derivatives, on the distances, Lipschitz constants and
+// the few operations of each bound), all on the conservative side. The two evaluate
+// f_z differently (the CPU per cage vertex, the GPU per cage edge) and so carry
+// different allowances: the bounds differ by ~1e-11 of σ1 max (tests demand 1e-9), and
+// a verdict can differ only for a map whose margin is within about that of zero.
 #pragma once
 
 #include <vector>
