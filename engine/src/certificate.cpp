@@ -165,7 +165,8 @@ CertificateResult Certifier::certify(const HarmonicMap& map, const CertificateOp
   }
   const VectorXcd a = I.D * map.phi, b = I.D * map.psi, a1 = I.E * map.phi, b1 = I.E * map.psi;
   // Rounding: a computed value is within (2 M + 72) u of its weighted sum of magnitudes
-  // (Impl::WD, WE) of the exact one: 16 u per entry, the product and a sum of M terms.
+  // (certificate_weights' WD, WE) of the exact one: 16 u per entry, the product and a
+  // sum of M terms.
   const int M = I.m + I.N;
   const double value_err = (2.0 * M + 72) * kU;
   Eigen::MatrixXd abs_coef(M, 2);  // [|φ| |ψ|]: one pass over each weight matrix
@@ -178,22 +179,18 @@ CertificateResult Certifier::certify(const HarmonicMap& map, const CertificateOp
   // by the rounding of the sums.
   const double inv2pi = 1 / (2 * std::numbers::pi);
   // The log columns contribute −φ_log/(w − ρ)² to f_zz and −ψ_log/(w − ρ)² to (conj f_zbar)'.
-  Eigen::VectorXd logmag_phi(I.N), logmag_psi(I.N);
-  for (int h = 0; h < I.N; ++h) {
-    logmag_phi(h) = std::abs(map.phi(I.m + h)) * (1 + 4 * kU);
-    logmag_psi(h) = std::abs(map.psi(I.m + h)) * (1 + 4 * kU);
-  }
+  const Eigen::MatrixXd logmag = abs_coef.bottomRows(I.N) * (1 + 4 * kU);
   Eigen::VectorXd err_phi, err_psi;
+  const Eigen::VectorXd s_phi = certificate_jumps(I.cage, map.phi, &err_phi);
+  const Eigen::VectorXd s_psi = certificate_jumps(I.cage, map.psi, &err_psi);
   Eigen::MatrixXd jumps(I.m, 2);  // upper bounds of |S_j| for φ and ψ
-  jumps << certificate_jumps(I.cage, map.phi, &err_phi) + err_phi, certificate_jumps(I.cage, map.psi, &err_psi) + err_psi;
+  jumps << s_phi + err_phi, s_psi + err_psi;
   jumps *= 1 + 2 * kU;
-  Eigen::MatrixXd logmag(I.N, 2);
-  logmag << logmag_phi, logmag_psi;
   const double lip_up = 1 + (2.0 * M + 32) * kU;
   const Eigen::MatrixXd L = lip_up * (inv2pi * (I.weights.W * jumps) + 2 * (I.weights.Wh * logmag));
   Eigen::VectorXd La = L.col(0), Lb = L.col(1);
-  for (size_t i = 0; i < I.weights.touches.size(); ++i)
-    if (I.weights.touches[i]) La(static_cast<Eigen::Index>(i)) = Lb(static_cast<Eigen::Index>(i)) = std::numeric_limits<double>::infinity();
+  for (Eigen::Index i = 0; i < La.size(); ++i)
+    if (I.weights.touches[static_cast<size_t>(i)]) La(i) = Lb(i) = std::numeric_limits<double>::infinity();
 
   const Eigen::Index S = static_cast<Eigen::Index>(I.seg.size());
   std::vector<SegmentCertificate> out(static_cast<size_t>(S));
@@ -201,7 +198,7 @@ CertificateResult Certifier::certify(const HarmonicMap& map, const CertificateOp
 
   // f_z, conj f_zbar and their derivatives at one point, straight from the cage
   // (math.md §2), without forming basis rows: the subdivision's inner loop. The error
-  // bounds sum the same weights as Impl::WD, WE.
+  // bounds sum the same weights as certificate_weights' WD and WE.
   const cd inv2pii = 1.0 / (2.0 * std::numbers::pi * cd(0, 1));
   auto values_at = [&](cd w) {
     Values v{0, 0, 0, 0, 0, 0, 0, 0};
