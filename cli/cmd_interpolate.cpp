@@ -192,7 +192,29 @@ void register_interpolate(CLI::App& app) {
       table += f.overlap.overlaps() ? "       YES\n" : "\n";
     }
     const SequenceSummary sum = summarize(frames, seq.total_s);
-    char head[1024];
+    // Why the unconverged frames stopped (each frame's message is in report.json and on
+    // the progress line), counted for the summary.
+    std::string why_unconverged;
+    if (sum.not_converged > 0) {
+      int at_limit = 0, stagnated = 0, refused = 0, other = 0;
+      for (const FrameResult& f : frames) {
+        if (f.converged) continue;
+        if (f.message.rfind("stopped at the iteration limit", 0) == 0) ++at_limit;
+        else if (f.message.rfind("stagnated", 0) == 0) ++stagnated;
+        else if (f.message.find("the certificate refused") != std::string::npos) ++refused;
+        else ++other;
+      }
+      auto add = [&](int count, const std::string& what) {
+        if (count == 0) return;
+        why_unconverged += (why_unconverged.empty() ? " (" : ", ") + std::to_string(count) + " " + what;
+      };
+      add(at_limit, "at the iteration limit " + std::to_string(o->max_iterations));
+      add(stagnated, "stagnated");
+      add(refused, "where the certificate refused every further step: the map nears a fold between samples");
+      add(other, "with no certified decrease or no factorable system");
+      why_unconverged += ")";
+    }
+    char head[1536];
     // Certified means locally injective; a frame can still overlap itself (overlap.h).
     char overlap_line[320] = "";
     if (sum.overlapping > 0)
@@ -201,11 +223,11 @@ void register_interpolate(CLI::App& app) {
                     "globally injective; sampled at the boundary breakpoints)\n",
                     sum.overlapping);
     std::snprintf(head, sizeof head,
-                  "hsi interpolate %s: %zu frames, %d certified locally injective, %d NOT certified, %d NOT CONVERGED (Newton iteration limit %d), %d overlapping themselves\n%s"
+                  "hsi interpolate %s: %zu frames, %d certified locally injective, %d NOT certified, %d NOT CONVERGED%s, %d overlapping themselves\n%s"
                   "mean %.2f Newton iterations and %.1f ms per solved frame (max %.1f ms), %.1f s in all\n"
                   "%d frames within the keyframes' sampled distortion (sampled at the certificate's breakpoints), largest excess %.3g (relative)\n"
                   "%d frames within the keyframes' certified bounds (certified bound against certified bounds), largest excess %.3g (relative)\n\n",
-                  o->scene.c_str(), frames.size(), sum.certified, sum.uncertified, sum.not_converged, o->max_iterations,
+                  o->scene.c_str(), frames.size(), sum.certified, sum.uncertified, sum.not_converged, why_unconverged.c_str(),
                   sum.overlapping, overlap_line, sum.mean_iterations, sum.mean_ms, sum.max_ms, sum.total_s, sum.within_bounds,
                   sum.max_bound_excess, sum.within_certified_bounds, sum.max_certified_bound_excess);
     write_file_atomic(out / "report.txt", std::string(head) + table);

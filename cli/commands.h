@@ -15,8 +15,8 @@ namespace hsi::cli {
 //   2  bad input (scene, file, option value)
 //   3  some frame could not be certified (locally injective not proved): never good
 //   4  every frame certified, but some Newton solve stopped without converging (its
-//      iteration limit reached): the frame is injective but not the interpolation's
-//      minimiser. --allow-unconverged makes this 0.
+//      iteration limit, stagnation, or no certified decrease left): the frame is
+//      injective but not the interpolation's minimiser. --allow-unconverged makes this 0.
 // hsi keyframes writes the scene (the closest certified maps) and then exits with:
 //   5  some keyframe's handle targets could not be reached without folding;
 //      --allow-unreached makes this 0.
@@ -36,14 +36,15 @@ inline void exit_for_flagged_frames(int uncertified, int not_converged, bool all
     throw FlaggedFrames(kExitUncertified, std::to_string(uncertified) + " frame(s) could not be certified; " + what + " (exit status 3)");
   if (not_converged > 0 && !allow_unconverged)
     throw FlaggedFrames(kExitNotConverged, std::to_string(not_converged) +
-                                              " frame(s) NOT CONVERGED: certified, but the Newton solve stopped at its iteration limit "
-                                              "before the tolerance; " + what +
-                                              " (exit status 4; --allow-unconverged accepts them, or raise --max-iterations)");
+                                              " frame(s) NOT CONVERGED: certified, but the Newton solve stopped before its tolerance "
+                                              "(iteration limit, stagnation, or no certified decrease: each frame says which); " + what +
+                                              " (exit status 4; --allow-unconverged accepts them; a higher --max-iterations or more "
+                                              "--samples may help, as the reasons say)");
 }
 // The exit-status paragraph of --help for interpolate / bake / export.
 inline constexpr const char* kFlaggedFramesHelp =
     "Exit status: 0 all frames certified and converged; 1 error; 2 bad input; 3 some frame not certified;\n"
-    "4 some frame did not converge (certified, but Newton stopped at --max-iterations; --allow-unconverged: 0).";
+    "4 some frame did not converge (certified, but Newton stopped before its tolerance; --allow-unconverged: 0).";
 
 // --frames N and --frames-per-interval K (exclusive) for interpolate, bake and export;
 // the frame times are then sequence_times(keys, frames, per_interval) (interpolation.h).
