@@ -192,26 +192,21 @@ void register_interpolate(CLI::App& app) {
       table += f.overlap.overlaps() ? "       YES\n" : "\n";
     }
     const SequenceSummary sum = summarize(frames, seq.total_s);
-    // Why the unconverged frames stopped (each frame's message is in report.json and on
-    // the progress line), counted for the summary.
+    // Why the unconverged frames stopped (each frame's message and stop are in report.json
+    // and the message on the progress line), counted for the summary.
     std::string why_unconverged;
     if (sum.not_converged > 0) {
-      int at_limit = 0, stagnated = 0, refused = 0, other = 0;
-      for (const FrameResult& f : frames) {
-        if (f.converged) continue;
-        if (f.message.rfind("stopped at the iteration limit", 0) == 0) ++at_limit;
-        else if (f.message.rfind("stagnated", 0) == 0) ++stagnated;
-        else if (f.message.find("the certificate refused") != std::string::npos) ++refused;
-        else ++other;
-      }
-      auto add = [&](int count, const std::string& what) {
-        if (count == 0) return;
-        why_unconverged += (why_unconverged.empty() ? " (" : ", ") + std::to_string(count) + " " + what;
+      auto count = [&](NewtonStop stop) { return sum.stops[static_cast<size_t>(stop)]; };
+      const int other = count(NewtonStop::NoDecrease) + count(NewtonStop::NotFactored) + count(NewtonStop::StartFolds) +
+                        count(NewtonStop::StartNotCertified);
+      auto add = [&](int n, const std::string& what) {
+        if (n == 0) return;
+        why_unconverged += (why_unconverged.empty() ? " (" : ", ") + std::to_string(n) + " " + what;
       };
-      add(at_limit, "at the iteration limit " + std::to_string(o->max_iterations));
-      add(stagnated, "stagnated");
-      add(refused, "where the certificate refused every further step: the map nears a fold between samples");
-      add(other, "with no certified decrease or no factorable system");
+      add(count(NewtonStop::IterationLimit), "at the iteration limit " + std::to_string(o->max_iterations));
+      add(count(NewtonStop::Stagnated), "stagnated");
+      add(count(NewtonStop::CertificateRefused), "where the certificate refused every further step: the map nears a fold between samples");
+      add(other, "with no certified decrease, no factorable system or an uncertified start");
       why_unconverged += ")";
     }
     char head[1536];

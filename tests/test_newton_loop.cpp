@@ -103,7 +103,7 @@ TEST_CASE("newton_run: a quadratic converges in one full step, then stops on the
   FakeStepper f;
   const NewtonResult r = newton_run(f, true, true, Eigen::Vector2d(0, 0), {});
   CHECK(r.converged);
-  CHECK_FALSE(r.stagnated);
+  CHECK(r.stop == NewtonStop::Converged);
   CHECK(r.certified);
   CHECK(r.x.isApprox(f.a, 1e-12));
   CHECK(r.iterations <= 2);
@@ -191,6 +191,7 @@ TEST_CASE("newton_run: a singular system gets ridges 1e-12 * max|diag| growing t
   const NewtonResult bad = newton_run(always, false, false, Eigen::Vector2d(0, 0), o);
   CHECK_FALSE(bad.converged);
   CHECK(bad.message == "the Newton system could not be factored");
+  CHECK(bad.stop == NewtonStop::NotFactored);
   CHECK(always.ridges.size() == 3);
   CHECK(always.ridges[2] == Approx(always.ridges[1] * 10));
 }
@@ -205,6 +206,9 @@ TEST_CASE("newton_run: a step the certificate rejects is halved; the start must 
   CHECK(r.log[0].step == 0.5);
   CHECK(r.log[0].certificate_rejections == 1);
   CHECK(r.certified);
+  CHECK_FALSE(r.converged);  // a step the line search cut ends nothing: the limit of 1 does
+  CHECK(r.stop == NewtonStop::IterationLimit);
+  CHECK(r.message == "stopped at the iteration limit");
 
   FakeStepper g;
   g.certifies = [](double) { return false; };
@@ -212,11 +216,13 @@ TEST_CASE("newton_run: a step the certificate rejects is halved; the start must 
   CHECK_FALSE(bad.certified);
   CHECK(bad.iterations == 0);
   CHECK(bad.message.rfind("the starting map is not certified", 0) == 0);
+  CHECK(bad.stop == NewtonStop::StartNotCertified);
 
   FakeStepper h;  // certified only at the start: no certified decrease anywhere
   h.certifies = [](double s) { return s == 0; };
   const NewtonResult stuck = newton_run(h, true, true, Eigen::Vector2d(0, 0), {});
   CHECK_FALSE(stuck.converged);
+  CHECK(stuck.stop == NewtonStop::CertificateRefused);
   // Armijo passed and the certificate refused: the message says so and where.
   CHECK_THAT(stuck.message, Catch::Matchers::StartsWith("line search found no certified decrease: the certificate refused") &&
                                 Catch::Matchers::Contains("more samples") &&
@@ -226,6 +232,7 @@ TEST_CASE("newton_run: a step the certificate rejects is halved; the start must 
   const NewtonResult armijo = newton_run(flat, true, true, Eigen::Vector2d(0, 0), {});
   CHECK_FALSE(armijo.converged);
   CHECK(armijo.message == "line search found no certified decrease");
+  CHECK(armijo.stop == NewtonStop::NoDecrease);
   CHECK(stuck.x.isApprox(Eigen::Vector2d(0, 0)));
 }
 
@@ -263,7 +270,7 @@ TEST_CASE("newton_run: a linear crawl below the tolerance is not convergence; a 
   NewtonOptions o;  // tolerance 5e-8 · E = 1.5e-7
   const NewtonResult r = newton_run(crawl, false, false, Eigen::Vector2d(0, 0), o);
   CHECK_FALSE(r.converged);
-  CHECK(r.stagnated);
+  CHECK(r.stop == NewtonStop::Stagnated);
   CHECK(r.iterations == o.stagnation_steps + 1);
   CHECK(r.message.find("stagnated") != std::string::npos);
 
@@ -275,6 +282,7 @@ TEST_CASE("newton_run: a linear crawl below the tolerance is not convergence; a 
   // decrement, 1e-7, is below 1.5e-7: nothing left to take.
   CHECK(q.iterations == 2);
   CHECK(q.message == "converged (Newton decrement below tolerance)");
+  CHECK(q.stop == NewtonStop::Converged);
   NewtonOptions projected_only = o;
   projected_only.exact_hessian_when_definite = false;  // a projected decrement is not trusted: one more step
   Geometric again(1e-3, 0.01);
@@ -370,6 +378,7 @@ TEST_CASE("the grid of holes of issue #20 converges in a few iterations per fram
   for (const FrameResult& f : fixed) {
     CHECK(f.certified);
     CHECK(f.converged);
+    CHECK(f.stop == NewtonStop::Converged);
     mean += f.iterations / 9.0;  // 9 solved frames
     worst = std::max(worst, f.iterations);
   }
@@ -485,7 +494,7 @@ TEST_CASE("newton_run: the exact system's ridge leaves soft modes alone (no line
       CHECK(r.converged);
       CHECK(r.iterations <= 5);
     } else {
-      CHECK((r.stagnated || r.iterations >= 20));
+      CHECK((r.stop == NewtonStop::Stagnated || r.iterations >= 20));
     }
   }
 }
@@ -603,7 +612,7 @@ TEST_CASE("newton_run: a step Armijo cut is never convergence, however small its
   CHECK(r.log.front().backtracks == 11);
   CHECK(r.iterations > 1);
   CHECK_FALSE(r.converged);  // a crawl of cut steps: stagnation
-  CHECK(r.stagnated);
+  CHECK(r.stop == NewtonStop::Stagnated);
 }
 
 TEST_CASE("newton_run: a projection Armijo keeps cutting over all samples gives way to FullProj", "[newton][loop]") {

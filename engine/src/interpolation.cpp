@@ -344,6 +344,7 @@ FrameResult Interpolator::frame_before_crossings(double t, const Eigen::VectorXd
   r.iterations = n.iterations;
   r.energy = n.energy;
   r.converged = n.converged;
+  r.stop = n.stop;
   r.certified = n.certified;
   r.certificate = n.certificate;
   r.timing = n.timing;

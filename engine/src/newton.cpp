@@ -326,6 +326,7 @@ NewtonResult newton_run(NewtonStepper& st, bool certify, bool rotation_invariant
   const auto t_start = Clock::now();
   NewtonResult res;
   auto finish = [&](double E) {
+    res.converged = res.stop == NewtonStop::Converged;
     res.energy = E;
     res.x = st.x();
     res.ms = ms_since(t_start);
@@ -335,6 +336,7 @@ NewtonResult newton_run(NewtonStepper& st, bool certify, bool rotation_invariant
   double E = st.start(x0);
   res.timing.energy_gradient += ms_since(t0);
   if (!std::isfinite(E)) {
+    res.stop = NewtonStop::StartFolds;
     res.message = "the starting map folds or degenerates at a sample (infinite energy)";
     return finish(E);
   }
@@ -347,6 +349,7 @@ NewtonResult newton_run(NewtonStepper& st, bool certify, bool rotation_invariant
   if (certify) {
     res.certificate = opt.start_certificate && opt.start_certificate->certified ? *opt.start_certificate : timed_certify(0, true);
     if (!res.certificate.certified) {
+      res.stop = NewtonStop::StartNotCertified;
       res.message = "the starting map is not certified: " + res.certificate.reason;
       return finish(E);
     }
@@ -410,6 +413,7 @@ NewtonResult newton_run(NewtonStepper& st, bool certify, bool rotation_invariant
       }
     }
     if (!sys.factored) {
+      res.stop = NewtonStop::NotFactored;
       res.message = "the Newton system could not be factored";
       break;
     }
@@ -418,7 +422,7 @@ NewtonResult newton_run(NewtonStepper& st, bool certify, bool rotation_invariant
     log.max_safe_step = sys.max_safe_step;
     const double slope = sys.slope;
     if (!(slope < -opt.descent_slope * scale)) {
-      res.converged = true;
+      res.stop = NewtonStop::Converged;
       res.message = "converged (no descent direction left: gradient at round-off level)";
       break;
     }
@@ -426,7 +430,7 @@ NewtonResult newton_run(NewtonStepper& st, bool certify, bool rotation_invariant
     // bring (−gᵀd / 2): below the tolerance there is nothing left to take. (A projected
     // Hessian overestimates curvature, so its decrement can understate what is left.)
     if (log.exact_hessian && !log.shifted && -slope / 2 < opt.tolerance * std::max(std::abs(E), 1e-300)) {
-      res.converged = true;
+      res.stop = NewtonStop::Converged;
       res.message = "converged (Newton decrement below tolerance)";
       break;
     }
@@ -500,10 +504,11 @@ NewtonResult newton_run(NewtonStepper& st, bool certify, bool rotation_invariant
     }
     res.timing.line_search += ms_since(t0);
     if (!accepted) {
-      res.converged = std::abs(slope) < 1e-12 * scale;
-      if (res.converged) {
+      if (std::abs(slope) < 1e-12 * scale) {
+        res.stop = NewtonStop::Converged;
         res.message = "converged (no further decrease at round-off level)";
       } else if (log.certificate_rejections > 0) {
+        res.stop = NewtonStop::CertificateRefused;
         // The energy falls along the step, but every step that lowers it enough folds
         // (or comes within round-off of folding) where the energy has no sample: the
         // solve is pressed against the certificate between samples.
@@ -512,6 +517,7 @@ NewtonResult newton_run(NewtonStepper& st, bool certify, bool rotation_invariant
                       " step(s) that lowered the energy enough (the map is close to folding between boundary samples, where "
                       "the energy does not look; more samples let it see there); last refusal: " + last_refusal;
       } else {
+        res.stop = NewtonStop::NoDecrease;
         res.message = "line search found no certified decrease";
       }
       break;
@@ -545,13 +551,13 @@ NewtonResult newton_run(NewtonStepper& st, bool certify, bool rotation_invariant
     // Only a step the line search took as first offered counts: a cut one's small
     // decrease says nothing about what is left (NewtonOptions::tolerance).
     if (log.backtracks == 0 && dE + to_come < tol) {  // (dE > 0: the step passed Armijo with slope < 0)
-      res.converged = true;
+      res.stop = NewtonStop::Converged;
       res.message = "converged (energy decrease below tolerance)";
       break;
     }
     crawling = rate >= opt.stagnation_rate && dE < 10 * tol ? crawling + 1 : 0;
     if (crawling >= opt.stagnation_steps) {
-      res.stagnated = true;
+      res.stop = NewtonStop::Stagnated;
       char why[200];
       std::snprintf(why, sizeof why, "stagnated: %d steps in a row each lowered the energy at a linear rate >= %.2f (last decrease %.3g)",
                     crawling, opt.stagnation_rate, dE);
@@ -559,11 +565,28 @@ NewtonResult newton_run(NewtonStepper& st, bool certify, bool rotation_invariant
       break;
     }
   }
-  if (res.message.empty()) res.message = "stopped at the iteration limit";
+  if (res.message.empty()) {
+    res.stop = NewtonStop::IterationLimit;
+    res.message = "stopped at the iteration limit";
+  }
   if (certify) {
     res.certified = res.certificate.certified;
   }
   return finish(E);
+}
+
+const char* to_string(NewtonStop stop) {
+  switch (stop) {
+    case NewtonStop::Converged: return "converged";
+    case NewtonStop::IterationLimit: return "iteration limit";
+    case NewtonStop::Stagnated: return "stagnated";
+    case NewtonStop::CertificateRefused: return "certificate refused";
+    case NewtonStop::NoDecrease: return "no decrease";
+    case NewtonStop::NotFactored: return "not factored";
+    case NewtonStop::StartFolds: return "start folds";
+    case NewtonStop::StartNotCertified: return "start not certified";
+  }
+  return "?";
 }
 
 std::uint64_t NewtonCore::next_target_token() {

@@ -84,6 +84,7 @@ SequenceSummary summarize(const std::vector<FrameResult>& frames, double total_s
     s.max_bound_excess = std::max(s.max_bound_excess, f.bound_excess);
     s.overlapping += f.overlap.overlaps();
     s.not_converged += !f.converged;
+    ++s.stops[static_cast<size_t>(f.stop)];
     if (f.certified && std::isfinite(f.certified_bound_excess)) {
       s.within_certified_bounds += f.certified_bound_excess <= 1e-9;
       s.max_certified_bound_excess = std::max(s.max_certified_bound_excess, f.certified_bound_excess);
@@ -175,6 +176,7 @@ std::string report_json(const Scene& scene, const SceneSequence& seq, const std:
                   {"held", f.held},
                   {"certified", f.certified},
                   {"converged", f.converged},
+                  {"stop", to_string(f.stop)},
                   {"iterations", f.iterations},
                   {"energy", f.energy},
                   {"ms", f.ms},
@@ -195,7 +197,13 @@ std::string report_json(const Scene& scene, const SceneSequence& seq, const std:
                   {"overlaps", f.overlap.overlaps()},
                   {"overlap", overlap_json(f.overlap)}});
   }
-  rep["summary"] = summary_json(summarize(seq.frames, seq.total_s));
+  const SequenceSummary sum = summarize(seq.frames, seq.total_s);
+  rep["summary"] = summary_json(sum);
+  // Why frames stopped, by NewtonStop's names ("converged", "iteration limit", ...): zeros left out.
+  nlohmann::json stops = nlohmann::json::object();
+  for (int i = 0; i < kNewtonStopCount; ++i)
+    if (sum.stops[static_cast<size_t>(i)] > 0) stops[to_string(static_cast<NewtonStop>(i))] = sum.stops[static_cast<size_t>(i)];
+  rep["summary"]["stops"] = stops;
   rep["frames"] = fr;
   return rep.dump(1) + "\n";
 }

@@ -73,6 +73,7 @@ struct FrameResult {
   bool held = false;         // t lies in a Hold interval: the held keyframe itself (timing.h)
   bool certified = false;
   bool converged = false;
+  NewtonStop stop = NewtonStop::Converged;  // why the solve stopped (a keyframe or held frame: Converged)
   CertificateResult certificate;
   int iterations = 0;
   double energy = 0;         // mean isometric energy against the blended metric (2 = exact)

@@ -294,12 +294,29 @@ struct NewtonIteration {
   double ms = 0;
 };
 
+// Why a Newton solve stopped (NewtonResult::stop): set by the loop where it decides, so
+// callers count and report reasons without reading the message's wording.
+enum class NewtonStop : std::uint8_t {
+  Converged,           // the decrement, the decrease or the slope fell below its tolerance
+  IterationLimit,      // NewtonOptions::max_iterations steps taken, still decreasing
+  Stagnated,           // the energy decreased only linearly and slowly (stagnation_steps in a row)
+  CertificateRefused,  // every step that lowered the energy enough was refused by the certificate
+  NoDecrease,          // Armijo refused every step (the certificate refused none)
+  NotFactored,         // no system could be factored, ridges included
+  StartFolds,          // the starting map folds or degenerates at a sample
+  StartNotCertified,   // the starting map is not certified
+};
+inline constexpr int kNewtonStopCount = 8;
+// "converged", "iteration limit", "stagnated", "certificate refused", "no decrease",
+// "not factored", "start folds", "start not certified".
+const char* to_string(NewtonStop stop);
+
 struct NewtonResult {
   Eigen::VectorXd x;
   double energy = 0;
   int iterations = 0;
-  bool converged = false;
-  bool stagnated = false;         // stopped because the energy decreased only linearly and slowly
+  bool converged = false;         // stop == NewtonStop::Converged
+  NewtonStop stop = NewtonStop::IterationLimit;
   bool certified = false;         // the final map passed the certificate
   CertificateResult certificate;  // of the final map (when certify)
   std::vector<NewtonIteration> log;

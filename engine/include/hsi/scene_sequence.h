@@ -3,6 +3,7 @@
 // the C API share.
 #pragma once
 
+#include <array>
 #include <functional>
 #include <memory>
 #include <string>
@@ -56,6 +57,9 @@ struct SequenceSummary {
   // Frames whose Newton solve stopped at its iteration limit (or otherwise) without
   // meeting the tolerance, certified or not (FrameResult::converged false).
   int not_converged = 0;
+  // The frames counted by why their solve stopped, indexed by NewtonStop (FrameResult::stop;
+  // [Converged] counts the converged frames, keyframes included).
+  std::array<int, kNewtonStopCount> stops{};
   // within_bounds / max_bound_excess compare the *sampled* distortion with the
   // keyframes' sampled values; these compare certified bounds with certified bounds
   // (certified frames only: an uncertified frame has no certified bound).
