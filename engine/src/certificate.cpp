@@ -96,17 +96,25 @@ CertificateWeights certificate_weights(const Cage& cage, const CertificateSegmen
       g.Wh(i, h) = d > 0 ? 1 / (d * d * d) : 0;
       if (!(d > 0)) g.touches[static_cast<size_t>(i)] = 1;
     }
+    // Per edge j → j+1 of each loop, once: |log(B_{j+1}/B_j)| and |B_j| (each vertex's two
+    // edges share them; a log per edge rather than two per vertex).
+    std::vector<double> edge_log, dist;
     int col = 0;
     for (const Loop& loop : cage.loops) {
       const size_t k = loop.size();
+      edge_log.resize(k);
+      dist.resize(k);
+      for (size_t j = 0; j < k; ++j) {
+        const size_t jp = (j + 1) % k;
+        edge_log[j] = std::abs(std::log((loop[jp] - p) / (loop[j] - p)));
+        dist[j] = std::abs(loop[j] - p);
+      }
       for (size_t j = 0; j < k; ++j) {
         const size_t jm = (j + k - 1) % k, jp = (j + 1) % k;
-        const cd Bm = loop[jm] - p, B0 = loop[j] - p, Bp = loop[jp] - p;
-        const double lm = std::abs(std::log(B0 / Bm)), l0 = std::abs(std::log(Bp / B0));
+        const double lm = edge_log[jm], l0 = edge_log[j];
         g.WD(i, col + static_cast<Eigen::Index>(j)) =
             inv2pi * ((1 + lm) / std::abs(loop[j] - loop[jm]) + (1 + l0) / std::abs(loop[jp] - loop[j]));
-        g.WE(i, col + static_cast<Eigen::Index>(j)) =
-            inv2pi * (std::abs(Bp) + std::abs(Bm)) / (std::abs(Bm) * std::abs(B0) * std::abs(Bp));
+        g.WE(i, col + static_cast<Eigen::Index>(j)) = inv2pi * (dist[jp] + dist[jm]) / (dist[jm] * dist[j] * dist[jp]);
       }
       col += static_cast<int>(k);
     }
