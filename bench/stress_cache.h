@@ -194,6 +194,19 @@ inline uint64_t keyframes_hash(const std::string& scene_file_contents, const Seq
   return h.value();
 }
 
+// Why a sequence's keyframes do not all pass today's certificate ("keyframe k: reason"),
+// or empty when every one does. The cache key does not cover the solver's code: a
+// keyframe authored before a change to the certificate may now fail it (one authored
+// at a margin within round-off, before the certificate counted its own rounding), and
+// bench_stress then authors the sequence again instead of failing its runs.
+inline std::string uncertified_keyframe(const Certifier& certifier, const Authored& a) {
+  for (size_t k = 0; k < a.maps.size(); ++k) {
+    const CertificateResult c = certifier.certify(a.maps[k]);
+    if (!c.certified) return "keyframe " + std::to_string(k) + ": " + c.reason;
+  }
+  return {};
+}
+
 inline CacheEntry to_entry(const std::string& id, int samples, uint64_t hash, const Authored& a) {
   CacheEntry c{id, samples, hash, a.ms, {}};
   for (size_t k = 0; k < a.maps.size(); ++k) c.keyframes.push_back({a.times[k], a.reached[k] != 0, a.target_error[k], a.maps[k]});

@@ -12,6 +12,7 @@
 
 #include "hsi/harmonic_map.h"
 #include "hsi/interpolation.h"
+#include "stress_cache.h"
 #include "stress_corpus.h"
 
 using namespace hsi;
@@ -144,4 +145,28 @@ TEST_CASE("stress slice, loops reversed: annulus/hinge is the same map", "[stres
 }
 TEST_CASE("stress slice, loops reversed: grid_2/issue is the same map", "[stress][orientation]") {
   check_orientation("grid_2/issue");
+}
+
+// bench_stress certifies every cached keyframe again when it reads the cache
+// (stress::uncertified_keyframe): one today's certificate refuses is authored anew.
+TEST_CASE("stress cache: a keyframe today's certificate refuses is named, down to a margin within round-off", "[stress][cache]") {
+  const stress::Corpus& c = corpus();
+  const stress::Sequence& q = sequence("annulus/hinge");
+  Scene scene = stress::sequence_scene(stress::load_shape(c, c.shape(q.shape)), q, 2000);
+  const auto setup = make_shape_setup(scene, 2000);
+  stress::Authored a = stress::author(scene, *setup);
+  REQUIRE(a.maps.size() == 2);
+  CHECK(stress::uncertified_keyframe(setup->certifier, a).empty());
+  // f = φ + b conj(φ): |f_zbar| / |f_z| = b everywhere. b = 0.5 is a locally injective
+  // map; b = 1.5 reverses orientation; b = 1 − 1e-15 is within round-off of folding.
+  const HarmonicMap key = a.maps[1];
+  for (const double b : {0.5, 1.5, 1 - 1e-15}) {
+    a.maps[1] = {key.phi, b * key.phi};
+    const std::string why = stress::uncertified_keyframe(setup->certifier, a);
+    INFO("b = " << b << ": '" << why << "'");
+    if (b < 1 - 1e-3)
+      CHECK(why.empty());
+    else
+      CHECK(why.rfind("keyframe 1: ", 0) == 0);
+  }
 }
