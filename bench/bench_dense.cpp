@@ -117,6 +117,7 @@ Row time_order(int m, int reps) {
   hc::DeviceArray<int> info(1);
   HSI_CUDA_CHECK(cudaMemcpy(A0.get(), A_host.data(), A0.bytes(), cudaMemcpyHostToDevice));
   HSI_CUDA_CHECK(cudaMemcpy(b0.get(), b_host.data(), b0.bytes(), cudaMemcpyHostToDevice));
+  HSI_CUDA_CHECK(cudaDeviceSynchronize());  // the legacy stream's copies landed before `stream` reads them
   int lwork = 0;
   HSI_CUDA_CHECK(cusolverDnDpotrf_bufferSize(solver, CUBLAS_FILL_MODE_LOWER, m, A.get(), m, &lwork));
   hc::DeviceArray<double> work(static_cast<size_t>(std::max(lwork, 1)));
@@ -152,6 +153,7 @@ Row time_order(int m, int reps) {
   double* const b_ptr = b.get();
   HSI_CUDA_CHECK(cudaMemcpy(A_array.get(), &A_ptr, sizeof A_ptr, cudaMemcpyHostToDevice));
   HSI_CUDA_CHECK(cudaMemcpy(b_array.get(), &b_ptr, sizeof b_ptr, cudaMemcpyHostToDevice));
+  HSI_CUDA_CHECK(cudaDeviceSynchronize());
   const auto potrf_batched = [&] {
     HSI_CUDA_CHECK(cusolverDnDpotrfBatched(solver, CUBLAS_FILL_MODE_LOWER, m, A_array.get(), m, info.get(), 1));
   };

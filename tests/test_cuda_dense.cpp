@@ -74,6 +74,13 @@ Eigen::VectorXd random_vector(int m, unsigned seed) {
 // A column-major m × m matrix with leading dimension lda on the device; the strictly
 // upper triangle and the rows past m hold NaN, which the factor must neither read nor
 // overwrite.
+// A plain cudaMemcpy runs on the legacy default stream: host to device from pageable
+// memory may return before its DMA lands, device to device returns at once, and the
+// kernels below run on a non-blocking stream that is not ordered after either. Seen on an
+// H200: a good matrix uploaded over a failed factor's output was factored while the
+// copy's tail was still in flight, and reported a failing column (256, 289, 230 at m = 305).
+void copies_landed() { HSI_CUDA_CHECK(cudaDeviceSynchronize()); }
+
 struct DeviceSystem {
   int m, lda;
   std::vector<double> host;  // lda × m, what was uploaded
@@ -91,6 +98,7 @@ struct DeviceSystem {
     HSI_CUDA_CHECK(cudaMemcpy(b.get(), rhs.data(), b.bytes(), cudaMemcpyHostToDevice));
     const int minus_one = -1;  // the factor must overwrite it
     HSI_CUDA_CHECK(cudaMemcpy(info.get(), &minus_one, sizeof(int), cudaMemcpyHostToDevice));
+    copies_landed();
   }
   std::vector<double> matrix() const {
     std::vector<double> out(host.size());
@@ -264,6 +272,7 @@ TEST_CASE("dense Cholesky: a matrix that is not positive definite gives LAPACK's
     for (int j = 0; j < c.m; ++j)
       for (int i = j; i < c.m; ++i) sys.host[static_cast<size_t>(i) + static_cast<size_t>(j) * c.m] = good(i, j);
     HSI_CUDA_CHECK(cudaMemcpy(sys.A.get(), sys.host.data(), sys.A.bytes(), cudaMemcpyHostToDevice));
+    copies_landed();
     HSI_CUDA_CHECK(hk::cholesky_factor(c.m, sys.A.get(), c.m, sys.info.get(), stream));
     HSI_CUDA_CHECK(cudaStreamSynchronize(stream));
     CHECK(sys.info_value() == 0);
@@ -295,6 +304,7 @@ TEST_CASE("dense Cholesky: the calls captured into a CUDA graph give the same re
       hc::DeviceArray<double> A0(sys.A.size()), b0(sys.b.size());
       HSI_CUDA_CHECK(cudaMemcpy(A0.get(), sys.A.get(), sys.A.bytes(), cudaMemcpyDeviceToDevice));
       HSI_CUDA_CHECK(cudaMemcpy(b0.get(), sys.b.get(), sys.b.bytes(), cudaMemcpyDeviceToDevice));
+      copies_landed();
       cudaGraph_t graph = nullptr;
       HSI_CUDA_CHECK(cudaStreamBeginCapture(stream, cudaStreamCaptureModeThreadLocal));
       HSI_CUDA_CHECK(cudaMemcpyAsync(sys.A.get(), A0.get(), sys.A.bytes(), cudaMemcpyDeviceToDevice, stream));
@@ -311,6 +321,7 @@ TEST_CASE("dense Cholesky: the calls captured into a CUDA graph give the same re
         INFO("replay " << replay);
         const int stale = 12345;  // each replay must write info afresh
         HSI_CUDA_CHECK(cudaMemcpy(sys.info.get(), &stale, sizeof(int), cudaMemcpyHostToDevice));
+        copies_landed();
         HSI_CUDA_CHECK(cudaGraphLaunch(exec, stream));
         HSI_CUDA_CHECK(cudaStreamSynchronize(stream));
         CHECK(sys.info_value() == want_info);

@@ -111,9 +111,12 @@ DeviceSpace& CudaNewtonCore::device_space(const MapSpace& space) {
     e(k) = 1;
     X.col(k) = flat(space.expand(e)) - x0;
   }
+  // On the core's stream: a plain cudaMemcpy from pageable memory runs on the legacy
+  // default stream and may return before its DMA lands, and kernels on a non-blocking
+  // stream are not ordered after it. (The sources live until the synchronisation below.)
   auto upload = [&](DeviceArray<double>& dst, const double* src, size_t count) {
     dst = DeviceArray<double>(count);
-    HSI_CUDA_CHECK(cudaMemcpy(dst.get(), src, count * sizeof(double), cudaMemcpyHostToDevice));
+    HSI_CUDA_CHECK(cudaMemcpyAsync(dst.get(), src, count * sizeof(double), cudaMemcpyHostToDevice, stream_));
   };
   upload(ds->Ta, Ta.data(), static_cast<size_t>(Ta.size()));
   upload(ds->Tca, Tca.data(), static_cast<size_t>(Tca.size()));
@@ -122,7 +125,7 @@ DeviceSpace& CudaNewtonCore::device_space(const MapSpace& space) {
   upload(ds->X, X.data(), static_cast<size_t>(X.size()));
   upload(ds->X0, x0.data(), static_cast<size_t>(x0.size()));
   ds->primary = DeviceArray<int>(sz(dim));
-  HSI_CUDA_CHECK(cudaMemcpy(ds->primary.get(), space.primary_rows().data(), ds->primary.bytes(), cudaMemcpyHostToDevice));
+  HSI_CUDA_CHECK(cudaMemcpyAsync(ds->primary.get(), space.primary_rows().data(), ds->primary.bytes(), cudaMemcpyHostToDevice, stream_));
   const size_t D = sz(m);
   ds->xa = DeviceArray<double>(D);  // [x; 0]
   ds->xna = DeviceArray<double>(D);
