@@ -51,15 +51,6 @@ std::vector<std::string> split(const std::string& s) {
   return out;
 }
 
-const char* projection_label(HessianProjection p) {
-  switch (p) {
-    case HessianProjection::Delete: return "delete";
-    case HessianProjection::FullProj: return "fullproj";
-    case HessianProjection::PartProj: return "partproj";
-  }
-  return "?";
-}
-
 HessianProjection projection_from(const std::string& s) {
   if (s == "delete") return HessianProjection::Delete;
   if (s == "fullproj") return HessianProjection::FullProj;
@@ -150,7 +141,7 @@ void print_header() {
               "not converged | ms/frame |\n|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n");
 }
 void print_row(const RunKey& k, const Stats& s) {
-  std::printf("| %s | %s | %d%s | %ld | %.2f | %d | %d | %ld | %ld | %ld | %.1f |\n", frames_label(k.first).c_str(), projection_label(k.second), s.runs,
+  std::printf("| %s | %s | %d%s | %ld | %.2f | %d | %d | %ld | %ld | %ld | %.1f |\n", frames_label(k.first).c_str(), to_string(k.second), s.runs,
               s.failed_runs ? (" (" + std::to_string(s.failed_runs) + " failed)").c_str() : "", s.frames(), s.mean(),
               s.quantile(0.99), s.max(), s.at_cap, s.certified, s.not_converged, s.ms_per_frame());
 }
@@ -175,7 +166,7 @@ void trace_run(Interpolator& interp, const ShapeSetup& setup, const std::vector<
     out += b;
     for (const NewtonIteration& k : r.log) {
       std::snprintf(b, sizeof b, "    E %.12f step %.3g %s %s dec2 %.3g |g| %.3g smax %.3g bt %d rej %d\n", k.energy, k.step,
-                    k.shifted ? "shift" : k.exact_hessian ? "exact" : projection_label(k.projection), k.all_samples ? "G" : "H", k.decrement2, k.gradient_norm, k.max_safe_step, k.backtracks,
+                    k.shifted ? "shift" : k.exact_hessian ? "exact" : to_string(k.projection), k.all_samples ? "G" : "H", k.decrement2, k.gradient_norm, k.max_safe_step, k.backtracks,
                     k.certificate_rejections);
       out += b;
     }
@@ -599,7 +590,7 @@ int main(int argc, char** argv) {
           if (!f.keyframe && !f.held) run.s.add(f, max_iterations);
         }
       } else {
-        if (trace) trace_run(interp, setup, it.a.times, run.F * intervals + 1, it.q->id + " F=" + std::to_string(run.F) + " " + projection_label(run.p));
+        if (trace) trace_run(interp, setup, it.a.times, run.F * intervals + 1, it.q->id + " F=" + std::to_string(run.F) + " " + to_string(run.p));
         for (const FrameResult& f : interp.sequence(run.F * intervals + 1))
           if (!f.keyframe) run.s.add(f, max_iterations);
       }
@@ -611,11 +602,11 @@ int main(int argc, char** argv) {
     const std::lock_guard<std::mutex> lock(mutex);
     const int k = ++runs_done;
     if (!run.error.empty())
-      std::fprintf(stderr, "[run %d/%zu] %s F=%s %s: failed: %s\n", k, runs.size(), it.q->id.c_str(), frames_label(run.F).c_str(), projection_label(run.p),
+      std::fprintf(stderr, "[run %d/%zu] %s F=%s %s: failed: %s\n", k, runs.size(), it.q->id.c_str(), frames_label(run.F).c_str(), to_string(run.p),
                    run.error.c_str());
     else
       std::fprintf(stderr, "[run %d/%zu] %s F=%s %-8s %4ld frames: mean %.2f it, max %d, at cap %ld, uncertified %ld  (%.1f s)%s%s\n", k,
-                   runs.size(), it.q->id.c_str(), frames_label(run.F).c_str(), projection_label(run.p), run.s.frames(), run.s.mean(), run.s.max(),
+                   runs.size(), it.q->id.c_str(), frames_label(run.F).c_str(), to_string(run.p), run.s.frames(), run.s.mean(), run.s.max(),
                    run.s.at_cap, run.s.frames() - run.s.certified, run.seconds, run.s.unconverged.empty() ? "" : "; not converged: ",
                    run.s.unconverged_text().c_str());
   });
@@ -689,7 +680,7 @@ int main(int argc, char** argv) {
         r["max_target_error"] = it.a.max_target_error;
         r["keyframes_cached"] = it.cached;
         r["frames_per_interval"] = frames_json(run.F);
-        r["projection"] = projection_label(run.p);
+        r["projection"] = to_string(run.p);
         if (!run.error.empty()) r["error"] = run.error;
         runs_json.push_back(r);
         mine[key].add(run.s);
@@ -721,7 +712,7 @@ int main(int argc, char** argv) {
     for (const auto& [k, st] : mine) {
       json r = st.to_json();
       r["frames_per_interval"] = frames_json(k.first);
-      r["projection"] = projection_label(k.second);
+      r["projection"] = to_string(k.second);
       rows.push_back(r);
     }
     sj["rows"] = rows;
@@ -751,7 +742,7 @@ int main(int argc, char** argv) {
       std::string gs;
       for (int v : g.samples) gs += (gs.empty() ? "" : ",") + std::to_string(v);
       for (const auto& [k, s] : g.stats)
-        std::printf("| %d | %d | %s | %s | %s | %ld | %.2f | %.1f | %.2f |\n", h, g.n, gs.c_str(), frames_label(k.first).c_str(), projection_label(k.second),
+        std::printf("| %d | %d | %s | %s | %s | %ld | %.2f | %.1f | %.2f |\n", h, g.n, gs.c_str(), frames_label(k.first).c_str(), to_string(k.second),
                     s.frames(), s.mean(), s.ms_per_frame(), s.iterations.empty() ? NAN : s.ms / std::max(1.0, s.mean() * static_cast<double>(s.frames())));
     }
   }
@@ -801,7 +792,7 @@ int main(int argc, char** argv) {
     for (const auto& [k, s] : total) {
       json r = s.to_json();
       r["frames_per_interval"] = frames_json(k.first);
-      r["projection"] = projection_label(k.second);
+      r["projection"] = to_string(k.second);
       tot.push_back(r);
     }
     out["total"] = tot;

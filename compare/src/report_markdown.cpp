@@ -6,17 +6,6 @@
 #include "hsi/interpolation.h"
 
 namespace hsi::compare {
-namespace {
-const char* projection_name(HessianProjection p) {
-  switch (p) {
-    case HessianProjection::Delete: return "Delete";
-    case HessianProjection::FullProj: return "FullProj";
-    case HessianProjection::PartProj: return "PartProj";
-  }
-  return "?";
-}
-}  // namespace
-
 std::string report_markdown(const Comparison& c) {
   const PerFrame& p = c.per_frame;
   const int arap_folded = count_positive(p.arap_flipped);
@@ -36,8 +25,8 @@ std::string report_markdown(const Comparison& c) {
        (c.gpu_clocks.empty() ? std::string() : " GPU clocks after our timed block (Tables 3–4): " + c.gpu_clocks + "."));
   line();
   line("**Settings:** |G| = " + std::to_string(c.samples) + " boundary samples, |H| = " + std::to_string(c.hessian_samples) +
-       " (r = " + fixed(c.hessian_ratio, 2) + "); ours with " + projection_name(InterpolationOptions{}.projection) +
-       " (the interpolation's default: the plots and Tables 3–4; Table 2 with PartProj, Table 1 each projection); " +
+       " (r = " + fixed(c.hessian_ratio, 2) + "); ours with " + std::string(to_string(InterpolationOptions{}.projection)) +
+       " (the interpolation's default: the plots and Tables 3–4; Table 2 with partproj, Table 1 each projection); " +
        std::to_string(c.frames) + " frames over the keyframes' range " +
        "for the plots, " + std::to_string(c.table_frames) + " for Tables 1–2; baselines on a " + std::to_string(c.mesh_vertices) +
        "-vertex, " + std::to_string(c.mesh_triangles) + "-triangle mesh" +
