@@ -119,11 +119,12 @@ struct Stats {
   json to_json() const {
     json u = json::array();
     for (const Unconverged& x : unconverged) u.push_back({{"t", x.t}, {"iterations", x.iterations}, {"stop", to_string(x.stop)}});
-    return {{"unconverged_frames", u},{"runs", runs},          {"failed_runs", failed_runs},       {"frames", frames()},
+    return {{"runs", runs},          {"failed_runs", failed_runs},       {"frames", frames()},
             {"mean_iterations", iterations.empty() ? json(nullptr) : json(mean())},
             {"p99_iterations", quantile(0.99)}, {"max_iterations", max()}, {"at_cap", at_cap},
             {"certified", certified},           {"not_converged", not_converged},
-            {"ms_per_frame", iterations.empty() ? json(nullptr) : json(ms_per_frame())}};
+            {"ms_per_frame", iterations.empty() ? json(nullptr) : json(ms_per_frame())},
+            {"unconverged_frames", u}};
   }
 };
 

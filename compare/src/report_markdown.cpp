@@ -6,6 +6,7 @@
 #include "hsi/interpolation.h"
 
 namespace hsi::compare {
+
 std::string report_markdown(const Comparison& c) {
   const PerFrame& p = c.per_frame;
   const int arap_folded = count_positive(p.arap_flipped);
