@@ -1,7 +1,7 @@
 # ctest bench_stress_options: bench_stress --hessian-ratio refuses what is not a number in
 # [0, 1] (nan included) with a message naming the option, before any work; 1 (the Hessian
 # over all of G) runs a small slice, every frame certified and converged, and the JSON
-# says which ratio ran.
+# says which ratio ran; --max-iterations 1 lists the unconverged frames and why.
 # -D: HSI_BENCH_STRESS, HSI_WORK_DIR
 file(REMOVE_RECURSE ${HSI_WORK_DIR})
 file(MAKE_DIRECTORY ${HSI_WORK_DIR})
@@ -41,4 +41,15 @@ string(JSON not_converged GET "${j}" total 0 not_converged)
 string(JSON failed GET "${j}" total 0 failed_runs)
 if(NOT ratio EQUAL 1 OR NOT frames EQUAL 2 OR NOT certified EQUAL frames OR NOT not_converged EQUAL 0 OR NOT failed EQUAL 0)
   message(FATAL_ERROR "--hessian-ratio 1: ratio ${ratio}, ${frames} frames (want 2), ${certified} certified, ${not_converged} not converged, ${failed} failed runs")
+endif()
+
+# A run names each frame that did not converge and why (NewtonStop): one iteration a frame.
+run(0 ${HSI_BENCH_STRESS} ${slice} --max-iterations 1 --json ${W}/cap.json)
+file(READ ${W}/cap.json j)
+string(JSON not_converged GET "${j}" total 0 not_converged)
+string(JSON listed LENGTH "${j}" total 0 unconverged_frames)
+string(JSON stop0 GET "${j}" total 0 unconverged_frames 0 stop)
+if(not_converged LESS 1 OR NOT listed EQUAL not_converged OR NOT stop0 STREQUAL "iteration limit"
+   OR NOT RUN_OUTPUT MATCHES "not converged: t=[0-9.]+ iteration limit after 1 it")
+  message(FATAL_ERROR "--max-iterations 1: ${not_converged} not converged, ${listed} listed, first stop '${stop0}', or no progress-line list")
 endif()
