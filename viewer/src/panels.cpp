@@ -177,7 +177,7 @@ PanelRequests draw_side_panel(const PanelContext& c) {
     if (c.shown.certified) ImGui::TextColored(ImVec4(0.4f, 0.85f, 0.45f, 1), "certified locally injective");
     else ImGui::TextColored(ImVec4(1, 0.3f, 0.3f, 1), "NOT CERTIFIED");
     if (!f->converged)
-      ImGui::TextColored(ImVec4(1, 0.6f, 0.1f, 1), "NOT CONVERGED (Newton stopped after %d iterations)", f->iterations);
+      ImGui::TextColored(ImVec4(1, 0.6f, 0.1f, 1), "NOT CONVERGED (%s after %d iterations)", to_string(f->stop), f->iterations);
   }
   if (c.overlap && c.overlap->overlaps())  // a drag, a keyframe or a frame: locally, not globally injective
     ImGui::TextColored(ImVec4(1, 0.62f, 0.1f, 1), "overlaps itself (%d boundary crossings)", c.overlap->crossings);

@@ -227,6 +227,7 @@ void Solver::run() {
         f->keyframe = r.keyframe;
         f->certified = r.certified;
         f->converged = r.converged;
+        f->stop = r.stop;
         f->iterations = r.iterations;
         f->ms = r.ms;
         f->energy = r.energy;

@@ -37,6 +37,7 @@ struct SolvedFrame {
   HarmonicMap map;
   Eigen::VectorXd x;  // warm start for the neighbours
   bool keyframe = false, certified = false, converged = false;
+  NewtonStop stop = NewtonStop::Converged;  // why the solve stopped (FrameResult::stop)
   int iterations = 0;
   double ms = 0, energy = 0;
   Distortion distortion;            // sampled at the certificate's breakpoints
