@@ -61,7 +61,7 @@ HessianProjection projection_from(const std::string& s) {
 // Frames of some runs, pooled (keyframes excluded: they are not solved).
 struct Stats {
   std::vector<int> iterations;
-  long at_cap = 0, certified = 0, not_converged = 0;
+  long at_cap = 0, certified = 0;
   double ms = 0;
   int runs = 0, failed_runs = 0;  // failed: the interpolator threw
   // The frames that stopped without converging: t, iterations, why (NewtonStop).
@@ -77,7 +77,6 @@ struct Stats {
     if (!f.converged) unconverged.push_back({f.t, f.iterations, f.stop});
     at_cap += f.iterations >= max_iterations || !f.converged;
     certified += f.certified;
-    not_converged += !f.converged;
     ms += f.ms;
   }
   void add(const Stats& o) {
@@ -85,12 +84,12 @@ struct Stats {
     unconverged.insert(unconverged.end(), o.unconverged.begin(), o.unconverged.end());
     at_cap += o.at_cap;
     certified += o.certified;
-    not_converged += o.not_converged;
     ms += o.ms;
     runs += o.runs;
     failed_runs += o.failed_runs;
   }
   long frames() const { return static_cast<long>(iterations.size()); }
+  long not_converged() const { return static_cast<long>(unconverged.size()); }
   double mean() const {
     if (iterations.empty()) return NAN;
     double s = 0;
@@ -122,7 +121,7 @@ struct Stats {
     return {{"runs", runs},          {"failed_runs", failed_runs},       {"frames", frames()},
             {"mean_iterations", iterations.empty() ? json(nullptr) : json(mean())},
             {"p99_iterations", quantile(0.99)}, {"max_iterations", max()}, {"at_cap", at_cap},
-            {"certified", certified},           {"not_converged", not_converged},
+            {"certified", certified},           {"not_converged", not_converged()},
             {"ms_per_frame", iterations.empty() ? json(nullptr) : json(ms_per_frame())},
             {"unconverged_frames", u}};
   }
@@ -144,7 +143,7 @@ void print_header() {
 void print_row(const RunKey& k, const Stats& s) {
   std::printf("| %s | %s | %d%s | %ld | %.2f | %d | %d | %ld | %ld | %ld | %.1f |\n", frames_label(k.first).c_str(), to_string(k.second), s.runs,
               s.failed_runs ? (" (" + std::to_string(s.failed_runs) + " failed)").c_str() : "", s.frames(), s.mean(),
-              s.quantile(0.99), s.max(), s.at_cap, s.certified, s.not_converged, s.ms_per_frame());
+              s.quantile(0.99), s.max(), s.at_cap, s.certified, s.not_converged(), s.ms_per_frame());
 }
 
 // The frames of a run solved as Interpolator::frame solves them (the blended metric,
