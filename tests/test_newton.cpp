@@ -5,6 +5,7 @@
 #include <Eigen/Eigenvalues>
 #include <random>
 
+#include "hessian_kernel.h"
 #include "hsi/newton.h"
 #include "hsi/shape_setup.h"
 #include "test_shapes.h"
@@ -105,6 +106,70 @@ TEST_CASE("structured Hessian assembly equals the naive 4n x 4n sum", "[newton]"
     naive /= static_cast<double>(fx.setup.H.size());
     const Eigen::MatrixXd fast = fx.core->hessian(p);
     CHECK((fast - naive).cwiseAbs().maxCoeff() < 1e-10 * naive.cwiseAbs().maxCoeff());
+  }
+}
+
+TEST_CASE("the Hessian over every sample, split over the threads, equals the naive sum (exact and projected)", "[newton]") {
+  // 1,500 samples: several ranges of samples, each summed on its own and then added.
+  Fixture fx(test::bar_with_holes(), 1500, 0.2);
+  const Eigen::VectorXd x = fx.perturbed_identity(8, 0.02);
+  fx.core->set_targets(fx.metrics_of(fx.perturbed_identity(7, 0.02)));
+  const Eigen::VectorXd v = fx.space().T() * x;
+  fx.core->set_coefficients(v);
+  const int n = fx.core->n();
+  const Eigen::VectorXcd phi = v.segment(0, n).cast<cd>() + cd(0, 1) * v.segment(n, n).cast<cd>();
+  const Eigen::VectorXcd psi = v.segment(2 * n, n).cast<cd>() + cd(0, 1) * v.segment(3 * n, n).cast<cd>();
+  const std::vector<Metric> g = fx.metrics_of(fx.perturbed_identity(7, 0.02));
+  for (bool exact : {false, true}) {
+    Eigen::MatrixXd naive = Eigen::MatrixXd::Zero(4 * n, 4 * n);
+    const Eigen::Index G = fx.setup.D_G.rows();
+    for (Eigen::Index s = 0; s < G; ++s) {
+      const Eigen::RowVectorXcd D = fx.setup.D_G.row(s);
+      Eigen::MatrixXd B = Eigen::MatrixXd::Zero(4, 4 * n);
+      B.block(0, 0, 1, n) = D.real();
+      B.block(0, n, 1, n) = -D.imag();
+      B.block(1, 0, 1, n) = D.imag();
+      B.block(1, n, 1, n) = D.real();
+      B.block(2, 2 * n, 2, 2 * n) = B.block(0, 0, 2, 2 * n);
+      const SampleDerivatives d = isometric_derivatives(g[static_cast<size_t>(s)], D * phi, D * psi, HessianProjection::PartProj, exact);
+      naive += B.transpose() * d.hess * B;
+    }
+    naive /= static_cast<double>(G);
+    const Eigen::MatrixXd fast = fx.core->hessian(HessianProjection::PartProj, exact, /*all_samples=*/true);
+    INFO("exact " << exact);
+    CHECK((fast - naive).cwiseAbs().maxCoeff() < 1e-10 * naive.cwiseAbs().maxCoeff());
+    CHECK(fast == fast.transpose());
+  }
+}
+
+TEST_CASE("the Hessian's dense products: both builds (baseline, AVX2 + FMA) against a naive sum", "[newton]") {
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> u(-1, 1);
+  for (const auto& [rows, m] : {std::pair<long, long>{7, 5}, {300, 40}, {1000, 152}}) {
+    using RowMatrix = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
+    RowMatrix C(rows, m), W(rows, 3 * m);
+    for (Eigen::Index i = 0; i < C.size(); ++i) C.data()[i] = u(rng);
+    for (Eigen::Index i = 0; i < W.size(); ++i) W.data()[i] = u(rng);
+    Eigen::MatrixXd naive = Eigen::MatrixXd::Zero(m, 3 * m);
+    for (long r = 0; r < rows; ++r)
+      for (long i = 0; i < m; ++i)
+        for (long j = 0; j < 3 * m; ++j) naive(i, j) += C(r, i) * W(r, j);
+    const Eigen::MatrixXd start = Eigen::MatrixXd::Constant(m, 3 * m, 0.5);  // it adds to P
+    auto check = [&](void (*kernel)(const double*, const double*, long, long, double*), const char* name) {
+      Eigen::MatrixXd P = start;
+      kernel(C.data(), W.data(), rows, m, P.data());
+      INFO(name << ", " << rows << " rows, m = " << m);
+      for (long j = 0; j < 3 * m; ++j)
+        for (long i = 0; i < m; ++i) {
+          const bool written = j >= m && j < 2 * m ? true : i >= j % m;  // the first and last blocks: lower triangles
+          const double want = written ? naive(i, j) + 0.5 : 0.5;
+          REQUIRE(std::abs(P(i, j) - want) <= 1e-12 * (1 + std::abs(want)));
+        }
+    };
+    check(&detail::hessian_accumulate_baseline, "baseline");
+    check(&detail::hessian_accumulate, detail::hessian_kernel_name());
+    if (detail::hessian_kernel_has_avx2_fma()) check(&detail::hessian_accumulate_avx2_fma, "avx2+fma");
+    else WARN("no AVX2 + FMA build or processor here: only the baseline build is tested");
   }
 }
 

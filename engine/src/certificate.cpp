@@ -9,6 +9,8 @@
 #include <numbers>
 #include <sstream>
 
+#include "row_parallel.h"
+
 namespace hsi {
 
 CertificateSegments certificate_segments(const Shape& shape, const BoundarySamples& s) {
@@ -171,7 +173,10 @@ CertificateResult Certifier::certify(const HarmonicMap& map, const CertificateOp
     r.reason = "the map's coefficients are not finite";
     return r;
   }
-  const VectorXcd a = I.D * map.phi, b = I.D * map.psi, a1 = I.E * map.phi, b1 = I.E * map.psi;
+  Eigen::Matrix<cd, Eigen::Dynamic, 2> coef(I.m + I.N, 2);
+  coef << map.phi, map.psi;
+  const Eigen::Matrix<cd, Eigen::Dynamic, 2> ab = detail::rows_times(I.D, coef), ab1 = detail::rows_times(I.E, coef);
+  const auto a = ab.col(0), b = ab.col(1), a1 = ab1.col(0), b1 = ab1.col(1);
   // Rounding: a computed value is within (2 M + 72) u of its weighted sum of magnitudes
   // (certificate_weights' WD, WE) of the exact one: 16 u per entry, the product and a
   // sum of M terms.
@@ -180,7 +185,8 @@ CertificateResult Certifier::certify(const HarmonicMap& map, const CertificateOp
   Eigen::MatrixXd abs_coef(M, 2);  // [|φ| |ψ|]: one pass over each weight matrix
   abs_coef << map.phi.cwiseAbs(), map.psi.cwiseAbs();
   const auto abs_phi = abs_coef.col(0), abs_psi = abs_coef.col(1);
-  const Eigen::MatrixXd eD = value_err * (I.weights.WD * abs_coef), eE = value_err * (I.weights.WE * abs_coef);
+  const Eigen::MatrixXd eD = value_err * detail::rows_times(I.weights.WD, abs_coef);
+  const Eigen::MatrixXd eE = value_err * detail::rows_times(I.weights.WE, abs_coef);
   const auto ea = eD.col(0), eb = eD.col(1), ea1 = eE.col(0), eb1 = eE.col(1);
   // Lipschitz constants of f_zz and of (conj f_zbar)' per segment (bounds on the third
   // derivatives), from upper bounds of |S_j| and lower bounds of the distances, raised
@@ -195,7 +201,7 @@ CertificateResult Certifier::certify(const HarmonicMap& map, const CertificateOp
   jumps << s_phi + err_phi, s_psi + err_psi;
   jumps *= 1 + 2 * kU;
   const double lip_up = 1 + (2.0 * M + 32) * kU;
-  const Eigen::MatrixXd L = lip_up * (inv2pi * (I.weights.W * jumps) + 2 * (I.weights.Wh * logmag));
+  const Eigen::MatrixXd L = lip_up * (inv2pi * detail::rows_times(I.weights.W, jumps) + 2 * detail::rows_times(I.weights.Wh, logmag));
   Eigen::VectorXd La = L.col(0), Lb = L.col(1);
   for (Eigen::Index i = 0; i < La.size(); ++i)
     if (I.weights.touches[static_cast<size_t>(i)]) La(i) = Lb(i) = std::numeric_limits<double>::infinity();

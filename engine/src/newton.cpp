@@ -2,6 +2,8 @@
 #include "hsi/stopwatch.h"
 #include "hsi/newton.h"
 #include "hsi/timing.h"
+#include "hessian_kernel.h"
+#include "row_parallel.h"
 
 #include <Eigen/Cholesky>
 #include <atomic>
@@ -10,32 +12,18 @@
 #include <array>
 #include <cstdio>
 #include <limits>
+#include <omp.h>
 
 namespace hsi {
 namespace {
 
 using Clock = std::chrono::steady_clock;
-
-// A real 2×2 block K acting on u ∈ C ≅ R² as K u = α u + β conj(u).
-inline void complex_form(double k11, double k12, double k21, double k22, cd& alpha, cd& beta) {
-  alpha = cd((k11 + k22) / 2, (k21 - k12) / 2);
-  beta = cd((k11 - k22) / 2, (k21 + k12) / 2);
-}
-
-// The real matrix of δ ↦ P δ + Q conj(δ) with complex-packed input and output.
-void real_block(const MatrixXcd& P, const MatrixXcd& Q, Eigen::Ref<Eigen::MatrixXd> out) {
-  const Eigen::Index n = P.rows();
-  out.topLeftCorner(n, n) = P.real() + Q.real();
-  out.topRightCorner(n, n) = -P.imag() + Q.imag();
-  out.bottomLeftCorner(n, n) = P.imag() + Q.imag();
-  out.bottomRightCorner(n, n) = P.real() - Q.real();
-}
+using RowMatrix = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
 
 class CpuNewtonCore final : public NewtonCore {
  public:
   CpuNewtonCore(MatrixXcd D, std::vector<int> H) : D_(std::move(D)), H_(std::move(H)) {
-    DH_.resize(static_cast<Eigen::Index>(H_.size()), D_.cols());
-    for (size_t k = 0; k < H_.size(); ++k) DH_.row(static_cast<Eigen::Index>(k)) = D_.row(H_[k]);
+    CH_ = real_rows(H_);
     g_.assign(static_cast<size_t>(D_.rows()), Metric(1, 0, 1));
   }
   int n() const override { return static_cast<int>(D_.cols()); }
@@ -49,8 +37,7 @@ class CpuNewtonCore final : public NewtonCore {
     const Eigen::Index n = D_.cols();
     const VectorXcd phi = v.segment(0, n).cast<cd>() + cd(0, 1) * v.segment(n, n).cast<cd>();
     const VectorXcd psi = v.segment(2 * n, n).cast<cd>() + cd(0, 1) * v.segment(3 * n, n).cast<cd>();
-    a_ = D_ * phi;
-    b_ = D_ * psi;
+    times(phi, psi, a_, b_);
   }
   double energy() override { return mean_energy(0.0); }
   double energy_at(double s) override { return mean_energy(s); }
@@ -66,55 +53,58 @@ class CpuNewtonCore final : public NewtonCore {
       gb(s) = cd(d.grad(2), d.grad(3));
     }
     // (∂/∂Re φ + i ∂/∂Im φ) E = Σ conj(D) (∂E/∂Re a + i ∂E/∂Im a).
-    const VectorXcd gphi = D_.adjoint() * ga / static_cast<double>(G);
-    const VectorXcd gpsi = D_.adjoint() * gb / static_cast<double>(G);
+    const ColumnPair g = adjoint_times(ga, gb) / static_cast<double>(G);
     Eigen::VectorXd out(4 * n);
-    out << gphi.real(), gphi.imag(), gpsi.real(), gpsi.imag();
+    out << g.col(0).real(), g.col(0).imag(), g.col(1).real(), g.col(1).imag();
     return out;
   }
 
   Eigen::MatrixXd hessian(HessianProjection projection, bool exact, bool all_samples) override {
-    // Σ_H B_sᵀ K_s B_s with B_s = diag(𝐃_s, 𝐃_s) (paper Eq. 13, 20): written in complex
-    // form, every block is Dᴴ diag(w) D or Dᴴ diag(w) conj(D), so the whole Hessian is
-    // one complex GEMM Dᴴ [α_aa∘D, β_aa∘D̄, α_ab∘D, β_ab∘D̄, α_bb∘D, β_bb∘D̄].
-    // The subset H's rows, or with all_samples every row of G.
-    const MatrixXcd& DH = all_samples ? D_ : DH_;
-    const Eigen::Index h = DH.rows(), n = D_.cols();
-    MatrixXcd Wt(h, 6 * n);
+    // Σ_H B_sᵀ K_s B_s (paper Eq. 13, 20), in real arithmetic. With D_s = x + i y the
+    // sample's basis row, (Re a, Im a) = c_s (Re φ, Im φ) for the 2 × 2n block
+    // c_s = [[x, −y], [y, x]], and likewise for b and ψ. So the (a, a) block of the
+    // Hessian is Σ c_sᵀ K_aa c_s = Cᵀ W_aa with C the c_s stacked and W_aa's rows K_aa c_s;
+    // (a, b) and (b, b) the same. Two of the three blocks are symmetric (only their lower
+    // triangles are multiplied out), and the products are real GEMMs, which Eigen
+    // vectorises, where a complex product with an adjoint falls to a scalar path; with
+    // AVX2 and FMA where the processor has them (hessian_kernel.h).
+    // The subset H's rows, or with all_samples every row of G; each thread sums its own
+    // range of samples and the ranges are added.
+    const RowMatrix& C = all_samples ? all_rows() : CH_;
+    const Eigen::Index h = C.rows() / 2, m = C.cols();
+    const int chunks = static_cast<int>(std::clamp<Eigen::Index>(h / 64, 1, omp_get_max_threads()));
+    std::vector<Eigen::MatrixXd> parts(static_cast<size_t>(chunks));
 #pragma omp parallel for schedule(static)
-    for (Eigen::Index k = 0; k < h; ++k) {
-      const Eigen::Index s = all_samples ? k : H_[static_cast<size_t>(k)];
-      const SampleDerivatives d = isometric_derivatives(g_[static_cast<size_t>(s)], a_(s), b_(s), projection, exact);
-      const Eigen::Matrix4d& K = d.hess;
-      cd w[6];
-      complex_form(K(0, 0), K(0, 1), K(1, 0), K(1, 1), w[0], w[1]);
-      complex_form(K(0, 2), K(0, 3), K(1, 2), K(1, 3), w[2], w[3]);
-      complex_form(K(2, 2), K(2, 3), K(3, 2), K(3, 3), w[4], w[5]);
-      for (int q = 0; q < 6; ++q) {
-        if (q % 2 == 0)
-          Wt.row(k).segment(q * n, n) = w[q] * DH.row(k);
-        else
-          Wt.row(k).segment(q * n, n) = w[q] * DH.row(k).conjugate();
+    for (int c = 0; c < chunks; ++c) {
+      const Eigen::Index k0 = h * c / chunks, k1 = h * (c + 1) / chunks, len = k1 - k0;
+      RowMatrix W(2 * len, 3 * m);
+      for (Eigen::Index k = k0; k < k1; ++k) {
+        const Eigen::Index s = all_samples ? k : H_[static_cast<size_t>(k)];
+        const Eigen::Matrix4d K = isometric_derivatives(g_[static_cast<size_t>(s)], a_(s), b_(s), projection, exact).hess;
+        const auto cs = C.middleRows(2 * k, 2);
+        auto w = W.middleRows(2 * (k - k0), 2);
+        w.leftCols(m).noalias() = K.topLeftCorner<2, 2>() * cs;
+        w.middleCols(m, m).noalias() = K.topRightCorner<2, 2>() * cs;
+        w.rightCols(m).noalias() = K.bottomRightCorner<2, 2>() * cs;
       }
+      Eigen::MatrixXd& P = parts[static_cast<size_t>(c)];
+      P.setZero(m, 3 * m);
+      detail::hessian_accumulate(C.data() + 2 * k0 * m, W.data(), 2 * len, m, P.data());
     }
-    // The GEMM, split by column blocks over the threads (Eigen does not parallelise
-    // a product this thin on its own).
-    MatrixXcd R(n, 6 * n);
-#pragma omp parallel for schedule(static)
-    for (int q = 0; q < 6; ++q) R.middleCols(q * n, n).noalias() = DH.adjoint() * Wt.middleCols(q * n, n);
-    R /= static_cast<double>(h);
-    Eigen::MatrixXd Hv(4 * n, 4 * n);
-    real_block(R.middleCols(0, n), R.middleCols(n, n), Hv.block(0, 0, 2 * n, 2 * n));
-    real_block(R.middleCols(2 * n, n), R.middleCols(3 * n, n), Hv.block(0, 2 * n, 2 * n, 2 * n));
-    real_block(R.middleCols(4 * n, n), R.middleCols(5 * n, n), Hv.block(2 * n, 2 * n, 2 * n, 2 * n));
-    Hv.block(2 * n, 0, 2 * n, 2 * n) = Hv.block(0, 2 * n, 2 * n, 2 * n).transpose();
-    return (Hv + Hv.transpose()) / 2;
+    for (int c = 1; c < chunks; ++c) parts[0] += parts[static_cast<size_t>(c)];
+    const Eigen::MatrixXd& P = parts[0];
+    Eigen::MatrixXd Hv(2 * m, 2 * m);
+    Hv.topLeftCorner(m, m) = P.leftCols(m).selfadjointView<Eigen::Lower>();
+    Hv.topRightCorner(m, m) = P.middleCols(m, m);
+    Hv.bottomLeftCorner(m, m) = P.middleCols(m, m).transpose();
+    Hv.bottomRightCorner(m, m) = P.rightCols(m).selfadjointView<Eigen::Lower>();
+    return Hv / static_cast<double>(h);
   }
 
   void set_direction(const Eigen::VectorXd& dv) override {
     const Eigen::Index n = D_.cols();
-    da_ = D_ * (dv.segment(0, n).cast<cd>() + cd(0, 1) * dv.segment(n, n).cast<cd>());
-    db_ = D_ * (dv.segment(2 * n, n).cast<cd>() + cd(0, 1) * dv.segment(3 * n, n).cast<cd>());
+    times(dv.segment(0, n).cast<cd>() + cd(0, 1) * dv.segment(n, n).cast<cd>(),
+          dv.segment(2 * n, n).cast<cd>() + cd(0, 1) * dv.segment(3 * n, n).cast<cd>(), da_, db_);
   }
 
   double max_safe_step() override {
@@ -144,6 +134,24 @@ class CpuNewtonCore final : public NewtonCore {
   }
 
  private:
+  using ColumnPair = Eigen::Matrix<cd, Eigen::Dynamic, 2>;
+
+  // (D u, D w), one pass over D.
+  void times(const VectorXcd& u, const VectorXcd& w, VectorXcd& Du, VectorXcd& Dw) const {
+    ColumnPair uw(D_.cols(), 2);
+    uw << u, w;
+    const ColumnPair out = detail::rows_times(D_, uw);
+    Du = out.col(0);
+    Dw = out.col(1);
+  }
+
+  // Dᴴ [u, w].
+  ColumnPair adjoint_times(const VectorXcd& u, const VectorXcd& w) const {
+    ColumnPair uw(D_.rows(), 2);
+    uw << u, w;
+    return detail::rows_adjoint_times(D_, uw);
+  }
+
   double mean_energy(double s) const {
     const Eigen::Index G = D_.rows();
     double sum = 0;
@@ -159,7 +167,29 @@ class CpuNewtonCore final : public NewtonCore {
     return bad ? std::numeric_limits<double>::infinity() : sum / static_cast<double>(G);
   }
 
-  MatrixXcd D_, DH_;
+  // The blocks c_s = [[x, −y], [y, x]] of the samples' rows D_s = x + i y, stacked.
+  RowMatrix real_rows(const std::vector<int>& samples) const {
+    const Eigen::Index n = D_.cols();
+    RowMatrix C(2 * static_cast<Eigen::Index>(samples.size()), 2 * n);
+    for (size_t k = 0; k < samples.size(); ++k) {
+      const Eigen::RowVectorXd x = D_.row(samples[k]).real(), y = D_.row(samples[k]).imag();
+      const Eigen::Index r = 2 * static_cast<Eigen::Index>(k);
+      C.row(r) << x, -y;
+      C.row(r + 1) << y, x;
+    }
+    return C;
+  }
+  const RowMatrix& all_rows() {  // made on the first Hessian over all of G
+    if (CG_.rows() == 0) {
+      std::vector<int> every(static_cast<size_t>(D_.rows()));
+      for (size_t s = 0; s < every.size(); ++s) every[s] = static_cast<int>(s);
+      CG_ = real_rows(every);
+    }
+    return CG_;
+  }
+
+  MatrixXcd D_;
+  RowMatrix CH_, CG_;  // real_rows of the subset H, and of every sample (made when first needed)
   std::vector<int> H_;
   std::vector<Metric> g_;
   VectorXcd a_, b_, da_, db_;
