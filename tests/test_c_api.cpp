@@ -318,6 +318,7 @@ TEST_CASE("C API: frame reports carry the certificate's bounds beside the sample
   hsi_sequence_summary sum{};
   REQUIRE(hsi_sequence_summary_get(seq, &sum) == HSI_OK);
   CHECK(sum.not_converged == not_converged);
+  CHECK(sum.stops[HSI_STOP_CONVERGED] + not_converged == sum.frames);
   CHECK(sum.within_certified_bounds == within_certified);
   hsi_sequence_destroy(seq);
 
@@ -328,14 +329,28 @@ TEST_CASE("C API: frame reports carry the certificate's bounds beside the sample
   REQUIRE(hsi_interpolator_sequence(it, 5, nullptr, nullptr, &seq) == HSI_OK);
   REQUIRE(hsi_sequence_summary_get(seq, &sum) == HSI_OK);
   CHECK(sum.not_converged > 0);
-  uint32_t flagged = 0;
+  uint32_t flagged = 0, at_limit = 0;
   for (uint32_t f = 0; f < hsi_sequence_frame_count(seq); ++f) {
     hsi_frame_report r{};
     REQUIRE(hsi_sequence_frame_report(seq, f, &r) == HSI_OK);
     flagged += r.converged ? 0 : 1;
+    // 0.4: why it stopped, consistent with converged; one iteration allowed: the limit.
+    CHECK((r.stop == HSI_STOP_CONVERGED) == (r.converged == 1));
+    if (!r.converged) CHECK(r.stop == HSI_STOP_ITERATION_LIMIT);
+    at_limit += r.stop == HSI_STOP_ITERATION_LIMIT ? 1 : 0;
     if (!r.certified) CHECK(std::isnan(r.certified_sigma1_max));
   }
   CHECK(sum.not_converged == flagged);
+  CHECK(at_limit > 0);
+  CHECK(sum.stops[HSI_STOP_ITERATION_LIMIT] == at_limit);
+  uint32_t by_reason = 0;
+  for (int k = 0; k < HSI_STOP_COUNT; ++k) by_reason += sum.stops[k];
+  CHECK(by_reason == sum.frames);
+  CHECK(sum.stops[HSI_STOP_CONVERGED] + sum.not_converged == sum.frames);
+  CHECK(std::string(hsi_stop_name(HSI_STOP_ITERATION_LIMIT)) == "iteration limit");
+  CHECK(std::string(hsi_stop_name(HSI_STOP_START_NOT_CERTIFIED)) == "start not certified");
+  CHECK(std::string(hsi_stop_name(HSI_STOP_COUNT)) == "unknown");
+  CHECK(std::string(hsi_stop_name(-1)) == "unknown");
   hsi_sequence_destroy(seq);
   hsi_interpolator_destroy(it);
   hsi_scene_destroy(s);

@@ -127,6 +127,7 @@ hsi_frame_report to_report(const FrameResult& f) {
   r.keyframe = f.keyframe;
   r.certified = f.certified;
   r.converged = f.converged;
+  r.stop = static_cast<int>(f.stop);
   r.iterations = f.iterations;
   r.energy = f.energy;
   r.ms = f.ms;
@@ -171,6 +172,17 @@ void check_in_cage(const Cage& cage, double size, const std::vector<cd>& points)
 
 }  // namespace
 
+// hsi_stop mirrors NewtonStop value for value.
+static_assert(HSI_STOP_COUNT == kNewtonStopCount);
+static_assert(HSI_STOP_CONVERGED == static_cast<int>(NewtonStop::Converged));
+static_assert(HSI_STOP_ITERATION_LIMIT == static_cast<int>(NewtonStop::IterationLimit));
+static_assert(HSI_STOP_STAGNATED == static_cast<int>(NewtonStop::Stagnated));
+static_assert(HSI_STOP_CERTIFICATE_REFUSED == static_cast<int>(NewtonStop::CertificateRefused));
+static_assert(HSI_STOP_NO_DECREASE == static_cast<int>(NewtonStop::NoDecrease));
+static_assert(HSI_STOP_NOT_FACTORED == static_cast<int>(NewtonStop::NotFactored));
+static_assert(HSI_STOP_START_FOLDS == static_cast<int>(NewtonStop::StartFolds));
+static_assert(HSI_STOP_START_NOT_CERTIFIED == static_cast<int>(NewtonStop::StartNotCertified));
+
 extern "C" {
 
 uint32_t hsi_version(void) { return HSI_VERSION; }
@@ -191,6 +203,11 @@ const char* hsi_status_name(hsi_status s) {
     case HSI_ERROR_INTERNAL: return "internal error";
   }
   return "unknown status";
+}
+
+const char* hsi_stop_name(int stop) {
+  if (stop < 0 || stop >= HSI_STOP_COUNT) return "unknown";
+  return to_string(static_cast<NewtonStop>(stop));
 }
 
 const char* hsi_last_error(void) { return g_error.c_str(); }
@@ -707,6 +724,7 @@ hsi_status hsi_sequence_summary_get(const hsi_sequence* s, hsi_sequence_summary*
     r.not_converged = static_cast<uint32_t>(m.not_converged);
     r.within_certified_bounds = static_cast<uint32_t>(m.within_certified_bounds);
     r.max_certified_bound_excess = m.max_certified_bound_excess;
+    for (int k = 0; k < HSI_STOP_COUNT; ++k) r.stops[k] = static_cast<uint32_t>(m.stops[static_cast<size_t>(k)]);
     *out = r;
   });
 }

@@ -40,15 +40,15 @@ extern "C" {
 #endif
 
 #define HSI_VERSION_MAJOR 0
-#define HSI_VERSION_MINOR 3
+#define HSI_VERSION_MINOR 4
 #define HSI_VERSION_PATCH 0
 /* major * 10000 + minor * 100 + patch, comparable with hsi_version(). Before 1.0 the
  * minor version is the ABI: a struct that grows (0.2: hsi_interpolation_options gained
  * its backend; 0.3: hsi_frame_report and hsi_sequence_summary gained the certified
- * bounds and the frames that did not converge) bumps it, and so the library's soname
- * (libhsi.so.0.3). */
+ * bounds and the frames that did not converge; 0.4: they gained why each solve
+ * stopped) bumps it, and so the library's soname (libhsi.so.0.4). */
 #define HSI_VERSION (HSI_VERSION_MAJOR * 10000 + HSI_VERSION_MINOR * 100 + HSI_VERSION_PATCH)
-#define HSI_VERSION_STRING "0.3.0"
+#define HSI_VERSION_STRING "0.4.0"
 
 typedef enum hsi_status {
   HSI_OK = 0,
@@ -214,6 +214,24 @@ HSI_API hsi_status hsi_interpolator_backend(const hsi_interpolator* interpolator
  * cannot be certified is returned and reported as such (certified = 0), never as good. */
 HSI_API hsi_status hsi_interpolator_frame(hsi_interpolator* interpolator, double t, hsi_sequence** out);
 
+/* 0.4. Why a frame's Newton solve stopped (hsi_frame_report.stop). Every value but
+ * HSI_STOP_CONVERGED is a frame that did not converge (hsi_frame_report.converged == 0). */
+typedef enum hsi_stop {
+  HSI_STOP_CONVERGED = 0,           /* the decrement, the decrease or the slope fell below its tolerance */
+  HSI_STOP_ITERATION_LIMIT = 1,     /* the iteration cap was reached, still decreasing */
+  HSI_STOP_STAGNATED = 2,           /* the energy decreased only linearly and slowly, step after step */
+  HSI_STOP_CERTIFICATE_REFUSED = 3, /* every step that lowered the energy enough was refused by the certificate */
+  HSI_STOP_NO_DECREASE = 4,         /* the line search refused every step (the certificate refused none) */
+  HSI_STOP_NOT_FACTORED = 5,        /* no Newton system could be factored */
+  HSI_STOP_START_FOLDS = 6,         /* the starting map folds or degenerates at a sample */
+  HSI_STOP_START_NOT_CERTIFIED = 7  /* the starting map is not certified */
+} hsi_stop;
+#define HSI_STOP_COUNT 8
+/* [any thread] "converged", "iteration limit", "stagnated", "certificate refused",
+ * "no decrease", "not factored", "start folds", "start not certified"; "unknown"
+ * for any other value. */
+HSI_API const char* hsi_stop_name(int stop);
+
 typedef struct hsi_frame_report {
   double t;
   int keyframe, certified, converged;
@@ -241,6 +259,9 @@ typedef struct hsi_frame_report {
   double certified_bound_sigma1_max, certified_bound_sigma2_min, certified_bound_conformal_max,
       certified_bound_isometric_max;
   double certified_bound_excess;
+  /* 0.4. Why the solve stopped (hsi_stop); HSI_STOP_CONVERGED for a keyframe or a
+   * held frame, which are not solved. converged == (stop == HSI_STOP_CONVERGED). */
+  int stop;
 } hsi_frame_report;
 
 /* Called after each frame; return non-zero to stop (HSI_ERROR_CANCELLED). */
@@ -312,6 +333,9 @@ typedef struct hsi_sequence_summary {
    * envelope, and the largest certified excess (certified frames only). */
   uint32_t within_certified_bounds;
   double max_certified_bound_excess;
+  /* 0.4. Frames by why their solve stopped, indexed by hsi_stop; stops[HSI_STOP_CONVERGED]
+   * + not_converged == frames. */
+  uint32_t stops[HSI_STOP_COUNT];
 } hsi_sequence_summary;
 /* [per handle, const] */
 HSI_API hsi_status hsi_sequence_summary_get(const hsi_sequence* sequence, hsi_sequence_summary* summary);
