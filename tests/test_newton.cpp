@@ -5,7 +5,7 @@
 #include <Eigen/Eigenvalues>
 #include <random>
 
-#include "hessian_kernel.h"
+#include "dense_kernels.h"
 #include "hsi/newton.h"
 #include "hsi/shape_setup.h"
 #include "test_shapes.h"
@@ -142,6 +142,35 @@ TEST_CASE("the Hessian over every sample, split over the threads, equals the nai
   }
 }
 
+TEST_CASE("the Newton system's Cholesky solve: both builds solve it, refuse an indefinite one, and add the ridge", "[newton]") {
+  std::mt19937 rng(4);
+  std::uniform_real_distribution<double> u(-1, 1);
+  for (long m : {1L, 7L, 300L}) {
+    Eigen::MatrixXd R(m, m);
+    for (Eigen::Index i = 0; i < R.size(); ++i) R.data()[i] = u(rng);
+    const Eigen::MatrixXd A = R * R.transpose() + Eigen::MatrixXd::Identity(m, m);
+    Eigen::VectorXd b(m);
+    for (Eigen::Index i = 0; i < m; ++i) b(i) = u(rng);
+    Eigen::MatrixXd indefinite = A;
+    indefinite(m / 2, m / 2) = -1;
+    auto check = [&](bool (*solve)(const double*, long, double, const double*, double*), const char* name) {
+      INFO(name << ", m = " << m);
+      for (double ridge : {0.0, 0.5}) {
+        Eigen::VectorXd x = Eigen::VectorXd::Zero(m);
+        REQUIRE(solve(A.data(), m, ridge, b.data(), x.data()));
+        const Eigen::VectorXd residual = (A + ridge * Eigen::MatrixXd::Identity(m, m)) * x - b;
+        CHECK(residual.norm() <= 1e-10 * b.norm());
+      }
+      Eigen::VectorXd untouched = Eigen::VectorXd::Constant(m, 7);
+      CHECK_FALSE(solve(indefinite.data(), m, 0, b.data(), untouched.data()));
+      CHECK(untouched == Eigen::VectorXd::Constant(m, 7));
+    };
+    check(&detail::cholesky_solve_baseline, "baseline");
+    check(&detail::cholesky_solve, detail::dense_kernels_name());
+    if (detail::dense_kernels_have_avx2_fma()) check(&detail::cholesky_solve_avx2_fma, "avx2+fma");
+  }
+}
+
 TEST_CASE("the Hessian's dense products: both builds (baseline, AVX2 + FMA) against a naive sum", "[newton]") {
   std::mt19937 rng(3);
   std::uniform_real_distribution<double> u(-1, 1);
@@ -167,8 +196,8 @@ TEST_CASE("the Hessian's dense products: both builds (baseline, AVX2 + FMA) agai
         }
     };
     check(&detail::hessian_accumulate_baseline, "baseline");
-    check(&detail::hessian_accumulate, detail::hessian_kernel_name());
-    if (detail::hessian_kernel_has_avx2_fma()) check(&detail::hessian_accumulate_avx2_fma, "avx2+fma");
+    check(&detail::hessian_accumulate, detail::dense_kernels_name());
+    if (detail::dense_kernels_have_avx2_fma()) check(&detail::hessian_accumulate_avx2_fma, "avx2+fma");
     else WARN("no AVX2 + FMA build or processor here: only the baseline build is tested");
   }
 }

@@ -2,10 +2,9 @@
 #include "hsi/stopwatch.h"
 #include "hsi/newton.h"
 #include "hsi/timing.h"
-#include "hessian_kernel.h"
+#include "dense_kernels.h"
 #include "row_parallel.h"
 
-#include <Eigen/Cholesky>
 #include <atomic>
 #include <cmath>
 #include <algorithm>
@@ -67,7 +66,7 @@ class CpuNewtonCore final : public NewtonCore {
     // (a, b) and (b, b) the same. Two of the three blocks are symmetric (only their lower
     // triangles are multiplied out), and the products are real GEMMs, which Eigen
     // vectorises, where a complex product with an adjoint falls to a scalar path; with
-    // AVX2 and FMA where the processor has them (hessian_kernel.h).
+    // AVX2 and FMA where the processor has them (dense_kernels.h).
     // The subset H's rows, or with all_samples every row of G; each thread sums its own
     // range of samples and the ranges are added.
     const RowMatrix& C = all_samples ? all_rows() : CH_;
@@ -91,8 +90,12 @@ class CpuNewtonCore final : public NewtonCore {
       P.setZero(m, 3 * m);
       detail::hessian_accumulate(C.data() + 2 * k0 * m, W.data(), 2 * len, m, P.data());
     }
-    for (int c = 1; c < chunks; ++c) parts[0] += parts[static_cast<size_t>(c)];
-    const Eigen::MatrixXd& P = parts[0];
+    Eigen::MatrixXd P(m, 3 * m);  // the ranges' sums added, by columns over the threads
+#pragma omp parallel for schedule(static)
+    for (Eigen::Index j = 0; j < 3 * m; ++j) {
+      P.col(j) = parts[0].col(j);
+      for (int c = 1; c < chunks; ++c) P.col(j) += parts[static_cast<size_t>(c)].col(j);
+    }
     Eigen::MatrixXd Hv(2 * m, 2 * m);
     Hv.topLeftCorner(m, m) = P.leftCols(m).selfadjointView<Eigen::Lower>();
     Hv.topRightCorner(m, m) = P.middleCols(m, m);
@@ -273,14 +276,14 @@ class HostStepper final : public NewtonStepper {
     NewtonSystem sys;
     sys.diagonal_max = H_.diagonal().cwiseAbs().maxCoeff();
     sys.gradient_norm = horizontal_ ? gh_.norm() : g_.head(space_.dim()).norm();
-    Eigen::LLT<Eigen::MatrixXd> llt(H_ + ridge * Eigen::MatrixXd::Identity(H_.rows(), H_.cols()));
-    if (llt.info() != Eigen::Success) return sys;
+    const Eigen::VectorXd rhs = horizontal_ ? Eigen::VectorXd(-gh_) : Eigen::VectorXd(-g_);
+    Eigen::VectorXd sol(rhs.size());
+    if (!detail::cholesky_solve(H_.data(), H_.rows(), ridge, rhs.data(), sol.data())) return sys;
     if (horizontal_) {
-      const Eigen::VectorXd dm = llt.solve(-gh_);
-      d_.resize(dm.size() + 1);
-      d_ << dm, -a_.dot(dm) / uu_;
+      d_.resize(sol.size() + 1);
+      d_ << sol, -a_.dot(sol) / uu_;
     } else {
-      d_ = llt.solve(-g_);
+      d_ = std::move(sol);
     }
     if (!d_.allFinite()) return sys;
     sys.factored = true;

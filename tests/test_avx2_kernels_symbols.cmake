@@ -1,7 +1,7 @@
-# ctest avx2_kernel_symbols: the AVX2 + FMA build of the Hessian's dense products
-# (engine/src/hessian_kernel.h) defines nothing the rest of the program could pick in
-# place of its own baseline code: every symbol it defines is in the renamed Eigen
-# namespace (hsi_eigen_avx2_fma) or is its one entry point. A std:: or Eigen:: template
+# ctest avx2_kernels_symbols: the AVX2 + FMA build of the Newton core's dense linear
+# algebra (engine/src/dense_kernels.h) defines nothing the rest of the program could
+# pick in place of its own baseline code: every symbol it defines is in the renamed
+# Eigen namespace (hsi_eigen_avx2_fma) or is one of its entry points. A std:: or Eigen:: template
 # instantiated there (a weak symbol) could be the copy the linker keeps for the whole
 # program, and run AVX2 instructions on a processor without them.
 # -D: HSI_OBJECTS (the object files, ;-separated), HSI_NM
@@ -19,7 +19,7 @@ foreach(object IN LISTS HSI_OBJECTS)
       set(name "${CMAKE_MATCH_2}")
       if(kind MATCHES "^[rtbdn]$" AND NOT name MATCHES "hsi_eigen_avx2_fma")
         # local to the object: read-only data, local code (.cold parts, constants)
-      elseif(name MATCHES "^hsi::detail::hessian_accumulate_avx2_fma\\(")
+      elseif(name MATCHES "^hsi::detail::(hessian_accumulate|cholesky_solve)_avx2_fma\\(")
         math(EXPR entry "${entry} + 1")
       elseif(name MATCHES "hsi_eigen_avx2_fma::" OR name MATCHES "^DW\\.ref\\.__gxx_personality_v0$")
       else()
@@ -29,9 +29,9 @@ foreach(object IN LISTS HSI_OBJECTS)
   endforeach()
 endforeach()
 if(entry EQUAL 0)
-  message(FATAL_ERROR "no hsi::detail::hessian_accumulate_avx2_fma in ${HSI_OBJECTS}: is this the AVX2 build?")
+  message(FATAL_ERROR "no hsi::detail::*_avx2_fma entry point in ${HSI_OBJECTS}: is this the AVX2 build?")
 endif()
 if(bad)
-  message(FATAL_ERROR "the AVX2 + FMA kernel defines symbols the rest of the program could share:\n${bad}")
+  message(FATAL_ERROR "the AVX2 + FMA kernels define symbols the rest of the program could share:\n${bad}")
 endif()
-message(STATUS "the AVX2 + FMA kernel defines only its entry point and hsi_eigen_avx2_fma:: symbols")
+message(STATUS "the AVX2 + FMA kernels define only their entry points and hsi_eigen_avx2_fma:: symbols")
