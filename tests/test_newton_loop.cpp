@@ -46,6 +46,7 @@ struct FakeStepper : NewtonStepper {
   Eigen::Vector2d projected_scale{1, 1};
   double exact_scale = 1;
   bool subset_exact_too = false;  // subset_softness applies to the exact system over H too
+  bool subset_exact_indefinite = false;  // the exact system over H does not factor (over G it does)
   // The exact system's second eigenvalue is −exact_negative (> 0: indefinite, A diagonal):
   // it factors only with a ridge above exact_negative (a shifted system).
   double exact_negative = 0;
@@ -68,6 +69,7 @@ struct FakeStepper : NewtonStepper {
     NewtonSystem s;
     s.diagonal_max = A.diagonal().cwiseAbs().maxCoeff();
     if ((exact_now && !exact_definite) || (ridge == 0 && fail_factorisations-- > 0)) return s;
+    if (exact_now && !all_now && subset_exact_indefinite) return s;
     if (exact_now && exact_negative > 0 && !(ridge > exact_negative)) return s;
     const Eigen::Vector2d g = A * (x_ - a);
     const double subset = all_now || (exact_now && !subset_exact_too) ? 1.0 : 1.0 / subset_softness;
@@ -454,6 +456,7 @@ TEST_CASE("newton_run: a subset Hessian whose steps Armijo keeps cutting is repl
     f.energy = [&f](const Eigen::Vector2d& x) { return 2 + 0.5 * (x - f.a).dot(f.A * (x - f.a)) + 0.1 * std::pow((x - f.a).norm(), 3); };
     NewtonOptions o;
     o.escalate_after_cuts = cuts;
+    if (!cuts) o.escalate_after_cut_iterations = 0;  // (that rule would escalate the crawl too)
     const NewtonResult r = newton_run(f, true, true, Eigen::Vector2d(0, 0), o);
     CHECK(r.converged);
     REQUIRE(!r.log.empty());
@@ -473,6 +476,43 @@ TEST_CASE("newton_run: a subset Hessian whose steps Armijo keeps cutting is repl
     iterations[cuts ? 0 : 1] = r.iterations;
   }
   CHECK(2 * iterations[0] <= iterations[1]);  // without it: a crawl of cut-down steps
+}
+
+TEST_CASE("newton_run: steps Armijo cuts once, iteration after iteration, move the Hessians to all samples too", "[newton][loop]") {
+  // The subset's projected model 3x too soft along one axis (a full step overshoots to
+  // twice the error and fails Armijo, half of it passes) and 10x too stiff along the
+  // other (a step goes 5-10% of the way), the exact system over H indefinite, over G
+  // definite (issue #20:
+  // grid_6/hinge_posed, t = 0.772 with FullProj: 40 steps cut to 1/2, stagnated).
+  int iterations[2] = {0, 0};
+  for (const int after : {NewtonOptions{}.escalate_after_cut_iterations, 0}) {
+    FakeStepper f;
+    f.subset_softness = 3;
+    f.projected_scale << 1, 30;
+    f.subset_exact_indefinite = true;
+    f.a << 1, 1;
+    f.energy = [&f](const Eigen::Vector2d& x) { return 2 + 0.5 * (x - f.a).dot(f.A * (x - f.a)); };
+    NewtonOptions o;
+    o.escalate_after_cut_iterations = after;
+    o.expand_ratio = 0;
+    const NewtonResult r = newton_run(f, true, true, Eigen::Vector2d(0, 0), o);
+    REQUIRE(r.log.size() >= 2);
+    CHECK(r.log[0].backtracks == 1);  // cut once
+    CHECK_FALSE(r.log[0].all_samples);
+    CHECK_FALSE(r.log[1].all_samples);  // one cut is not escalate_after_cuts' two
+    if (after > 0) {
+      CHECK(r.converged);
+      REQUIRE(r.log.size() > static_cast<size_t>(after));
+      CHECK(r.log[static_cast<size_t>(after)].all_samples);  // after `after` cut iterations
+      CHECK(r.log[static_cast<size_t>(after)].exact_hessian);  // and the exact system over G, definite, ends it
+      CHECK(r.iterations <= after + 2);
+    } else {
+      CHECK((r.stop == NewtonStop::Stagnated || r.iterations >= 20));
+      for (const NewtonIteration& l : r.log) CHECK_FALSE(l.all_samples);
+    }
+    iterations[after ? 0 : 1] = r.iterations;
+  }
+  CHECK(3 * iterations[0] <= iterations[1]);
 }
 
 TEST_CASE("newton_run: the exact system's ridge leaves soft modes alone (no linear crawl along them)", "[newton][loop]") {

@@ -392,6 +392,7 @@ NewtonResult newton_run(NewtonStepper& st, bool certify, bool rotation_invariant
   double dE_prev = -1;  // the previous step's decrease (none yet)
   int crawling = 0;     // accepted steps in a row at a linear rate ≥ stagnation_rate
   bool all_samples = false;  // the subset H's model failed: Hessians over all of G from now on
+  int cut_iterations = 0;    // iterations whose step Armijo cut (NewtonOptions::escalate_after_cut_iterations)
   HessianProjection projection = opt.projection;  // NewtonOptions::escalate_projection once it failed too
 
   for (int it = 0; it < opt.max_iterations; ++it) {
@@ -568,10 +569,14 @@ NewtonResult newton_run(NewtonStepper& st, bool certify, bool rotation_invariant
     // The model overshot: the subset's Hessian is wrong (or the step is near a fold,
     // where all of G is the better model too).
     // Over all of G and still cut: the projection is the wrong model (escalate_projection).
-    if (opt.escalate_after_cuts > 0 && log.backtracks - log.certificate_rejections >= opt.escalate_after_cuts) {
+    const int cuts = log.backtracks - log.certificate_rejections;
+    if (opt.escalate_after_cuts > 0 && cuts >= opt.escalate_after_cuts) {
       if (all_samples && !log.exact_hessian) projection = opt.escalate_projection;
       all_samples = true;
     }
+    // Cut again and again, if only once each time: the subset's model too.
+    cut_iterations += cuts > 0 ? 1 : 0;
+    if (opt.escalate_after_cut_iterations > 0 && cut_iterations >= opt.escalate_after_cut_iterations) all_samples = true;
     // Still running: the projection may be too stiff (NewtonOptions::escalate_after_iterations).
     if (opt.escalate_after_iterations > 0 && res.iterations >= opt.escalate_after_iterations) projection = opt.escalate_projection;
 

@@ -239,6 +239,16 @@ struct NewtonOptions {
   // certificate's rejections not counted), the rest of the solve builds its Hessians
   // over all of G (HessianChoice::all_samples). 0: never.
   int escalate_after_cuts = 2;
+  // The subset's model can be wrong by less than that rule sees: Armijo cuts every step
+  // once, to 1/2, the exact system over H is indefinite (so exact_after_cut falls back to
+  // the projection), and the energy crawls (bench_stress --trace, issue #20:
+  // grid_6/hinge_posed at 500 frames per interval with FullProj, t = 0.770: 16 steps cut
+  // to 1/2, then one cut twice moved the Hessians to all of G, whose exact system was
+  // definite and ended the frame in one step; t = 0.772: 40 steps cut to 1/2, stagnated).
+  // After this many iterations of a solve whose steps Armijo cut (the certificate's
+  // rejections not counted), the rest of the solve builds its Hessians over all of G
+  // too. 0: never.
+  int escalate_after_cut_iterations = 3;
   // Once the Hessians are built over all of G (above), a projected step that Armijo again
   // cut escalate_after_cuts times switches the rest of the solve to this projection, the
   // one nearest the exact Hessian (each sample's own Hessian with its negative eigenvalues
