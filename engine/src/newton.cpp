@@ -22,7 +22,8 @@ using RowMatrix = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::R
 class CpuNewtonCore final : public NewtonCore {
  public:
   CpuNewtonCore(MatrixXcd D, std::vector<int> H) : D_(std::move(D)), H_(std::move(H)) {
-    CH_ = real_rows(H_);
+    DH_.resize(static_cast<Eigen::Index>(H_.size()), D_.cols());
+    for (size_t k = 0; k < H_.size(); ++k) DH_.row(static_cast<Eigen::Index>(k)) = D_.row(H_[k]);
     g_.assign(static_cast<size_t>(D_.rows()), Metric(1, 0, 1));
   }
   int n() const override { return static_cast<int>(D_.cols()); }
@@ -69,18 +70,29 @@ class CpuNewtonCore final : public NewtonCore {
     // AVX2 and FMA where the processor has them (dense_kernels.h).
     // The subset H's rows, or with all_samples every row of G; each thread sums its own
     // range of samples and the ranges are added.
-    const RowMatrix& C = all_samples ? all_rows() : CH_;
-    const Eigen::Index h = C.rows() / 2, m = C.cols();
+    const Eigen::Index h = all_samples ? D_.rows() : DH_.rows(), n = D_.cols(), m = 2 * n;
     const int chunks = static_cast<int>(std::clamp<Eigen::Index>(h / 64, 1, omp_get_max_threads()));
     std::vector<Eigen::MatrixXd> parts(static_cast<size_t>(chunks));
 #pragma omp parallel for schedule(static)
     for (int c = 0; c < chunks; ++c) {
       const Eigen::Index k0 = h * c / chunks, k1 = h * (c + 1) / chunks, len = k1 - k0;
-      RowMatrix W(2 * len, 3 * m);
+      // The range's blocks c_s, rows 2k and 2k + 1 of C, from its rows of D (made here:
+      // a copy is O(n) a sample against the product's O(n²)).
+      RowMatrix C(2 * len, m), W(2 * len, 3 * m);
+      const Eigen::OuterStride<> every_other(2 * m);
+      Eigen::Map<RowMatrix, 0, Eigen::OuterStride<>> even(C.data(), len, m, every_other), odd(C.data() + m, len, m, every_other);
+      auto fill = [&](const auto& rows) {
+        even.leftCols(n) = rows.real();
+        even.rightCols(n) = -rows.imag();
+        odd.leftCols(n) = rows.imag();
+        odd.rightCols(n) = rows.real();
+      };
+      if (all_samples) fill(D_.middleRows(k0, len));
+      else fill(DH_.middleRows(k0, len));
       for (Eigen::Index k = k0; k < k1; ++k) {
         const Eigen::Index s = all_samples ? k : H_[static_cast<size_t>(k)];
         const Eigen::Matrix4d K = isometric_derivatives(g_[static_cast<size_t>(s)], a_(s), b_(s), projection, exact).hess;
-        const auto cs = C.middleRows(2 * k, 2);
+        const auto cs = C.middleRows(2 * (k - k0), 2);
         auto w = W.middleRows(2 * (k - k0), 2);
         w.leftCols(m).noalias() = K.topLeftCorner<2, 2>() * cs;
         w.middleCols(m, m).noalias() = K.topRightCorner<2, 2>() * cs;
@@ -88,7 +100,7 @@ class CpuNewtonCore final : public NewtonCore {
       }
       Eigen::MatrixXd& P = parts[static_cast<size_t>(c)];
       P.setZero(m, 3 * m);
-      detail::hessian_accumulate(C.data() + 2 * k0 * m, W.data(), 2 * len, m, P.data());
+      detail::hessian_accumulate(C.data(), W.data(), 2 * len, m, P.data());
     }
     Eigen::MatrixXd P(m, 3 * m);  // the ranges' sums added, by columns over the threads
 #pragma omp parallel for schedule(static)
@@ -170,29 +182,8 @@ class CpuNewtonCore final : public NewtonCore {
     return bad ? std::numeric_limits<double>::infinity() : sum / static_cast<double>(G);
   }
 
-  // The blocks c_s = [[x, −y], [y, x]] of the samples' rows D_s = x + i y, stacked.
-  RowMatrix real_rows(const std::vector<int>& samples) const {
-    const Eigen::Index n = D_.cols();
-    RowMatrix C(2 * static_cast<Eigen::Index>(samples.size()), 2 * n);
-    for (size_t k = 0; k < samples.size(); ++k) {
-      const Eigen::RowVectorXd x = D_.row(samples[k]).real(), y = D_.row(samples[k]).imag();
-      const Eigen::Index r = 2 * static_cast<Eigen::Index>(k);
-      C.row(r) << x, -y;
-      C.row(r + 1) << y, x;
-    }
-    return C;
-  }
-  const RowMatrix& all_rows() {  // made on the first Hessian over all of G
-    if (CG_.rows() == 0) {
-      std::vector<int> every(static_cast<size_t>(D_.rows()));
-      for (size_t s = 0; s < every.size(); ++s) every[s] = static_cast<int>(s);
-      CG_ = real_rows(every);
-    }
-    return CG_;
-  }
-
   MatrixXcd D_;
-  RowMatrix CH_, CG_;  // real_rows of the subset H, and of every sample (made when first needed)
+  Eigen::Matrix<cd, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> DH_;  // the subset H's rows of D, in H's order
   std::vector<int> H_;
   std::vector<Metric> g_;
   VectorXcd a_, b_, da_, db_;
