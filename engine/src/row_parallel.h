@@ -12,7 +12,8 @@
 
 namespace hsi::detail {
 
-// Ranges of at most 2048 rows (a complex column segment of 32 KiB), at least one per thread.
+// Ranges of at most 2048 rows (a complex column segment of 32 KiB), and one per thread
+// where each gets 256 rows or more.
 inline int row_chunks(Eigen::Index rows) {
   const Eigen::Index by_size = (rows + 2047) / 2048;
   return static_cast<int>(std::max<Eigen::Index>({1, by_size, std::min<Eigen::Index>(rows / 256, omp_get_max_threads())}));
