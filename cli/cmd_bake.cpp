@@ -92,10 +92,12 @@ Flagged write_baked(const Scene& scene, const FrameFile& ff, const std::string& 
     flagged.not_converged += !f.converged;
     overlapping += f.overlaps;
   }
-  std::printf("wrote %s: %zu frames, %zu bytes (%.1f KB per frame), %d uncertified, %d not converged\n", out.c_str(),
+  // Why the frames that did not converge stopped, as the file stores it (hsib_frame_stop).
+  const std::string why = stop_counts(ff.frames);
+  std::printf("wrote %s: %zu frames, %zu bytes (%.1f KB per frame), %d uncertified, %d not converged%s\n", out.c_str(),
               ff.frames.size(), bytes.size(),
               static_cast<double>(bytes.size()) / 1024.0 / static_cast<double>(std::max<size_t>(1, ff.frames.size())),
-              flagged.uncertified, flagged.not_converged);
+              flagged.uncertified, flagged.not_converged, why.empty() ? "" : (" (" + why + ")").c_str());
   // What the runtime will blend, read back from the file as a game reads it.
   if (o.blend_substeps >= 2 && ff.frames.size() >= 2) {
     int blendable = 0;
@@ -270,8 +272,8 @@ void register_bake(CLI::App& app) {
       "Bake a scene's interpolation for playback in a game: a compact .hsib file (the cage once, then per frame the\n"
       "reduced coefficients and pose, a few KB) that the dependency-free runtime hsi/baked_runtime.h plays back on\n"
       "any mesh's vertices with one small matrix product per frame. Each frame's flags (certified, keyframe,\n"
-      "converged) are stored in the file. Several scenes (hsi bake a.json b.json -o DIR) are solved together by\n"
-      "--jobs workers, one DIR/NAME.hsib per scene NAME.json.\n" +
+      "converged) and why its Newton solve stopped are stored in the file. Several scenes (hsi bake a.json b.json\n"
+      "-o DIR) are solved together by --jobs workers, one DIR/NAME.hsib per scene NAME.json.\n" +
           std::string(kFlaggedFramesHelp));
   cmd->add_option("scenes", o->scenes, "Scene file(s) (.json) with two or more keyframes")->required()->check(CLI::ExistingFile);
   cmd->add_option("-o,--output", o->out, "Baked file to write; with several scenes, the folder for their NAME.hsib")->capture_default_str();

@@ -105,7 +105,8 @@ Chosen choose_map(const EvalOptions& o, Scene& scene) {
     c.t = f.t;
     c.certified = f.certified;
     c.what = "frame " + std::to_string(o.frame) + " of " + o.frames + " (t = " + std::to_string(f.t) + ", " +
-             (f.certified ? "certified locally injective" : "NOT CERTIFIED") + (f.converged ? "" : ", NOT CONVERGED") + ")";
+             (f.certified ? "certified locally injective" : "NOT CERTIFIED") +
+             (f.converged ? "" : std::string(", NOT CONVERGED: ") + stop_name(stored_stop(f, static_cast<size_t>(o.frame)))) + ")";
     if (file.cage.loops.size() != static_cast<size_t>(scene.shape.loop_count()))
       throw InputError(o.frames + ": its cage has " + std::to_string(file.cage.loops.size()) + " loops; the scene's shape has " +
                        std::to_string(scene.shape.loop_count()) + ": not this scene's frames");
@@ -142,7 +143,8 @@ Chosen choose_map(const EvalOptions& o, Scene& scene) {
   c.t = f.t;
   c.certified = f.certified;
   c.what = "the interpolation at t = " + std::to_string(f.t) + " (" + (f.keyframe ? "a keyframe, " : "solved from the keyframe before, ") +
-           (f.certified ? "certified locally injective" : "NOT CERTIFIED") + (f.converged ? "" : ", NOT CONVERGED") + ")";
+           (f.certified ? "certified locally injective" : "NOT CERTIFIED") + (f.converged ? "" : std::string(", NOT CONVERGED: ") + to_string(f.stop)) +
+           ")";
   return c;
 }
 

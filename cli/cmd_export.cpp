@@ -30,7 +30,8 @@ void register_export(CLI::App& app) {
       "Export a scene's interpolation: --gltf an animated glTF 2.0 binary (.glb: the shape's triangulation with its\n"
       "texture, one morph target per sampled frame, a weights animation), --png a PNG sequence and contact sheet\n"
       "(Vulkan renderer), --json / --csv the per-frame report. Frames that are not certified are never exported as good;\n"
-      "the glTF animation's extras list each sampled frame's flags (certified, keyframe, converged).\n" +
+      "the glTF animation's extras list each sampled frame's flags (certified, keyframe, converged) and why its Newton\n"
+      "solve stopped (stop).\n" +
           std::string(kFlaggedFramesHelp));
   cmd->add_option("scene", o->scene, "Scene file (.json) with two or more keyframes")->required()->check(CLI::ExistingFile);
   cmd->add_option("--gltf", o->gltf, "Write an animated glTF binary (.glb)");
@@ -83,7 +84,9 @@ void register_export(CLI::App& app) {
       uncertified += !f.certified;
       not_converged += !f.converged;
     }
-    std::printf("%zu frames: %d uncertified, %d not converged\n", ff.frames.size(), uncertified, not_converged);
+    const std::string why = stop_counts(ff.frames);  // why the frames that did not converge stopped
+    std::printf("%zu frames: %d uncertified, %d not converged%s\n", ff.frames.size(), uncertified, not_converged,
+                why.empty() ? "" : (" (" + why + ")").c_str());
     if (!o->gltf.empty()) {
       GltfOptions go;
       go.mesh_vertices = o->gltf_vertices;

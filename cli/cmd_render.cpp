@@ -299,6 +299,7 @@ void run_render(const Opts& o) {
   int uncertified = 0;
   int overlapping = 0;  // frames flagged 8 in frames.hsif: the boundary's image crosses itself
   int not_converged = 0;  // Newton stopped before its tolerance (frames file flag 4 clear)
+  std::vector<std::optional<NewtonStop>> rendered_stops;  // why, per rendered frame (the frames file's stop code)
   size_t next_sheet = 0;
   double render_ms = 0;
   for (size_t s = 0; s < selected.size(); ++s) {
@@ -308,6 +309,8 @@ void run_render(const Opts& o) {
     uncertified += !fr.certified;
     overlapping += fr.overlaps;
     not_converged += !fr.converged;
+    const std::optional<NewtonStop> stop = stored_stop(fr, static_cast<size_t>(i));
+    rendered_stops.push_back(stop);
     const RgbaImage img = renderer.render(ff.cage, fr.map, view, style);
     render_ms += renderer.last_stats().gpu_ms + renderer.last_stats().upload_ms + renderer.last_stats().readback_ms;
     const Surface surf = surface_from(img);
@@ -389,7 +392,9 @@ void run_render(const Opts& o) {
     if (tty)
       std::fprintf(stderr, "\r[render] frame %zu/%zu (#%d)  %.1f ms  %s   ", done, n, i,
                    renderer.last_stats().gpu_ms + renderer.last_stats().readback_ms,
-                   (std::string(fr.certified ? "" : "NOT CERTIFIED ") + (fr.converged ? "" : "NOT CONVERGED")).c_str());
+                   (std::string(fr.certified ? "" : "NOT CERTIFIED ") +
+                    (fr.converged ? "" : std::string("NOT CONVERGED (") + stop_name(stop) + ")"))
+                       .c_str());
     else if (done % std::max<size_t>(1, n / 10) == 0 || done == n)
       std::fprintf(stderr, "[render] frame %zu/%zu (%.0f%%), %.1f s elapsed\n", done, n, 100.0 * static_cast<double>(done) / static_cast<double>(n), el);
   }
@@ -420,8 +425,8 @@ void run_render(const Opts& o) {
                 "itself): amber border and label\n",
                 overlapping);
   if (not_converged)
-    std::printf("%d of the rendered frames are NOT CONVERGED (the Newton solve stopped before its tolerance): labelled in orange\n",
-                not_converged);
+    std::printf("%d of the rendered frames are NOT CONVERGED (the Newton solve stopped before its tolerance: %s): labelled in orange\n",
+                not_converged, stop_counts(rendered_stops).c_str());
 }
 
 }  // namespace

@@ -839,3 +839,167 @@ TEST_CASE("baked blend distortion is the singular values of the blended Jacobian
   CHECK(sv[1] == -1.0f);
   hsib_unbind(b);
 }
+
+// ---- Stop reasons (issue #20): the frame record's stop word at byte 12 ----------------
+
+namespace {
+
+// Frames over the fixture's cage, one per stop reason (t = its value), then one not
+// recorded (not converged, stop empty) and one converged that does not say.
+FrameFile frames_with_every_stop(const ShapeSetup& setup) {
+  FrameFile ff;
+  ff.cage = setup.cage;
+  for (int k = 0; k <= kNewtonStopCount + 1; ++k) {
+    StoredFrame s;
+    s.t = k;
+    s.certified = true;
+    s.map = affine_map(setup.cage, cd(1.0 + 0.01 * k, 0), cd(0, 0), cd(0.05 * k, 0));
+    if (k < kNewtonStopCount) s.stop = static_cast<NewtonStop>(k);
+    s.converged = k == 0 || k == kNewtonStopCount + 1;
+    ff.frames.push_back(s);
+  }
+  return ff;
+}
+
+uint32_t le_u32(const std::string& b, size_t at) {
+  uint32_t v = 0;
+  for (int k = 3; k >= 0; --k) v = (v << 8) | static_cast<unsigned char>(b[at + static_cast<size_t>(k)]);
+  return v;
+}
+void put_le_u32(std::string& b, size_t at, uint32_t v) {
+  for (size_t k = 0; k < 4; ++k) b[at + k] = static_cast<char>((v >> (8 * k)) & 0xFFu);
+}
+
+// Frame f's record in a baked file: its offset and size, from the header.
+struct Record {
+  size_t at, size;
+};
+Record frame_record(const std::string& bytes, uint32_t f) {
+  const uint32_t F = le_u32(bytes, 40), S = le_u32(bytes, 44);
+  return {bytes.size() - static_cast<size_t>(F - f) * S, S};
+}
+// Sets frame f's stop word and fixes its CRC, so that only the word is wrong.
+std::string with_stop_word(std::string bytes, uint32_t f, uint32_t word) {
+  const Record r = frame_record(bytes, f);
+  put_le_u32(bytes, r.at + 12, word);
+  put_le_u32(bytes, r.at + r.size - 4, hsib_crc32(bytes.data() + r.at, r.size - 4));
+  return bytes;
+}
+
+}  // namespace
+
+TEST_CASE("baked frames carry every stop reason (hsib_frame_stop)", "[baked][stop]") {
+  BakedFixture& F = fixture();
+  const ShapeSetup& setup = *F.seq.setup;
+  const FrameFile ff = frames_with_every_stop(setup);
+  BakeOptions bo;
+  bo.blend_substeps = 0;
+  bo.mesh_vertices = 100;
+  const std::string bytes = encode_baked(setup.shape, ff, bo);
+  Sequence S(bytes);
+  REQUIRE(S.status == HSIB_OK);
+  hsib_info info;
+  hsib_get_info(S.s, &info);
+  CHECK(info.version == 2);
+  REQUIRE(info.frame_count == ff.frames.size());
+  for (uint32_t f = 0; f < info.frame_count; ++f) {
+    INFO("frame " << f);
+    uint32_t flags = 0, stop = 12345;
+    REQUIRE(hsib_frame_info(S.s, f, nullptr, &flags) == HSIB_OK);
+    REQUIRE(hsib_frame_stop(S.s, f, &stop) == HSIB_OK);
+    CHECK(((flags & HSIB_FRAME_CONVERGED) != 0) == ff.frames[f].converged);
+    const uint32_t word = le_u32(bytes, frame_record(bytes, f).at + 12);
+    if (f < static_cast<uint32_t>(kNewtonStopCount)) {
+      CHECK(stop == f);
+      CHECK(word == (0x100u | f));
+      CHECK(std::string(hsib_stop_name(stop)) == to_string(static_cast<NewtonStop>(f)));
+    } else if (f == static_cast<uint32_t>(kNewtonStopCount)) {
+      CHECK(stop == HSIB_STOP_NOT_RECORDED);  // not converged, reason unknown
+      CHECK(word == 0);
+      CHECK(std::string(hsib_stop_name(stop)) == "not recorded");
+    } else {
+      CHECK(stop == HSIB_STOP_CONVERGED);  // a converged frame that did not say: stored as converged
+      CHECK(word == 0x100u);
+    }
+  }
+  CHECK(std::string(hsib_stop_name(HSIB_STOP_COUNT)) == "unknown");
+  uint32_t stop = 0;
+  CHECK(hsib_frame_stop(S.s, info.frame_count, &stop) == HSIB_ERROR_ARGUMENT);
+  CHECK(hsib_frame_stop(S.s, 0, nullptr) == HSIB_ERROR_ARGUMENT);
+  CHECK(hsib_frame_stop(nullptr, 0, &stop) == HSIB_ERROR_ARGUMENT);
+  // The baker refuses a reason that contradicts the converged flag, naming the frame.
+  FrameFile bad = ff;
+  bad.frames[4].converged = true;
+  CHECK_THROWS_WITH(encode_baked(setup.shape, bad, bo), Contains("bake: frame 4") && Contains("no decrease") && Contains("contradicts"));
+}
+
+TEST_CASE("baked files without stop words read with the stop derived from flag 4", "[baked][stop]") {
+  // Files baked before the stop word wrote 0 there (reserved): converged frames read as
+  // converged, the others as not recorded.
+  BakedFixture& F = fixture();
+  const ShapeSetup& setup = *F.seq.setup;
+  const FrameFile ff = frames_with_every_stop(setup);
+  BakeOptions bo;
+  bo.blend_substeps = 0;
+  bo.mesh_vertices = 100;
+  std::string old = encode_baked(setup.shape, ff, bo);
+  for (uint32_t f = 0; f < ff.frames.size(); ++f) old = with_stop_word(old, f, 0);
+  Sequence S(old);
+  REQUIRE(S.status == HSIB_OK);
+  for (uint32_t f = 0; f < ff.frames.size(); ++f) {
+    INFO("frame " << f);
+    uint32_t stop = 12345;
+    REQUIRE(hsib_frame_stop(S.s, f, &stop) == HSIB_OK);
+    CHECK(stop == (ff.frames[f].converged ? HSIB_STOP_CONVERGED : HSIB_STOP_NOT_RECORDED));
+  }
+  // The version 1 golden file: every frame converged, none says so in a stop word.
+  hsib_sequence* s1 = nullptr;
+  const std::string golden = std::string(HSI_TESTS_DIR) + "/golden/annulus_v1.hsib";
+  REQUIRE(hsib_open_file(golden.c_str(), &s1, nullptr, 0) == HSIB_OK);
+  for (uint32_t f = 0; f < 3; ++f) {
+    uint32_t flags = 0, stop = 12345;
+    REQUIRE(hsib_frame_info(s1, f, nullptr, &flags) == HSIB_OK);
+    REQUIRE(hsib_frame_stop(s1, f, &stop) == HSIB_OK);
+    CHECK(stop == ((flags & HSIB_FRAME_CONVERGED) ? HSIB_STOP_CONVERGED : HSIB_STOP_NOT_RECORDED));
+  }
+  hsib_close(s1);
+}
+
+TEST_CASE("baked runtime refuses an unknown stop code or one that contradicts flag 4, naming the frame and byte", "[baked][stop]") {
+  BakedFixture& F = fixture();
+  const ShapeSetup& setup = *F.seq.setup;
+  const FrameFile ff = frames_with_every_stop(setup);
+  BakeOptions bo;
+  bo.blend_substeps = 0;
+  bo.mesh_vertices = 100;
+  const std::string bytes = encode_baked(setup.shape, ff, bo);
+  const std::string at3 = "(at byte " + std::to_string(frame_record(bytes, 3).at + 12) + ")";
+  auto refused = [](const std::string& b) {
+    Sequence S(b);
+    CHECK(S.status == HSIB_ERROR_FORMAT);
+    CHECK(S.s == nullptr);
+    return std::string(S.error);
+  };
+  for (const uint32_t code : {HSIB_STOP_COUNT, 100u, HSIB_STOP_NOT_RECORDED}) {
+    const std::string msg = refused(with_stop_word(bytes, 3, 0x100u | code));
+    INFO(msg);
+    CHECK_THAT(msg, Contains("frame 3: unknown stop code " + std::to_string(code)) && Contains(at3));
+  }
+  CHECK_THAT(refused(with_stop_word(bytes, 3, 3u)), Contains("frame 3: unknown stop word 0x3") && Contains(at3));
+  CHECK_THAT(refused(with_stop_word(bytes, 3, 0x200u | 0x100u | 3u)), Contains("frame 3: unknown stop word 0x303"));
+  // Frame 3 did not converge: code 0 contradicts; frame 0 did: any other code does.
+  CHECK_THAT(refused(with_stop_word(bytes, 3, 0x100u)), Contains("frame 3: stop code 0 (converged) contradicts the converged flag 4") &&
+                                                          Contains(at3));
+  CHECK_THAT(refused(with_stop_word(bytes, 0, 0x102u)), Contains("frame 0: stop code 2 (stagnated) contradicts the converged flag 4"));
+  // Without the CRC fixed, the checksum catches the change first.
+  std::string raw = bytes;
+  raw[frame_record(bytes, 3).at + 12] ^= 0x01;
+  Sequence C(raw);
+  CHECK(C.status == HSIB_ERROR_CHECKSUM);
+  // A right word in another frame reads.
+  Sequence ok(with_stop_word(bytes, 3, 0x100u | HSIB_STOP_START_FOLDS));
+  REQUIRE(ok.status == HSIB_OK);
+  uint32_t stop = 0;
+  REQUIRE(hsib_frame_stop(ok.s, 3, &stop) == HSIB_OK);
+  CHECK(stop == HSIB_STOP_START_FOLDS);
+}

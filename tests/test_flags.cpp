@@ -4,6 +4,7 @@
 #include <catch2/catch.hpp>
 
 #include <cmath>
+#include <cstring>
 #include <filesystem>
 #include <nlohmann/json.hpp>
 
@@ -11,6 +12,7 @@
 #include "hsi/baked_runtime.h"
 #include "hsi/frames_io.h"
 #include "hsi/scene_sequence.h"
+#include "test_shapes.h"
 
 using namespace hsi;
 
@@ -169,9 +171,213 @@ TEST_CASE("a frame stopped at max_iterations = 1 is flagged not converged in the
     INFO("frame " << i << " t = " << f.t << ": " << f.message);
     CHECK(rep["frames"][i]["converged"].get<bool>() == f.converged);
     CHECK(ff.frames[i].converged == f.converged);
+    // Why it stopped, through the frames file and the baked file (issue #20).
+    REQUIRE(ff.frames[i].stop.has_value());
+    CHECK(*ff.frames[i].stop == f.stop);
     uint32_t flags = 0;
     REQUIRE(hsib_frame_info(hs, static_cast<uint32_t>(i), nullptr, &flags) == HSIB_OK);
     CHECK(((flags & HSIB_FRAME_CONVERGED) != 0) == f.converged);
+    uint32_t stop = HSIB_STOP_NOT_RECORDED;
+    REQUIRE(hsib_frame_stop(hs, static_cast<uint32_t>(i), &stop) == HSIB_OK);
+    CHECK(stop == static_cast<uint32_t>(f.stop));
+    CHECK(std::string(hsib_stop_name(stop)) == to_string(f.stop));
   }
   hsib_close(hs);
+  const std::string why = stop_counts(ff.frames);
+  CHECK_THAT(why, Catch::Matchers::Contains("iteration limit"));
+}
+
+// ---- Stop reasons in frames.hsif (version 2: flag bits 8..15) ------------------------
+
+namespace {
+
+// One frame per stop reason (t = its value), then one not recorded (not converged) and
+// one converged that does not say (stored as Converged), over a disc's cage.
+FrameFile frames_with_every_stop() {
+  FrameFile f;
+  f.cage = build_cage(test::disc());
+  for (int k = 0; k < kNewtonStopCount; ++k) {
+    StoredFrame s;
+    s.t = k;
+    s.certified = true;
+    s.stop = static_cast<NewtonStop>(k);
+    s.converged = k == 0;
+    s.iterations = static_cast<uint32_t>(k);
+    s.energy = 2.0 + k;
+    s.map = affine_map(f.cage, 1.0 + 0.01 * k, 0.0, cd(0.1 * k, 0));
+    f.frames.push_back(s);
+  }
+  StoredFrame unknown;
+  unknown.t = kNewtonStopCount;
+  unknown.certified = true;
+  unknown.map = identity_map(f.cage);
+  f.frames.push_back(unknown);  // converged false, stop empty: not recorded
+  StoredFrame converged = unknown;
+  converged.t = kNewtonStopCount + 1;
+  converged.converged = true;  // stop empty: stored as Converged
+  f.frames.push_back(converged);
+  return f;
+}
+
+// Byte offset of frame i's flags word (after its f64 time) in an .hsif file.
+size_t flags_offset(const std::string& bytes, const FrameFile& f, size_t i) {
+  const size_t per_frame = 24 + 32 * static_cast<size_t>(basis_size(f.cage));
+  return bytes.size() - (f.frames.size() - i) * per_frame + 8;
+}
+
+uint32_t read_u32(const std::string& b, size_t at) {
+  uint32_t v;
+  std::memcpy(&v, b.data() + at, 4);
+  return v;
+}
+void write_u32(std::string& b, size_t at, uint32_t v) { std::memcpy(b.data() + at, &v, 4); }
+
+std::string frames_error(const std::string& bytes) {
+  try {
+    (void)decode_frames(bytes, "stops.hsif");
+  } catch (const InputError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+}  // namespace
+
+TEST_CASE("frames.hsif version 2 round-trips every stop reason in flag bits 8..15", "[flags][frames_io][stop]") {
+  const FrameFile f = frames_with_every_stop();
+  const std::string bytes = encode_frames(f);
+  CHECK(read_u32(bytes, 4) == 2);
+  CHECK(kFramesVersion == 2);
+  for (size_t i = 0; i < f.frames.size(); ++i) {
+    INFO("frame " << i);
+    const uint32_t flags = read_u32(bytes, flags_offset(bytes, f, i));
+    const uint32_t want = i < static_cast<size_t>(kNewtonStopCount) ? static_cast<uint32_t>(i)
+                          : i == static_cast<size_t>(kNewtonStopCount) ? kFramesStopNotRecorded
+                                                                       : 0u;
+    CHECK((flags >> 8) == want);
+    CHECK((flags & 0xF0u) == 0);
+    CHECK(((flags & 4u) != 0) == f.frames[i].converged);
+  }
+  const FrameFile g = decode_frames(bytes, "stops.hsif");
+  REQUIRE(g.frames.size() == f.frames.size());
+  for (int k = 0; k < kNewtonStopCount; ++k) {
+    INFO("stop " << to_string(static_cast<NewtonStop>(k)));
+    const StoredFrame& s = g.frames[static_cast<size_t>(k)];
+    REQUIRE(s.stop.has_value());
+    CHECK(*s.stop == static_cast<NewtonStop>(k));
+    CHECK(s.converged == (k == 0));
+    CHECK(s.certified);
+    CHECK(s.iterations == static_cast<uint32_t>(k));
+    CHECK(s.map.phi == f.frames[static_cast<size_t>(k)].map.phi);
+  }
+  const StoredFrame& unknown = g.frames[static_cast<size_t>(kNewtonStopCount)];
+  CHECK_FALSE(unknown.stop.has_value());
+  CHECK_FALSE(unknown.converged);
+  CHECK(std::string(stop_name(unknown.stop)) == "not recorded");
+  const StoredFrame& converged = g.frames.back();
+  REQUIRE(converged.stop.has_value());
+  CHECK(*converged.stop == NewtonStop::Converged);
+  CHECK(converged.converged);
+  // Written again: the same bytes.
+  CHECK(encode_frames(g) == bytes);
+  CHECK(stop_counts(g.frames) ==
+        "1 iteration limit, 1 stagnated, 1 certificate refused, 1 no decrease, 1 not factored, 1 start folds, "
+        "1 start not certified, 1 not recorded");
+  CHECK(stop_counts(std::vector<StoredFrame>{converged}).empty());
+}
+
+TEST_CASE("frames.hsif writers refuse a stop reason that contradicts the converged flag", "[flags][frames_io][stop]") {
+  FrameFile f = frames_with_every_stop();
+  f.frames[2].converged = true;  // stagnated, yet converged
+  CHECK_THROWS_WITH(encode_frames(f), Catch::Matchers::Contains("frame 2") && Catch::Matchers::Contains("stagnated") &&
+                                          Catch::Matchers::Contains("contradicts its converged flag"));
+  f = frames_with_every_stop();
+  f.frames[0].converged = false;  // converged, yet not
+  CHECK_THROWS_WITH(encode_frames(f), Catch::Matchers::Contains("frame 0") && Catch::Matchers::Contains("contradicts"));
+}
+
+TEST_CASE("frames.hsif version 1 still reads: stop Converged with flag 4, not recorded without", "[flags][frames_io][stop]") {
+  // A version 1 file built byte by byte in its own layout: a triangle cage (K = 3), two
+  // frames, the flags word holding bits 0..3 only.
+  std::string v1 = "HSIF";
+  auto u32 = [&](uint32_t v) { v1.append(reinterpret_cast<const char*>(&v), 4); };
+  auto f64 = [&](double v) { v1.append(reinterpret_cast<const char*>(&v), 8); };
+  u32(1);        // version
+  u32(1);        // one loop
+  u32(3);        // of three vertices
+  for (double x : {0.0, 0.0, 1.0, 0.0, 0.0, 1.0}) f64(x);
+  u32(0);        // no holes
+  u32(3);        // K
+  u32(2);        // frames
+  const uint32_t v1_flags[2] = {1u | 2u | 4u, 1u | 8u};  // certified keyframe converged; certified, overlaps, NOT converged
+  for (int fr = 0; fr < 2; ++fr) {
+    f64(0.5 * fr);
+    u32(v1_flags[fr]);
+    u32(7);     // iterations
+    f64(2.25);  // energy
+    for (int j = 0; j < 12; ++j) f64(0.125 * (j + 1) + fr);  // φ then ψ, (re, im) each
+  }
+  const FrameFile g = decode_frames(v1, "old.hsif");
+  REQUIRE(g.frames.size() == 2);
+  CHECK(g.cage.loops.size() == 1);
+  CHECK(g.frames[0].certified);
+  CHECK(g.frames[0].keyframe);
+  CHECK(g.frames[0].converged);
+  REQUIRE(g.frames[0].stop.has_value());
+  CHECK(*g.frames[0].stop == NewtonStop::Converged);
+  CHECK(g.frames[1].certified);
+  CHECK(g.frames[1].overlaps);
+  CHECK_FALSE(g.frames[1].converged);
+  CHECK_FALSE(g.frames[1].stop.has_value());  // version 1 did not say why
+  CHECK(g.frames[1].iterations == 7);
+  CHECK(g.frames[1].map.psi(2) == cd(0.125 * 11 + 1, 0.125 * 12 + 1));
+  CHECK(stop_counts(g.frames) == "1 not recorded");
+  // Written again as version 2: the unknown reason stays unknown (code 255).
+  const std::string v2 = encode_frames(g);
+  CHECK(read_u32(v2, 4) == 2);
+  CHECK(read_u32(v2, flags_offset(v2, g, 1)) == (1u | 8u | (kFramesStopNotRecorded << 8)));
+  const FrameFile h = decode_frames(v2);
+  CHECK_FALSE(h.frames[1].stop.has_value());
+  CHECK(*h.frames[0].stop == NewtonStop::Converged);
+  // Version 1 knew no bits above 3: a stop code there is refused.
+  std::string bad = v1;
+  write_u32(bad, flags_offset(bad, g, 1), 1u | (1u << 8));
+  CHECK_THAT(frames_error(bad), Catch::Matchers::Contains("frame 1: unknown frame flags 257"));
+  // Version 3 is not read.
+  std::string v3 = v2;
+  write_u32(v3, 4, 3);
+  CHECK_THAT(frames_error(v3), Catch::Matchers::Contains("unsupported frames version 3") &&
+                                   Catch::Matchers::Contains("reads versions 1 and 2"));
+}
+
+TEST_CASE("frames.hsif refuses an unknown stop code or one that contradicts flag 4, naming the frame and byte",
+          "[flags][frames_io][stop]") {
+  const FrameFile f = frames_with_every_stop();
+  const std::string bytes = encode_frames(f);
+  auto with_flags = [&](size_t frame, uint32_t flags) {
+    std::string b = bytes;
+    write_u32(b, flags_offset(b, f, frame), flags);
+    return b;
+  };
+  const size_t at3 = flags_offset(bytes, f, 3);
+  const std::string byte3 = "(at byte " + std::to_string(at3) + ")";
+  for (const uint32_t code : {static_cast<uint32_t>(kNewtonStopCount), 100u, 254u}) {
+    const std::string msg = frames_error(with_flags(3, 1u | (code << 8)));
+    INFO(msg);
+    CHECK_THAT(msg, Catch::Matchers::Contains("stops.hsif: frame 3: unknown stop code " + std::to_string(code)) &&
+                        Catch::Matchers::Contains(byte3));
+  }
+  // A reason against flag 4: converged with a reason, not converged with code 0, 255 on a converged frame.
+  std::string msg = frames_error(with_flags(3, 1u | 4u | (3u << 8)));
+  CHECK_THAT(msg, Catch::Matchers::Contains("frame 3: stop code 3 (certificate refused) contradicts the converged flag 4 (set)") &&
+                      Catch::Matchers::Contains(byte3));
+  msg = frames_error(with_flags(3, 1u));
+  CHECK_THAT(msg, Catch::Matchers::Contains("frame 3: stop code 0 (converged) contradicts the converged flag 4 (clear)"));
+  msg = frames_error(with_flags(0, 1u | 4u | (kFramesStopNotRecorded << 8)));
+  CHECK_THAT(msg, Catch::Matchers::Contains("frame 0: stop code 255 (not recorded) contradicts"));
+  // Bits 4..7 and 16..31 stay unknown flags.
+  CHECK_THAT(frames_error(with_flags(5, 1u | 16u | (5u << 8))), Catch::Matchers::Contains("frame 5: unknown frame flags"));
+  CHECK_THAT(frames_error(with_flags(5, 1u | (5u << 8) | (1u << 16))), Catch::Matchers::Contains("frame 5: unknown frame flags"));
+  // The ones that are right read.
+  CHECK_NOTHROW(decode_frames(with_flags(3, 1u | (7u << 8))));
 }

@@ -202,3 +202,46 @@ TEST_CASE("glTF export refuses uncertified frames and bad options", "[gltf]") {
   lenient.allow_uncertified = true;
   CHECK_THROWS_WITH(encode_glb(scene, ff, lenient), Contains("missing_texture.png"));
 }
+
+TEST_CASE("glTF export: the animation's extras name each frame's stop reason", "[gltf][stop]") {
+  // Issue #20: beside "converged", "stop" says why the frame's Newton solve stopped.
+  Scene scene;
+  scene.shape = test::disc(1.0, 48);
+  scene.cage = build_cage(scene.shape);
+  FrameFile ff;
+  ff.cage = *scene.cage;
+  for (int k = 0; k <= kNewtonStopCount + 1; ++k) {
+    StoredFrame s;
+    s.t = 0.25 * k;
+    s.certified = true;
+    s.map = affine_map(ff.cage, cd(1.0 + 0.02 * k, 0), cd(0, 0), cd(0.05 * k, 0));
+    if (k < kNewtonStopCount) s.stop = static_cast<NewtonStop>(k);  // then: not recorded, and converged without a reason
+    s.converged = k == 0 || k == kNewtonStopCount + 1;
+    ff.frames.push_back(s);
+  }
+  GltfOptions o;
+  o.mesh_vertices = 200;
+  o.max_frames = static_cast<int>(ff.frames.size());
+  const Glb g = parse_glb(encode_glb(scene, ff, o));
+  const auto& keys = g.json["animations"][0]["extras"]["frames"];
+  REQUIRE(keys.size() == ff.frames.size());
+  for (size_t k = 0; k < keys.size(); ++k) {
+    INFO("key " << k << ": " << keys[k].dump());
+    CHECK(keys[k]["frame"].get<size_t>() == k);
+    CHECK(keys[k]["converged"].get<bool>() == ff.frames[k].converged);
+    const std::string want = k < static_cast<size_t>(kNewtonStopCount) ? to_string(static_cast<NewtonStop>(k))
+                             : k == static_cast<size_t>(kNewtonStopCount) ? "not recorded"
+                                                                          : "converged";
+    CHECK(keys[k]["stop"].get<std::string>() == want);
+  }
+  // A reason that contradicts the converged flag is refused, naming the frame.
+  ff.frames[1].converged = true;
+  CHECK_THROWS_WITH(encode_glb(scene, ff, o), Contains("glTF export: frame 1") && Contains("iteration limit") && Contains("contradicts"));
+  // The extras keep the file valid glTF.
+  ff.frames[1].converged = false;
+  std::filesystem::create_directories(HSI_TEST_TMP);
+  const auto path = std::filesystem::path(HSI_TEST_TMP) / "stops.glb";
+  write_glb(path, scene, ff, o);
+  const std::string v = validate(path);
+  CHECK((v.empty() || v == "skip"));
+}

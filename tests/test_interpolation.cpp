@@ -163,9 +163,9 @@ TEST_CASE("frames file round-trips and refuses damaged files", "[interpolation][
   CHECK(g.frames[0].keyframe);
   CHECK(g.frames[1].iterations == 3);
   CHECK_THROWS_WITH(decode_frames("XXXX" + bytes.substr(4)), Contains("not an hsi frames file"));
-  std::string v2 = bytes;
-  v2[4] = 2;
-  CHECK_THROWS_WITH(decode_frames(v2), Contains("unsupported frames version 2"));
+  std::string v3 = bytes;
+  v3[4] = 3;  // version 2 is current (stop reasons), 1 still read
+  CHECK_THROWS_WITH(decode_frames(v3), Contains("unsupported frames version 3"));
   // Truncated at every length: always a clear error, never a crash.
   for (size_t cut = 0; cut < bytes.size(); cut += 7) CHECK_THROWS_AS(decode_frames(bytes.substr(0, cut)), InputError);
   CHECK_THROWS_WITH(decode_frames(bytes.substr(0, bytes.size() - 5)), Contains("truncated"));

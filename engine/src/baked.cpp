@@ -13,6 +13,19 @@
 #include "hsi/triangulate.h"
 
 namespace hsi {
+
+// The frame record's stop codes are NewtonStop's values (and so hsi_stop's).
+static_assert(static_cast<int>(HSIB_STOP_COUNT) == kNewtonStopCount);
+static_assert(HSIB_STOP_CONVERGED == static_cast<unsigned>(NewtonStop::Converged));
+static_assert(HSIB_STOP_ITERATION_LIMIT == static_cast<unsigned>(NewtonStop::IterationLimit));
+static_assert(HSIB_STOP_STAGNATED == static_cast<unsigned>(NewtonStop::Stagnated));
+static_assert(HSIB_STOP_CERTIFICATE_REFUSED == static_cast<unsigned>(NewtonStop::CertificateRefused));
+static_assert(HSIB_STOP_NO_DECREASE == static_cast<unsigned>(NewtonStop::NoDecrease));
+static_assert(HSIB_STOP_NOT_FACTORED == static_cast<unsigned>(NewtonStop::NotFactored));
+static_assert(HSIB_STOP_START_FOLDS == static_cast<unsigned>(NewtonStop::StartFolds));
+static_assert(HSIB_STOP_START_NOT_CERTIFIED == static_cast<unsigned>(NewtonStop::StartNotCertified));
+static_assert(HSIB_STOP_NOT_RECORDED >= HSIB_STOP_COUNT && HSIB_STOP_NOT_RECORDED <= 0xFFu);
+
 namespace {
 
 // Explicit little-endian bytes, whatever the host.
@@ -164,10 +177,19 @@ std::string encode_baked(const Shape& shape, const FrameFile& frames, const Bake
   for (const auto& t : mesh.triangles)
     for (int v : t) st.u32(static_cast<uint32_t>(v));
 
-  for (size_t i = 0; i < frames.frames.size(); ++i)
+  std::vector<uint32_t> stop_words(frames.frames.size(), 0);  // 0: not recorded; else 0x100 | the stop code
+  for (size_t i = 0; i < frames.frames.size(); ++i) {
     if (frames.frames[i].map.phi.size() != basis_size(cage) || frames.frames[i].map.psi.size() != basis_size(cage))
       throw InputError("bake: frame " + std::to_string(i) + " has " + std::to_string(frames.frames[i].map.phi.size()) +
                        " coefficients; the cage needs " + std::to_string(basis_size(cage)));
+    std::optional<NewtonStop> stop;
+    try {
+      stop = stored_stop(frames.frames[i], i);
+    } catch (const InputError& e) {
+      throw InputError(std::string("bake: ") + e.what());
+    }
+    if (stop) stop_words[i] = 0x100u | static_cast<uint32_t>(*stop);
+  }
   const std::vector<uint32_t> blends = blend_flags(shape, frames, options);
 
   LEWriter fr;
@@ -183,7 +205,7 @@ std::string encode_baked(const Shape& shape, const FrameFile& frames, const Bake
     const size_t start = fr.out.size();
     fr.f64(f.t);
     fr.u32((f.certified ? 1u : 0u) | (f.keyframe ? 2u : 0u) | (f.converged ? 4u : 0u) | (f.overlaps ? 8u : 0u) | blends[i]);
-    fr.u32(0);
+    fr.u32(stop_words[i]);
     fr.point(c.rotation);
     fr.point(c.translation);
     for (Eigen::Index d = 0; d < c.x.size(); ++d) {

@@ -61,6 +61,21 @@ const char* hsib_status_name(hsib_status s) {
   return "unknown status";
 }
 
+const char* hsib_stop_name(uint32_t stop) {
+  switch (stop) {
+    case HSIB_STOP_CONVERGED: return "converged";
+    case HSIB_STOP_ITERATION_LIMIT: return "iteration limit";
+    case HSIB_STOP_STAGNATED: return "stagnated";
+    case HSIB_STOP_CERTIFICATE_REFUSED: return "certificate refused";
+    case HSIB_STOP_NO_DECREASE: return "no decrease";
+    case HSIB_STOP_NOT_FACTORED: return "not factored";
+    case HSIB_STOP_START_FOLDS: return "start folds";
+    case HSIB_STOP_START_NOT_CERTIFIED: return "start not certified";
+    case HSIB_STOP_NOT_RECORDED: return "not recorded";
+    default: return "unknown";
+  }
+}
+
 static hsib_status hsib__fail(char* error, size_t error_size, hsib_status s, const char* fmt, ...) {
   if (error && error_size) {
     va_list ap;
@@ -349,6 +364,18 @@ static hsib_status hsib__parse(const unsigned char* b, size_t size, const hsib_l
     if (ff > known_flags) return hsib__fail(error, es, HSIB_ERROR_FORMAT, "frame %u: unknown flags 0x%x (at byte %ld)", f, ff, at_f + 8);
     if ((ff & (HSIB_FRAME_BLEND_CERTIFIED | HSIB_FRAME_BLEND_OVERLAPS)) && (f + 1 == F || y->k < 2u))
       return hsib__fail(error, es, HSIB_ERROR_FORMAT, "frame %u: blend flags without a next frame or sub-steps (at byte %ld)", f, at_f + 8);
+    /* The stop word: 0 (not recorded) or 0x100 | an HSIB_STOP_* code, 0 exactly with flag 4. */
+    const uint32_t sw = hsib__rd_u32(fr + 12);
+    if (sw != 0u && ((sw & ~0x1FFu) != 0u || (sw & 0x100u) == 0u))
+      return hsib__fail(error, es, HSIB_ERROR_FORMAT, "frame %u: unknown stop word 0x%x (at byte %ld)", f, sw, at_f + 12);
+    if (sw != 0u) {
+      const uint32_t code = sw & 0xFFu;
+      if (code >= HSIB_STOP_COUNT)
+        return hsib__fail(error, es, HSIB_ERROR_FORMAT, "frame %u: unknown stop code %u (at byte %ld)", f, code, at_f + 12);
+      if ((code == HSIB_STOP_CONVERGED) != ((ff & HSIB_FRAME_CONVERGED) != 0u))
+        return hsib__fail(error, es, HSIB_ERROR_FORMAT, "frame %u: stop code %u (%s) contradicts the converged flag 4 (at byte %ld)", f, code,
+                          hsib_stop_name(code), at_f + 12);
+    }
     const double rr = hsib__rd_f64(fr + 16), ri = hsib__rd_f64(fr + 24);
     if (!isfinite(rr) || !isfinite(ri) || fabs(hypot(rr, ri) - 1.0) > 1e-6 || !isfinite(hsib__rd_f64(fr + 32)) || !isfinite(hsib__rd_f64(fr + 40)))
       return hsib__fail(error, es, HSIB_ERROR_FORMAT, "frame %u: the pose is not a rotation and a finite translation (at byte %ld)", f, at_f + 16);
@@ -489,6 +516,16 @@ hsib_status hsib_frame_info(const hsib_sequence* s, uint32_t frame, double* t, u
   if (!s || frame >= s->info.frame_count) return HSIB_ERROR_ARGUMENT;
   if (t) *t = hsib__frame_time(s, frame);
   if (flags) *flags = hsib__frame_flags(s, frame);
+  return HSIB_OK;
+}
+
+hsib_status hsib_frame_stop(const hsib_sequence* s, uint32_t frame, uint32_t* stop) {
+  if (!s || frame >= s->info.frame_count || !stop) return HSIB_ERROR_ARGUMENT;
+  const uint32_t sw = hsib__rd_u32(hsib__frame_record(s, frame) + 12);  /* checked at open */
+  if (sw != 0u)
+    *stop = sw & 0xFFu;
+  else
+    *stop = (hsib__frame_flags(s, frame) & HSIB_FRAME_CONVERGED) ? HSIB_STOP_CONVERGED : HSIB_STOP_NOT_RECORDED;
   return HSIB_OK;
 }
 

@@ -1,6 +1,7 @@
 // Reading and writing .hsif frame files (layout in hsi/frames_io.h).
 #include "hsi/frames_io.h"
 
+#include <array>
 #include <cstring>
 #include <fstream>
 #include <sstream>
@@ -37,8 +38,9 @@ class Reader {
     const double x = f64(what);
     return {x, f64(what)};
   }
-  [[noreturn]] void fail(const std::string& msg) const {
-    throw InputError(source + ": " + msg + " (at byte " + std::to_string(pos) + ")");
+  [[noreturn]] void fail(const std::string& msg) const { fail_at(msg, pos); }
+  [[noreturn]] void fail_at(const std::string& msg, size_t at) const {
+    throw InputError(source + ": " + msg + " (at byte " + std::to_string(at) + ")");
   }
   void need(size_t n, const char* what) const {
     if (bytes.size() - pos < n)
@@ -60,6 +62,34 @@ class Reader {
 
 }  // namespace
 
+std::optional<NewtonStop> stored_stop(const StoredFrame& f, size_t index) {
+  if (!f.stop) return f.converged ? std::optional<NewtonStop>(NewtonStop::Converged) : std::nullopt;
+  if ((*f.stop == NewtonStop::Converged) != f.converged)
+    throw InputError("frame " + std::to_string(index) + ": its stop reason '" + to_string(*f.stop) + "' contradicts its converged flag (" +
+                     (f.converged ? "set" : "clear") + ")");
+  return f.stop;
+}
+
+const char* stop_name(const std::optional<NewtonStop>& stop) { return stop ? to_string(*stop) : "not recorded"; }
+
+std::string stop_counts(const std::vector<StoredFrame>& frames) {
+  std::vector<std::optional<NewtonStop>> stops;
+  for (size_t i = 0; i < frames.size(); ++i) stops.push_back(stored_stop(frames[i], i));
+  return stop_counts(stops);
+}
+
+std::string stop_counts(const std::vector<std::optional<NewtonStop>>& stops) {
+  std::array<size_t, kNewtonStopCount + 1> n{};  // the last: not recorded
+  for (const std::optional<NewtonStop>& stop : stops) ++n[stop ? static_cast<size_t>(*stop) : static_cast<size_t>(kNewtonStopCount)];
+  std::string out;
+  for (size_t k = 1; k < n.size(); ++k)
+    if (n[k] > 0) {
+      const std::optional<NewtonStop> stop = k < static_cast<size_t>(kNewtonStopCount) ? std::optional(static_cast<NewtonStop>(k)) : std::nullopt;
+      out += (out.empty() ? "" : ", ") + std::to_string(n[k]) + " " + stop_name(stop);
+    }
+  return out;
+}
+
 std::string encode_frames(const FrameFile& f) {
   Writer w;
   w.raw("HSIF", 4);
@@ -74,10 +104,13 @@ std::string encode_frames(const FrameFile& f) {
   const uint32_t K = static_cast<uint32_t>(basis_size(f.cage));
   w.u32(K);
   w.u32(static_cast<uint32_t>(f.frames.size()));
-  for (const StoredFrame& s : f.frames) {
+  for (size_t i = 0; i < f.frames.size(); ++i) {
+    const StoredFrame& s = f.frames[i];
     if (s.map.phi.size() != K || s.map.psi.size() != K) throw InputError("frame coefficients do not match the cage");
+    const std::optional<NewtonStop> stop = stored_stop(s, i);
+    const uint32_t code = stop ? static_cast<uint32_t>(*stop) : kFramesStopNotRecorded;
     w.f64(s.t);
-    w.u32((s.certified ? 1u : 0u) | (s.keyframe ? 2u : 0u) | (s.converged ? 4u : 0u) | (s.overlaps ? 8u : 0u));
+    w.u32((s.certified ? 1u : 0u) | (s.keyframe ? 2u : 0u) | (s.converged ? 4u : 0u) | (s.overlaps ? 8u : 0u) | (code << 8));
     w.u32(s.iterations);
     w.f64(s.energy);
     for (Eigen::Index j = 0; j < K; ++j) w.point(s.map.phi(j));
@@ -92,8 +125,8 @@ FrameFile decode_frames(const std::string& bytes, const std::string& source) {
   if (bytes.compare(0, 4, "HSIF") != 0) r.fail("not an hsi frames file (magic is not \"HSIF\")");
   r.pos = 4;
   const uint32_t version = r.u32("the version");
-  if (version != kFramesVersion)
-    r.fail("unsupported frames version " + std::to_string(version) + " (this hsi reads version " + std::to_string(kFramesVersion) + ")");
+  if (version != 1 && version != kFramesVersion)
+    r.fail("unsupported frames version " + std::to_string(version) + " (this hsi reads versions 1 and " + std::to_string(kFramesVersion) + ")");
   FrameFile f;
   const uint32_t L = r.u32("the loop count");
   if (L < 1 || L > 100000) r.fail("impossible cage loop count " + std::to_string(L));
@@ -126,14 +159,33 @@ FrameFile decode_frames(const std::string& bytes, const std::string& source) {
     r.fail("frame data is " + std::to_string(r.remaining()) + " bytes; " + std::to_string(F) + " frames need " +
            std::to_string(static_cast<size_t>(F) * per_frame) + (static_cast<size_t>(F) * per_frame > r.remaining() ? " (truncated)" : " (trailing bytes)"));
   f.frames.resize(F);
-  for (StoredFrame& s : f.frames) {
+  for (uint32_t i = 0; i < F; ++i) {
+    StoredFrame& s = f.frames[i];
+    const std::string frame = "frame " + std::to_string(i) + ": ";
     s.t = r.f64("a frame time");
+    const size_t flags_at = r.pos;
     const uint32_t flags = r.u32("frame flags");
-    if (flags > 15) r.fail("unknown frame flags " + std::to_string(flags));
+    // Version 1: bits 0..3; version 2: and the stop code in bits 8..15 (layout in frames_io.h).
+    const uint32_t known = version == 1 ? 15u : 0xFF0Fu;
+    if (flags & ~known) r.fail_at(frame + "unknown frame flags " + std::to_string(flags), flags_at);
     s.certified = flags & 1u;
     s.keyframe = flags & 2u;
     s.converged = flags & 4u;
     s.overlaps = flags & 8u;
+    if (version == 1) {
+      s.stop = s.converged ? std::optional<NewtonStop>(NewtonStop::Converged) : std::nullopt;
+    } else {
+      const uint32_t code = (flags >> 8) & 0xFFu;
+      if (code >= static_cast<uint32_t>(kNewtonStopCount) && code != kFramesStopNotRecorded)
+        r.fail_at(frame + "unknown stop code " + std::to_string(code) + " (bits 8..15 of the frame flags; known: 0.." +
+                      std::to_string(kNewtonStopCount - 1) + " and " + std::to_string(kFramesStopNotRecorded) + ", not recorded)",
+                  flags_at);
+      if (code != kFramesStopNotRecorded) s.stop = static_cast<NewtonStop>(code);
+      if ((code == 0) != s.converged)
+        r.fail_at(frame + "stop code " + std::to_string(code) + " (" + stop_name(s.stop) + ") contradicts the converged flag 4 (" +
+                      (s.converged ? "set" : "clear") + ")",
+                  flags_at);
+    }
     s.iterations = r.u32("an iteration count");
     s.energy = r.f64("an energy");
     s.map.phi.resize(K);

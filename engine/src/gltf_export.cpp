@@ -83,6 +83,14 @@ std::string encode_glb(const Scene& scene, const FrameFile& frames, const GltfOp
       throw InputError("glTF export: frame " + std::to_string(i) + " (t = " + std::to_string(f.t) +
                        ") is not certified locally injective; it is not exported as if it were good");
   }
+  std::vector<std::optional<NewtonStop>> stop_of;  // per sampled frame
+  for (int i : picks) {
+    try {
+      stop_of.push_back(stored_stop(frames.frames[static_cast<size_t>(i)], static_cast<size_t>(i)));
+    } catch (const InputError& e) {
+      throw InputError(std::string("glTF export: ") + e.what());
+    }
+  }
 
   TriangulateOptions to;
   to.max_edge = edge_for_vertex_count(scene.shape, std::max(16, o.mesh_vertices));
@@ -217,7 +225,8 @@ std::string encode_glb(const Scene& scene, const FrameFile& frames, const GltfOp
     tinygltf::Animation an;
     an.name = "interpolation";
     // Each key's frame and its flags, so that a consumer can tell a frame whose Newton
-    // solve stopped early (converged false) from a converged one.
+    // solve stopped early (converged false) from a converged one, and why it stopped
+    // ("stop": the reason's name, as report.json's; "not recorded" where the frames do not say).
     tinygltf::Value::Array keys;
     for (size_t k = 0; k < pos.size(); ++k) {
       const StoredFrame& f = frames.frames[static_cast<size_t>(picks[k])];
@@ -225,7 +234,8 @@ std::string encode_glb(const Scene& scene, const FrameFile& frames, const GltfOp
                                                 {"t", tinygltf::Value(f.t)},
                                                 {"certified", tinygltf::Value(f.certified)},
                                                 {"keyframe", tinygltf::Value(f.keyframe)},
-                                                {"converged", tinygltf::Value(f.converged)}});
+                                                {"converged", tinygltf::Value(f.converged)},
+                                                {"stop", tinygltf::Value(std::string(stop_name(stop_of[k])))}});
     }
     an.extras = tinygltf::Value(tinygltf::Value::Object{{"frames", tinygltf::Value(keys)}});
     an.samplers.push_back(s);

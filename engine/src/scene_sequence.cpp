@@ -23,6 +23,7 @@ FrameFile SceneSequence::frame_file() const {
   for (const FrameResult& f : frames) {
     ff.frames.push_back({f.t, f.certified, f.keyframe, f.converged, static_cast<uint32_t>(f.iterations), f.energy, f.map});
     ff.frames.back().overlaps = f.overlap.overlaps();
+    ff.frames.back().stop = f.stop;
   }
   return ff;
 }

@@ -62,6 +62,11 @@ void exercise(const uint8_t* data, size_t size) {
     double t;
     uint32_t flags;
     if (hsib_frame_info(s, f, &t, &flags) != HSIB_OK || !std::isfinite(t)) std::abort();
+    // An opened file's stop word was checked: a known reason, consistent with flag 4, or not recorded.
+    uint32_t stop = 0;
+    if (hsib_frame_stop(s, f, &stop) != HSIB_OK || (stop >= HSIB_STOP_COUNT && stop != HSIB_STOP_NOT_RECORDED) ||
+        ((stop == HSIB_STOP_CONVERGED) != ((flags & HSIB_FRAME_CONVERGED) != 0)))
+      std::abort();
   }
   (void)hsib_frame_at_time(s, 0.5 * (info.t_begin + info.t_end));
   // A few rest vertices around the recorded bounding box: some inside the cage,

@@ -113,6 +113,10 @@ int main(int argc, char** argv) {
     for (uint32_t fr = 0; fr < info.frame_count; ++fr) {
       uint32_t flags = 0;
       CHECK(hsib_frame_info(s, fr, NULL, &flags) == HSIB_OK);
+      uint32_t stop = HSIB_STOP_COUNT;
+      CHECK(hsib_frame_stop(s, fr, &stop) == HSIB_OK);
+      CHECK((stop == HSIB_STOP_CONVERGED) == ((flags & HSIB_FRAME_CONVERGED) != 0u));
+      CHECK(hsib_stop_name(stop)[0] != '\0');
       CHECK(hsib_evaluate_distortion(bd, fr, out, 0) == HSIB_OK);
       for (size_t k = 0; k < count; ++k) {
         CHECK(isfinite(out[2 * k]) && isfinite(out[2 * k + 1]));

@@ -70,7 +70,15 @@
  *                them (the injectivity certificate of hsi, proved, not sampled);
  *                32 some sub-step blend of this interval overlaps itself (sampled
  *                like flag 8). 16 and 32 never on the last frame.
- *   12  u32      reserved (0)
+ *   12  u32      stop: why the frame's Newton solve stopped. 0: not recorded (files
+ *                baked before hsi recorded it wrote 0 here, then reserved; and frames
+ *                whose reason is not known, e.g. from a version 1 frames file); else
+ *                bit 8 set and bits 0..7 the reason, an HSIB_STOP_* value (hsi_stop's
+ *                numbers: 0 converged, 1 iteration limit, 2 stagnated, 3 certificate
+ *                refused, 4 no decrease, 5 not factored, 6 start folds, 7 start not
+ *                certified); bits 9..31 0. A recorded reason is 0 (converged) exactly
+ *                when flag 4 is set. Runtimes that predate it ignore this word (in
+ *                either version), so the format version stays 2.
  *   16  f64[2]   rotation r (unit complex number)
  *   32  f64[2]   translation c
  *   48  D x f32|f64  reduced coefficients x (hsi's gauge modulo rigid motions)
@@ -130,7 +138,9 @@
  *
  * Readers refuse, with a message naming the problem and the byte or frame: a wrong
  * magic, another version, a header or static-section checksum mismatch, impossible
- * sizes, a truncated file or trailing bytes, and a frame whose checksum fails.
+ * sizes, a truncated file or trailing bytes, a frame whose checksum fails, and a
+ * frame's unknown flags or stop word (an unknown stop code, or a reason that
+ * contradicts flag 4).
  * ---------------------------------------------------------------------------------
  *
  * Thread safety: a sequence and a binding are immutable once made; any number of
@@ -145,9 +155,10 @@
  * hsib_basis_row_derivatives, hsib_blend_weights and hsib_gpu_uniforms take scratch
  * from the hooks.
  *
- * ABI: the distortion calls (hsib_bind_flags and after) were added without changing
- * any struct or existing function, so a program built against a header without them
- * runs unchanged; one that calls them needs a library that has them.
+ * ABI: the distortion calls (hsib_bind_flags and after) and the stop reasons
+ * (hsib_frame_stop, hsib_stop_name) were added without changing any struct or existing
+ * function, so a program built against a header without them runs unchanged; one that
+ * calls them needs a library that has them.
  */
 #ifndef HSI_BAKED_RUNTIME_H
 #define HSI_BAKED_RUNTIME_H
@@ -176,6 +187,18 @@ extern "C" {
 #define HSIB_FRAME_BLEND_CERTIFIED 16u /* the blends toward the next frame are certified at the k-1 sub-steps */
 #define HSIB_FRAME_BLEND_OVERLAPS 32u  /* some sub-step blend toward the next frame overlaps itself */
 #define HSIB_BLEND_BLENDED 64u         /* in hsib_blend.flags: the map shown is a blend of two frames */
+
+/* Why a frame's Newton solve stopped (hsib_frame_stop): hsi's hsi_stop values (hsi/hsi.h). */
+#define HSIB_STOP_CONVERGED 0u
+#define HSIB_STOP_ITERATION_LIMIT 1u     /* the iteration cap was reached, still decreasing */
+#define HSIB_STOP_STAGNATED 2u           /* the energy decreased only linearly and slowly, step after step */
+#define HSIB_STOP_CERTIFICATE_REFUSED 3u /* every step that lowered the energy enough was refused by the certificate */
+#define HSIB_STOP_NO_DECREASE 4u         /* the line search refused every step (the certificate refused none) */
+#define HSIB_STOP_NOT_FACTORED 5u        /* no Newton system could be factored */
+#define HSIB_STOP_START_FOLDS 6u         /* the starting map folds or degenerates at a sample */
+#define HSIB_STOP_START_NOT_CERTIFIED 7u /* the starting map is not certified */
+#define HSIB_STOP_COUNT 8u
+#define HSIB_STOP_NOT_RECORDED 255u      /* the file does not say (a frame without flag 4 in an older file) */
 
 typedef enum hsib_status {
   HSIB_OK = 0,
@@ -281,6 +304,14 @@ HSIB_API void hsib_close(hsib_sequence* sequence);
 
 HSIB_API void hsib_get_info(const hsib_sequence* sequence, hsib_info* info);
 HSIB_API hsib_status hsib_frame_info(const hsib_sequence* sequence, uint32_t frame, double* t, uint32_t* flags);
+/* Why the frame's Newton solve stopped: an HSIB_STOP_* value (the frame record's stop
+ * word), or, where the file does not record it, HSIB_STOP_CONVERGED for a frame with
+ * flag 4 (converged) and HSIB_STOP_NOT_RECORDED for one without. */
+HSIB_API hsib_status hsib_frame_stop(const hsib_sequence* sequence, uint32_t frame, uint32_t* stop);
+/* A short English name of a stop reason: "converged", "iteration limit", "stagnated",
+ * "certificate refused", "no decrease", "not factored", "start folds", "start not
+ * certified" (as hsi_stop_name), "not recorded" (HSIB_STOP_NOT_RECORDED), else "unknown". */
+HSIB_API const char* hsib_stop_name(uint32_t stop);
 /* The frame whose time is nearest t (clamped to the sequence). */
 HSIB_API uint32_t hsib_frame_at_time(const hsib_sequence* sequence, double t);
 /* The map to show at time t (clamped to the sequence), blended only where certified. */

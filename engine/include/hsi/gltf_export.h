@@ -5,7 +5,9 @@
 // blends neighbouring frames, so at most two targets are active at a time (what
 // three.js, Babylon.js, Blender, Unity and Godot all play back). The animation's
 // extras.frames lists, per key, the frame index, t and its flags (certified,
-// keyframe, converged).
+// keyframe, converged), and "stop": why its Newton solve stopped, by name
+// ("converged", "iteration limit", ...: to_string(NewtonStop); "not recorded" where the
+// frames do not say).
 #pragma once
 
 #include <string>
