@@ -2,6 +2,8 @@
 // reproduction, pose, certified warm-started sequences, the frames file.
 #include <catch2/catch.hpp>
 
+#include <set>
+
 #include "hsi/frames_io.h"
 #include "hsi/interpolation.h"
 #include "hsi/keyframes.h"
@@ -269,4 +271,91 @@ TEST_CASE("frames are those of the plain frame loop: set-up certificates and the
   const std::vector<cd> few{cd(0.1, 0.1), cd(0.2, 0.1)};
   CHECK_THROWS_WITH(Interpolator(setup, S.times, S.maps, {}, nullptr, make_cpu_mesh_evaluator(setup.cage, few)),
                     Contains("boundary evaluator is made for 2 points"));
+}
+
+namespace {
+
+// The CPU core, whose steppers' certificates a test script can refuse: stepper i (in
+// the order they are made: the interpolator's set-up makes one per keyframe, then each
+// solve one) refuses the certificate at step 0 if i is in refuse_start, and every
+// certificate if i is in refuse_all.
+class RefusingCore final : public NewtonCore {
+ public:
+  RefusingCore(const ShapeSetup& s, std::set<int> refuse_start, std::set<int> refuse_all)
+      : inner_(make_cpu_newton_core(s.D_G, s.H)), refuse_start_(std::move(refuse_start)), refuse_all_(std::move(refuse_all)) {}
+  int n() const override { return inner_->n(); }
+  const char* name() const override { return "refusing cpu"; }
+  void set_targets(const std::vector<Metric>& g) override { inner_->set_targets(g); }
+  void set_coefficients(const Eigen::VectorXd& v) override { inner_->set_coefficients(v); }
+  double energy() override { return inner_->energy(); }
+  Eigen::VectorXd gradient() override { return inner_->gradient(); }
+  Eigen::MatrixXd hessian(HessianProjection p, bool exact, bool all) override { return inner_->hessian(p, exact, all); }
+  void set_direction(const Eigen::VectorXd& dv) override { inner_->set_direction(dv); }
+  double max_safe_step() override { return inner_->max_safe_step(); }
+  double energy_at(double s) override { return inner_->energy_at(s); }
+  std::unique_ptr<NewtonStepper> make_stepper(const MapSpace& space, const Certifier* certifier, const QuadraticTerm* quad) override {
+    const int i = made_++;
+    return std::make_unique<Stepper>(make_host_stepper(*inner_, space, certifier, quad), refuse_start_.count(i) > 0,
+                                     refuse_all_.count(i) > 0);
+  }
+
+ private:
+  struct Stepper final : NewtonStepper {
+    Stepper(std::unique_ptr<NewtonStepper> in, bool start, bool all) : inner(std::move(in)), refuse_start(start), refuse_all(all) {}
+    double start(const Eigen::VectorXd& x0) override { return inner->start(x0); }
+    double linearize(const HessianChoice& c) override { return inner->linearize(c); }
+    NewtonSystem solve(double ridge) override { return inner->solve(ridge); }
+    void trial_energies(std::span<const double> s, std::span<double> e) override { inner->trial_energies(s, e); }
+    CertificateResult certify(double step, bool full) override {
+      if (refuse_all || (refuse_start && step == 0)) {
+        CertificateResult c;
+        c.reason = "refused by the test";
+        return c;
+      }
+      return inner->certify(step, full);
+    }
+    void accept(double step) override { inner->accept(step); }
+    Eigen::VectorXd x() override { return inner->x(); }
+    std::unique_ptr<NewtonStepper> inner;
+    bool refuse_start, refuse_all;
+  };
+  std::unique_ptr<NewtonCore> inner_;
+  std::set<int> refuse_start_, refuse_all_;
+  int made_ = 0;
+};
+
+}  // namespace
+
+// A keyframe whose reduced coefficients the certificate refuses (a keyframe authored at
+// the fold limit, its margin at round-off: grid_6/bend_steps in the stress corpus), and
+// the frames after it that no certified step can leave it for. Such a frame is flagged;
+// the next one starts from the keyframe's coefficients again, with their own certificate
+// (not the posed keyframe's, which passes: every frame after a failed one was reported
+// certified after 0 iterations), and once a certified step exists the solve takes it
+// (NewtonOptions::from_uncertified_start).
+TEST_CASE("frames after a keyframe whose coefficients are not certified are flagged until a certified step leaves it",
+          "[interpolation]") {
+  TwistScene& S = twist_scene();
+  // Set-up makes steppers 0, 1, 2 (one per keyframe); the solves of frames 1, 2, 3 make 3, 4, 5.
+  Interpolator I(*S.setup, S.times, S.maps, {}, std::make_unique<RefusingCore>(*S.setup, std::set<int>{0}, std::set<int>{3, 4}));
+  const std::vector<FrameResult> f = I.sequence(11);  // t = 0, 0.2, 0.4, ...
+  REQUIRE(f.size() == 11);
+  CHECK(f[0].keyframe);
+  CHECK(f[0].certified);
+  for (int i : {1, 2}) {
+    INFO("frame " << i << ": " << f[static_cast<size_t>(i)].message);
+    CHECK_FALSE(f[static_cast<size_t>(i)].certified);
+    CHECK(f[static_cast<size_t>(i)].stop == NewtonStop::StartNotCertified);
+    CHECK(f[static_cast<size_t>(i)].iterations == 0);
+  }
+  // Frame 3 starts from keyframe 0's coefficients, refused at step 0, and leaves them.
+  INFO("frame 3: " << f[3].message);
+  CHECK(f[3].certified);
+  CHECK(f[3].converged);
+  CHECK(f[3].iterations >= 1);
+  for (size_t i = 4; i < f.size(); ++i) {
+    INFO("frame " << i << ": " << f[i].message);
+    CHECK(f[i].certified);
+    CHECK(f[i].converged);
+  }
 }

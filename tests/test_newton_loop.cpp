@@ -3,6 +3,7 @@
 // and the stall that the freed rotation fixes, on the issue's grid of round holes.
 #include <catch2/catch.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <functional>
 
@@ -198,7 +199,7 @@ TEST_CASE("newton_run: a singular system gets ridges 1e-12 * max|diag| growing t
   CHECK(always.ridges[2] == Approx(always.ridges[1] * 10));
 }
 
-TEST_CASE("newton_run: a step the certificate rejects is halved; the start must be certified", "[newton][loop]") {
+TEST_CASE("newton_run: a step the certificate rejects is halved; an uncertified start must be left by a certified step", "[newton][loop]") {
   FakeStepper f;
   f.certifies = [](double s) { return s == 0 || s <= 0.5; };
   NewtonOptions o;
@@ -219,6 +220,44 @@ TEST_CASE("newton_run: a step the certificate rejects is halved; the start must 
   CHECK(bad.iterations == 0);
   CHECK(bad.message.rfind("the starting map is not certified", 0) == 0);
   CHECK(bad.stop == NewtonStop::StartNotCertified);
+
+  // Uncertified start, certified steps (a keyframe at the fold limit whose reduced
+  // coefficients lose its round-off margin): the first certified step leaves it.
+  FakeStepper u;
+  u.certifies = [](double s) { return s > 0; };
+  const NewtonResult left = newton_run(u, true, true, Eigen::Vector2d(0, 0), {});
+  CHECK(left.certified);
+  CHECK(left.converged);
+  CHECK(left.stop == NewtonStop::Converged);
+  CHECK(left.iterations >= 1);
+  CHECK(left.x.isApprox(u.a, 1e-9));
+  // … and the start's known certificate, refused, is not asked for again.
+  FakeStepper u2;
+  u2.certifies = [](double s) { return s > 0; };
+  CertificateResult refused;
+  refused.reason = "margin within round-off";
+  NewtonOptions given;
+  given.start_certificate = &refused;
+  const NewtonResult left2 = newton_run(u2, true, true, Eigen::Vector2d(0, 0), given);
+  CHECK(left2.certified);
+  CHECK(std::find(u2.certified_steps.begin(), u2.certified_steps.end(), 0.0) == u2.certified_steps.end());
+  // The old rule: stop at once.
+  FakeStepper u3;
+  u3.certifies = [](double s) { return s > 0; };
+  NewtonOptions strict;
+  strict.from_uncertified_start = false;
+  const NewtonResult at_once = newton_run(u3, true, true, Eigen::Vector2d(0, 0), strict);
+  CHECK_FALSE(at_once.certified);
+  CHECK(at_once.iterations == 0);
+  CHECK(at_once.stop == NewtonStop::StartNotCertified);
+  // Uncertified start already at the minimum: nothing to step, still not certified.
+  FakeStepper v;
+  v.certifies = [](double s) { return s > 0; };
+  const NewtonResult still = newton_run(v, true, true, Eigen::Vector2d(v.a), {});
+  CHECK_FALSE(still.certified);
+  CHECK_FALSE(still.converged);
+  CHECK(still.stop == NewtonStop::StartNotCertified);
+  CHECK(still.message.rfind("the starting map is not certified (scripted failure) and no certified step left it", 0) == 0);
 
   FakeStepper h;  // certified only at the start: no certified decrease anywhere
   h.certifies = [](double s) { return s == 0; };

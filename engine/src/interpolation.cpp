@@ -336,7 +336,7 @@ FrameResult Interpolator::frame_before_crossings(double t, const Eigen::VectorXd
   const CertificateResult* start = warm_start.size() ? warm_certificate : nullptr;
   for (size_t j = 0; !start && j < key_x_.size(); ++j)  // a keyframe's own coefficients: its start certificate
     if (x0.size() == key_x_[j].size() && x0 == key_x_[j]) start = &key_start_certificate_[j];
-  if (start && start->certified) no.start_certificate = start;
+  if (start) no.start_certificate = start;  // certified or not (NewtonOptions::from_uncertified_start)
   tp = Clock::now();
   const NewtonResult n = newton_solve(*core_, setup_.metric_space, &setup_.certifier, nullptr, x0, no);
   r.parts.solve = ms_since(tp);
@@ -387,6 +387,14 @@ std::vector<FrameResult> Interpolator::sequence(const std::vector<double>& times
   out.reserve(times.size());
   Eigen::VectorXd warm;
   CertificateResult warm_certificate;
+  // `warm` is a keyframe's own coefficients (the last certified frame was a keyframe or
+  // held one): its certificate is then the posed keyframe's, not of expand(warm), and
+  // frame() takes the start certificate made at set-up instead. Kept across frames that
+  // failed: they do not move the warm start, and the frame after them must not pair the
+  // keyframe's coefficients with the posed keyframe's certificate (a keyframe at the fold
+  // limit whose reduced coefficients the certificate refuses: every frame after a failed
+  // one was reported certified without a step, bench_stress grid_6/bend_steps).
+  bool warm_is_key = false;
   // Pipelined: solved frame i's crossing search runs on `crossings` while frame i + 1 is
   // solved and its image made (into the other of the two image buffers); then the
   // sequence waits for frame i's search, completes frame i and calls progress for it.
@@ -411,7 +419,7 @@ std::vector<FrameResult> Interpolator::sequence(const std::vector<double>& times
     // A solved frame's certificate is of its canonical map expand(x): reusable as the
     // next solve's start (a keyframe's, or a held one's, is of the posed map: frame()
     // takes the keyframe's start certificate made at set-up instead).
-    const CertificateResult* start = out.empty() || out.back().keyframe || out.back().held ? nullptr : &warm_certificate;
+    const CertificateResult* start = warm.size() == 0 || warm_is_key ? nullptr : &warm_certificate;
     bool search = false;
     if (options_.pipelined_overlap)
       out.push_back(frame_before_crossings(t, warm, start, boundary_values_[static_cast<size_t>(buffer)], search));
@@ -420,6 +428,7 @@ std::vector<FrameResult> Interpolator::sequence(const std::vector<double>& times
     if (out.back().certified) {
       warm = out.back().x;
       warm_certificate = out.back().certificate;
+      warm_is_key = out.back().keyframe || out.back().held;
     }
     if (pending >= 0) complete(std::exchange(pending, -1));
     if (search) {

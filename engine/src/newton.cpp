@@ -370,12 +370,20 @@ NewtonResult newton_run(NewtonStepper& st, bool certify, bool rotation_invariant
     res.timing.certificate += ms_since(tc);
     return c;
   };
+  // A start the certificate refuses is not yet a failed solve (NewtonOptions::
+  // from_uncertified_start): the line search accepts certified steps only, so the first
+  // step it takes leaves the solve on a certified map; without one the solve stops as
+  // StartNotCertified, whatever else ended it.
+  std::string start_refusal;  // why the start is not certified (empty: it is, or no certifier)
   if (certify) {
-    res.certificate = opt.start_certificate && opt.start_certificate->certified ? *opt.start_certificate : timed_certify(0, true);
+    res.certificate = opt.start_certificate ? *opt.start_certificate : timed_certify(0, true);
     if (!res.certificate.certified) {
-      res.stop = NewtonStop::StartNotCertified;
-      res.message = "the starting map is not certified: " + res.certificate.reason;
-      return finish(E);
+      start_refusal = res.certificate.reason.empty() ? "not certified" : res.certificate.reason;
+      if (!opt.from_uncertified_start) {
+        res.stop = NewtonStop::StartNotCertified;
+        res.message = "the starting map is not certified: " + start_refusal;
+        return finish(E);
+      }
     }
   }
   // A certificate that passes has looked at every segment, so the line search's verdict
@@ -600,6 +608,12 @@ NewtonResult newton_run(NewtonStepper& st, bool certify, bool rotation_invariant
   }
   if (certify) {
     res.certified = res.certificate.certified;
+    // Never left an uncertified start: whatever stopped the loop, the map it leaves is
+    // the start, and the certificate refuses it.
+    if (!res.certified && !start_refusal.empty()) {
+      res.stop = NewtonStop::StartNotCertified;
+      res.message = "the starting map is not certified (" + start_refusal + ") and no certified step left it: " + res.message;
+    }
   }
   return finish(E);
 }

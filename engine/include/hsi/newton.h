@@ -286,8 +286,19 @@ struct NewtonOptions {
   // cross faster. Kept as an option (newton_run's tests drive it).
   int shift_after = 0;
   bool certify = true;            // accept a step only if the certificate passes
+  // A start the certificate refuses (finite energy: no sample folds) is solved from all
+  // the same: the line search accepts certified steps only, so the first step taken
+  // leaves the solve on a certified map; only a solve that takes none stops as
+  // StartNotCertified (the final map is then the start, flagged not certified). A
+  // keyframe authored at the fold limit is certified with a margin at round-off level,
+  // and its coefficients in the interpolation's reduced space (MapSpace::reduce, then
+  // expand) differ from it by round-off, which the certificate, counting its own
+  // rounding, refuses: the first frame after it then stopped at once, not certified
+  // (the stress corpus' grid_6/bend_steps, 1 to 3 frames per run). false: stop at once.
+  bool from_uncertified_start = true;
   // The certificate of x0's map when the caller has it already (a warm start from the
-  // previous frame's solution): not computed again. Must be of space.expand(x0) exactly.
+  // previous frame's solution), certified or not: not computed again. Must be of
+  // space.expand(x0) exactly.
   const CertificateResult* start_certificate = nullptr;
 };
 
@@ -339,8 +350,9 @@ struct NewtonResult {
   struct Timing { double energy_gradient = 0, hessian = 0, solve = 0, line_search = 0, certificate = 0; } timing;
 };
 
-// Minimises mean_G E_iso + quad(x) from x0, which must be a certified map: the core's
-// own stepper where it has one for these arguments, else the host stepper.
+// Minimises mean_G E_iso + quad(x) from x0 (a certified map, or see
+// NewtonOptions::from_uncertified_start): the core's own stepper where it has one for
+// these arguments, else the host stepper.
 NewtonResult newton_solve(NewtonCore& core, const MapSpace& space, const Certifier* certifier, const QuadraticTerm* quad,
                           const Eigen::VectorXd& x0, const NewtonOptions& options);
 
