@@ -8,10 +8,14 @@
 #include <cusolverDn.h>
 #include <cuda_runtime.h>
 
+#include <atomic>
 #include <cstddef>
 #include <cstdlib>
 #include <cstdint>
 #include <cstdio>
+#include <mutex>
+#include <optional>
+#include <shared_mutex>
 #include <string>
 #include <unordered_map>
 #include <utility>
@@ -40,16 +44,49 @@ inline void check_call(cusolverStatus_t s, const char* call, const char* file, i
 
 namespace hsi::cuda {
 
+// Stream captures and the calls that break them, across threads. A capture in flight
+// on one thread (GraphCache) is invalidated by calls on any other thread that
+// synchronise the whole device (cudaFree, cudaFreeHost, a handle's destruction) or that
+// the capture cannot be ordered against; with many cores on many threads (bench_stress
+// --jobs 16, bench_batch's 16 workers) such calls came while others captured, captures
+// failed (cudaErrorStreamCaptureInvalidated, cuBLAS launch failures inside the capture)
+// and the process crashed. Every such call of this backend (the RAII owners below:
+// memory, pinned memory, streams, events, library handles, graphs) holds this lock
+// exclusively; every capture, from its beginning to its end, holds it shared, so
+// captures on several threads run side by side and never beside those calls.
+inline std::shared_mutex& capture_guard() {
+  static std::shared_mutex m;
+  return m;
+}
+// Captures that failed in this process (GraphCache: the work then ran directly); tests
+// and benchmarks read it.
+inline std::atomic<long>& capture_failures() {
+  static std::atomic<long> n{0};
+  return n;
+}
+// Held around a call that must not run while another thread captures.
+class OutsideCaptures {
+ public:
+  OutsideCaptures() : lock_(capture_guard()) {}
+
+ private:
+  std::unique_lock<std::shared_mutex> lock_;
+};
+
 // Device memory for `count` values of T (uninitialised).
 template <class T>
 class DeviceArray {
  public:
   DeviceArray() = default;
   explicit DeviceArray(size_t count) : count_(count) {
-    if (count) HSI_CUDA_CHECK(cudaMalloc(reinterpret_cast<void**>(&p_), count * sizeof(T)));
+    if (!count) return;
+    OutsideCaptures guard;
+    HSI_CUDA_CHECK(cudaMalloc(reinterpret_cast<void**>(&p_), count * sizeof(T)));
   }
   ~DeviceArray() {
-    if (p_) cudaFree(p_);
+    if (!p_) return;
+    OutsideCaptures guard;
+    cudaFree(p_);
   }
   DeviceArray(DeviceArray&& o) noexcept : p_(std::exchange(o.p_, nullptr)), count_(std::exchange(o.count_, 0)) {}
   DeviceArray& operator=(DeviceArray&& o) noexcept {
@@ -74,10 +111,14 @@ class PinnedArray {
  public:
   PinnedArray() = default;
   explicit PinnedArray(size_t count) : count_(count) {
-    if (count) HSI_CUDA_CHECK(cudaMallocHost(reinterpret_cast<void**>(&p_), count * sizeof(T)));
+    if (!count) return;
+    OutsideCaptures guard;
+    HSI_CUDA_CHECK(cudaMallocHost(reinterpret_cast<void**>(&p_), count * sizeof(T)));
   }
   ~PinnedArray() {
-    if (p_) cudaFreeHost(p_);
+    if (!p_) return;
+    OutsideCaptures guard;
+    cudaFreeHost(p_);
   }
   PinnedArray(PinnedArray&& o) noexcept : p_(std::exchange(o.p_, nullptr)), count_(std::exchange(o.count_, 0)) {}
   PinnedArray& operator=(PinnedArray&& o) noexcept {
@@ -99,8 +140,14 @@ class PinnedArray {
 // A non-blocking stream (no implicit ordering with the legacy default stream).
 class Stream {
  public:
-  Stream() { HSI_CUDA_CHECK(cudaStreamCreateWithFlags(&s_, cudaStreamNonBlocking)); }
-  ~Stream() { cudaStreamDestroy(s_); }
+  Stream() {
+    OutsideCaptures guard;
+    HSI_CUDA_CHECK(cudaStreamCreateWithFlags(&s_, cudaStreamNonBlocking));
+  }
+  ~Stream() {
+    OutsideCaptures guard;
+    cudaStreamDestroy(s_);
+  }
   Stream(const Stream&) = delete;
   Stream& operator=(const Stream&) = delete;
   operator cudaStream_t() const { return s_; }
@@ -112,9 +159,13 @@ class Stream {
 class Event {
  public:
   explicit Event(bool timing = false) {
+    OutsideCaptures guard;
     HSI_CUDA_CHECK(cudaEventCreateWithFlags(&e_, timing ? cudaEventDefault : cudaEventDisableTiming));
   }
-  ~Event() { cudaEventDestroy(e_); }
+  ~Event() {
+    OutsideCaptures guard;
+    cudaEventDestroy(e_);
+  }
   Event(const Event&) = delete;
   Event& operator=(const Event&) = delete;
   operator cudaEvent_t() const { return e_; }
@@ -154,6 +205,7 @@ class BlasHandle {
  public:
   static constexpr size_t kWorkspaceBytes = size_t{32} << 20;
   explicit BlasHandle(cudaStream_t stream) : workspace_(kWorkspaceBytes) {
+    OutsideCaptures guard;
     HSI_CUDA_CHECK(cublasCreate(&h_));
     try {
       HSI_CUDA_CHECK(cublasSetStream(h_, stream));
@@ -164,7 +216,10 @@ class BlasHandle {
       throw;
     }
   }
-  ~BlasHandle() { cublasDestroy(h_); }
+  ~BlasHandle() {
+    OutsideCaptures guard;
+    cublasDestroy(h_);
+  }
   BlasHandle(const BlasHandle&) = delete;
   BlasHandle& operator=(const BlasHandle&) = delete;
   operator cublasHandle_t() const { return h_; }
@@ -178,13 +233,17 @@ class BlasHandle {
 class SolverHandle {
  public:
   explicit SolverHandle(cudaStream_t stream) {
+    OutsideCaptures guard;
     HSI_CUDA_CHECK(cusolverDnCreate(&h_));
     if (const cusolverStatus_t st = cusolverDnSetStream(h_, stream); st != CUSOLVER_STATUS_SUCCESS) {
       cusolverDnDestroy(h_);
       HSI_CUDA_CHECK(st);
     }
   }
-  ~SolverHandle() { cusolverDnDestroy(h_); }
+  ~SolverHandle() {
+    OutsideCaptures guard;
+    cusolverDnDestroy(h_);
+  }
   SolverHandle(const SolverHandle&) = delete;
   SolverHandle& operator=(const SolverHandle&) = delete;
   operator cusolverDnHandle_t() const { return h_; }
@@ -198,12 +257,15 @@ class SolverHandle {
 class GraphExec {
  public:
   explicit GraphExec(cudaGraph_t graph) {
+    OutsideCaptures guard;
     const cudaError_t e = cudaGraphInstantiate(&g_, graph, 0);
     cudaGraphDestroy(graph);
     HSI_CUDA_CHECK(e);
   }
   ~GraphExec() {
-    if (g_) cudaGraphExecDestroy(g_);
+    if (!g_) return;
+    OutsideCaptures guard;
+    cudaGraphExecDestroy(g_);
   }
   GraphExec(GraphExec&& o) noexcept : g_(std::exchange(o.g_, nullptr)) {}
   GraphExec& operator=(GraphExec&& o) noexcept {
@@ -245,6 +307,10 @@ class GraphCache {
       int& failures = f->second;
       if (first || failures >= kMaxCaptureFailures) {
         if (first) failures = 0;
+        // The first run loads modules (lazily, at its first launches): outside any
+        // other thread's capture too.
+        std::optional<OutsideCaptures> guard;
+        if (first) guard.emplace();
         enqueue();
         return;
       }
@@ -254,15 +320,19 @@ class GraphCache {
       // can pick other kernels while capturing than in the direct run); in the stricter
       // modes that load failed the capture whenever other threads' cores were busy
       // (bench_stress, 16 workers on the H100).
-      HSI_CUDA_CHECK(cudaStreamBeginCapture(stream, cudaStreamCaptureModeRelaxed));
       std::string why;
-      try {
-        enqueue();
-      } catch (const Error& e) {
-        why = e.what();
-      }
       cudaGraph_t graph = nullptr;
-      const cudaError_t ended = cudaStreamEndCapture(stream, &graph);
+      cudaError_t ended = cudaSuccess;
+      {
+        std::shared_lock<std::shared_mutex> capturing(capture_guard());  // no device-wide call meanwhile
+        HSI_CUDA_CHECK(cudaStreamBeginCapture(stream, cudaStreamCaptureModeRelaxed));
+        try {
+          enqueue();
+        } catch (const Error& e) {
+          why = e.what();
+        }
+        ended = cudaStreamEndCapture(stream, &graph);
+      }
       if (why.empty() && ended != cudaSuccess) why = std::string("cudaStreamEndCapture: ") + cudaGetErrorName(ended);
       if (!why.empty() || !graph) {
         if (graph) cudaGraphDestroy(graph);
@@ -270,6 +340,7 @@ class GraphCache {
         if (last_failure_.empty())  // once per cache: a performance fallback, not an error
           std::fprintf(stderr, "hsi cuda: a CUDA graph capture failed, the call runs without one: %s\n", why.c_str());
         ++failures;
+        capture_failures().fetch_add(1);
         last_failure_ = why;
         enqueue();
         return;
@@ -290,15 +361,13 @@ class GraphCache {
   std::string last_failure_;
 };
 
-// Whether the CUDA backend replays its recurring call sequences as graphs: only with
-// HSI_CUDA_GRAPHS=1, and only for a process that drives one core at a time. With many
-// cores on many threads (bench_stress --jobs 16 on the H100) other threads' allocations
-// and frees invalidated captures in flight (cudaErrorStreamCaptureInvalidated, cuBLAS
-// launch failures inside the capture) and the process crashed; off, the same work is
-// launched directly (what GraphCache::run does when disabled).
+// Whether the CUDA backend replays its recurring call sequences as graphs: yes, unless
+// HSI_CUDA_GRAPHS=0 (then the same work is launched directly, what GraphCache::run does
+// when disabled). Captures on many threads are safe beside each other and beside the
+// backend's allocations and frees (capture_guard).
 inline bool graphs_enabled() {
   const char* v = std::getenv("HSI_CUDA_GRAPHS");
-  return v && std::string(v) == "1";
+  return !(v && std::string(v) == "0");
 }
 
 // Whether the Newton system is factored by the backend's own dense Cholesky
