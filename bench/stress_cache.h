@@ -199,10 +199,22 @@ inline uint64_t keyframes_hash(const std::string& scene_file_contents, const Seq
 // keyframe authored before a change to the certificate may now fail it (one authored
 // at a margin within round-off, before the certificate counted its own rounding), and
 // bench_stress then authors the sequence again instead of failing its runs.
-inline std::string uncertified_keyframe(const Certifier& certifier, const Authored& a) {
+// Also stale: a keyframe whose coefficients in the interpolation's reduced space
+// (metric_space.reduce, then expand: what every frame after it starts from) the
+// certificate refuses, as one authored at the fold limit before authoring kept a margin
+// (NewtonOptions::min_margin; grid_6/bend_steps).
+inline std::string uncertified_keyframe(const ShapeSetup& setup, const Authored& a) {
   for (size_t k = 0; k < a.maps.size(); ++k) {
-    const CertificateResult c = certifier.certify(a.maps[k]);
+    const CertificateResult c = setup.certifier.certify(a.maps[k]);
     if (!c.certified) return "keyframe " + std::to_string(k) + ": " + c.reason;
+    Eigen::VectorXd x;
+    try {
+      x = setup.metric_space.reduce(a.maps[k]).x;
+    } catch (const InputError&) {
+      continue;  // a map outside the map space: the Interpolator names it
+    }
+    const CertificateResult r = setup.certifier.certify(setup.metric_space.expand(x));
+    if (!r.certified) return "keyframe " + std::to_string(k) + "'s reduced coefficients: " + r.reason;
   }
   return {};
 }

@@ -68,6 +68,10 @@ TEST_CASE("targets no map can reach end at the closest certified map, with a mes
   CHECK_FALSE(k.reached);
   CHECK_THAT(k.message, Contains("not reached") && Contains("closest certified map"));
   CHECK(setup->certifier.certify(k.map).certified);
+  // Short of the fold by a margin (KeyframeOptions' NewtonOptions::min_margin), so that
+  // its coefficients in the interpolation's reduced space are certified too.
+  CHECK(k.certificate.min_margin >= 1e-6 * k.certificate.sigma1_max);
+  CHECK(setup->certifier.certify(setup->metric_space.expand(setup->metric_space.reduce(k.map).x)).certified);
 }
 
 TEST_CASE("imported keyframes are certified; folding or malformed ones are refused", "[keyframes]") {

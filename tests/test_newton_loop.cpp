@@ -33,6 +33,7 @@ struct FakeStepper : NewtonStepper {
   bool exact_definite = true;
   int fail_factorisations = 0;                 // at ridge 0, this many times
   std::function<bool(double)> certifies = [](double) { return true; };
+  std::function<double(double)> margin = [](double) { return 1.0; };  // certified min_margin at a step (σ1 bound 1)
   std::function<double(const Eigen::Vector2d&)> energy = [this](const Eigen::Vector2d& x) {
     return 2 + 0.5 * (x - a).dot(A * (x - a));
   };
@@ -93,6 +94,8 @@ struct FakeStepper : NewtonStepper {
     certified_steps.push_back(step);
     CertificateResult c;
     c.certified = certifies(step);
+    c.min_margin = margin(step);
+    c.sigma1_max = 1;
     if (!c.certified) c.reason = "scripted failure";
     return c;
   }
@@ -797,4 +800,35 @@ TEST_CASE("newton_run: a solve still running after escalate_after_iterations swi
     iterations[after ? 0 : 1] = r.iterations;
   }
   CHECK(2 * iterations[0] <= iterations[1]);
+}
+
+TEST_CASE("newton_run: with min_margin a certified step closer to folding than that is refused", "[newton][loop]") {
+  // The margin shrinks along the step: 1 at the start, 0 at the full step (a fold ahead).
+  auto shrinking = [](FakeStepper& f) { f.margin = [](double s) { return std::max(0.0, 1.0 - s); }; };
+  FakeStepper any;
+  shrinking(any);
+  NewtonOptions o;
+  o.max_iterations = 1;
+  const NewtonResult r0 = newton_run(any, true, true, Eigen::Vector2d(0, 0), o);
+  REQUIRE(r0.log.size() == 1);
+  CHECK(r0.log[0].step == 1.0);  // min_margin 0: the full step, margin 0, is certified
+  FakeStepper kept;
+  shrinking(kept);
+  o.min_margin = 0.3;
+  const NewtonResult r1 = newton_run(kept, true, true, Eigen::Vector2d(0, 0), o);
+  REQUIRE(r1.log.size() == 1);
+  CHECK(r1.log[0].step == 0.5);  // 1 (margin 0) refused, 0.5 (margin 0.5) taken
+  CHECK(r1.log[0].certificate_rejections == 1);
+  CHECK(r1.certified);
+  CHECK(r1.certificate.min_margin >= 0.3 * r1.certificate.sigma1_max);
+  // Nothing but the start keeps the margin: the refusal names it.
+  FakeStepper none;
+  none.margin = [](double s) { return s == 0 ? 1.0 : 1e-9; };
+  NewtonOptions p;
+  p.min_margin = 1e-6;
+  const NewtonResult r2 = newton_run(none, true, true, Eigen::Vector2d(0, 0), p);
+  CHECK(r2.stop == NewtonStop::CertificateRefused);
+  CHECK(r2.iterations == 0);
+  CHECK(r2.certified);  // the start, which keeps it
+  CHECK_THAT(r2.message, Catch::Matchers::Contains("below 1e-06 of sigma1"));
 }

@@ -156,13 +156,13 @@ TEST_CASE("stress cache: a keyframe today's certificate refuses is named, down t
   const auto setup = make_shape_setup(scene, 2000);
   stress::Authored a = stress::author(scene, *setup);
   REQUIRE(a.maps.size() == 2);
-  CHECK(stress::uncertified_keyframe(setup->certifier, a).empty());
+  CHECK(stress::uncertified_keyframe(*setup, a).empty());
   // f = φ + b conj(φ): |f_zbar| / |f_z| = b everywhere. b = 0.5 is a locally injective
   // map; b = 1.5 reverses orientation; b = 1 − 1e-15 is within round-off of folding.
   const HarmonicMap key = a.maps[1];
   for (const double b : {0.5, 1.5, 1 - 1e-15}) {
     a.maps[1] = {key.phi, b * key.phi};
-    const std::string why = stress::uncertified_keyframe(setup->certifier, a);
+    const std::string why = stress::uncertified_keyframe(*setup, a);
     INFO("b = " << b << ": '" << why << "'");
     if (b < 1 - 1e-3)
       CHECK(why.empty());

@@ -368,6 +368,14 @@ NewtonResult newton_run(NewtonStepper& st, bool certify, bool rotation_invariant
     const auto tc = Clock::now();
     CertificateResult c = st.certify(step, full);
     res.timing.certificate += ms_since(tc);
+    // NewtonOptions::min_margin: a certified map closer to folding than that is refused.
+    if (c.certified && opt.min_margin > 0 && !(c.min_margin >= opt.min_margin * c.sigma1_max)) {
+      char why[200];
+      std::snprintf(why, sizeof why, "certified, but its margin min(|f_z| - |f_zbar|) = %.3g is below %.3g of sigma1 = %.3g (min_margin)",
+                    c.min_margin, opt.min_margin, c.sigma1_max);
+      c.certified = false;
+      c.reason = why;
+    }
     return c;
   };
   // A start the certificate refuses is not yet a failed solve (NewtonOptions::

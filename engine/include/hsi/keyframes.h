@@ -21,6 +21,10 @@ struct KeyframeOptions {
     NewtonOptions o;
     o.max_iterations = 300;
     o.tolerance = 1e-10;
+    // A drag that would fold stops short of the fold by a margin, not at round-off
+    // (NewtonOptions::min_margin): the keyframe's coefficients in the interpolation's
+    // reduced space are then certified too, and so are the frames next to it.
+    o.min_margin = 1e-6;
     return o;
   }();
   double reach_tolerance = 1e-3;  // a target counts as reached within this fraction of the size

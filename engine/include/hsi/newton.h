@@ -296,6 +296,15 @@ struct NewtonOptions {
   // rounding, refuses: the first frame after it then stopped at once, not certified
   // (the stress corpus' grid_6/bend_steps, 1 to 3 frames per run). false: stop at once.
   bool from_uncertified_start = true;
+  // A step is accepted only where the certificate proves a margin: min over ∂Ω of
+  // |f_z| − |f_zbar| (CertificateResult::min_margin, the certified lower bound of σ2) at
+  // least min_margin times the certified upper bound of σ1 (so κ ≤ 1/min_margin). 0:
+  // any certified map. Keyframe authoring asks for 1e-6 (KeyframeOptions): a drag that
+  // would fold otherwise stops at a map whose margin is at round-off level, and that
+  // map's coefficients in the interpolation's reduced space, equal to it up to
+  // round-off, are not certified (the stress corpus' grid_6/bend_steps: the frames after
+  // its keyframe 0 could not be certified, 59 of 60 with FullProj).
+  double min_margin = 0;
   // The certificate of x0's map when the caller has it already (a warm start from the
   // previous frame's solution), certified or not: not computed again. Must be of
   // space.expand(x0) exactly.
