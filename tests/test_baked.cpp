@@ -846,6 +846,14 @@ namespace {
 
 // Frames over the fixture's cage, one per stop reason (t = its value), then one not
 // recorded (not converged, stop empty) and one converged that does not say.
+// A quick bake for the stop-word tests: no blend sub-steps, a coarse mesh.
+BakeOptions small_bake_options() {
+  BakeOptions bo;
+  bo.blend_substeps = 0;
+  bo.mesh_vertices = 100;
+  return bo;
+}
+
 FrameFile frames_with_every_stop(const ShapeSetup& setup) {
   FrameFile ff;
   ff.cage = setup.cage;
@@ -892,9 +900,7 @@ TEST_CASE("baked frames carry every stop reason (hsib_frame_stop)", "[baked][sto
   BakedFixture& F = fixture();
   const ShapeSetup& setup = *F.seq.setup;
   const FrameFile ff = frames_with_every_stop(setup);
-  BakeOptions bo;
-  bo.blend_substeps = 0;
-  bo.mesh_vertices = 100;
+  const BakeOptions bo = small_bake_options();
   const std::string bytes = encode_baked(setup.shape, ff, bo);
   Sequence S(bytes);
   REQUIRE(S.status == HSIB_OK);
@@ -939,9 +945,7 @@ TEST_CASE("baked files without stop words read with the stop derived from flag 4
   BakedFixture& F = fixture();
   const ShapeSetup& setup = *F.seq.setup;
   const FrameFile ff = frames_with_every_stop(setup);
-  BakeOptions bo;
-  bo.blend_substeps = 0;
-  bo.mesh_vertices = 100;
+  const BakeOptions bo = small_bake_options();
   std::string old = encode_baked(setup.shape, ff, bo);
   for (uint32_t f = 0; f < ff.frames.size(); ++f) old = with_stop_word(old, f, 0);
   Sequence S(old);
@@ -969,9 +973,7 @@ TEST_CASE("baked runtime refuses an unknown stop code or one that contradicts fl
   BakedFixture& F = fixture();
   const ShapeSetup& setup = *F.seq.setup;
   const FrameFile ff = frames_with_every_stop(setup);
-  BakeOptions bo;
-  bo.blend_substeps = 0;
-  bo.mesh_vertices = 100;
+  const BakeOptions bo = small_bake_options();
   const std::string bytes = encode_baked(setup.shape, ff, bo);
   const std::string at3 = "(at byte " + std::to_string(frame_record(bytes, 3).at + 12) + ")";
   auto refused = [](const std::string& b) {
