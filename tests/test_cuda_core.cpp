@@ -14,6 +14,8 @@
 #include <cuda_runtime.h>
 
 #include <atomic>
+#include <chrono>
+#include <memory>
 #include <mutex>
 #include <thread>
 
@@ -628,6 +630,27 @@ TEST_CASE("CUDA graphs captured on many threads beside allocations and frees", "
     REQUIRE(got[static_cast<size_t>(w)].size() == reference.size());
     for (size_t i = 0; i < reference.size(); ++i) test::require_same(got[static_cast<size_t>(w)][i], reference[i]);
   }
+}
+
+// capture_guard is not recursive: an OutsideCaptures nested in one this thread holds
+// (a graph key's first run holds one while it enqueues, and may make buffers) must not
+// wait for itself. Needs no GPU. Without the nesting rule the helper thread would hang.
+TEST_CASE("capture guard: nested device-wide calls on one thread do not deadlock", "[cuda]") {
+  auto done = std::make_shared<std::atomic<bool>>(false);
+  std::thread([done] {
+    hsi::cuda::OutsideCaptures outer;
+    { hsi::cuda::OutsideCaptures inner; }
+    CHECK(hsi::cuda::guard_held() == hsi::cuda::GuardHeld::Exclusive);  // the outer one still holds it
+    *done = true;
+  }).detach();
+  for (int i = 0; i < 200 && !*done; ++i) std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  REQUIRE(done->load());
+  // Released: another thread takes it at once.
+  std::thread([] {
+    hsi::cuda::OutsideCaptures again;
+    CHECK(hsi::cuda::guard_held() == hsi::cuda::GuardHeld::Exclusive);
+  }).join();
+  CHECK(hsi::cuda::guard_held() == hsi::cuda::GuardHeld::None);
 }
 
 // cuBLAS and cuSOLVER are not linked (cuda/src/lazy_libraries.cpp): every process with

@@ -64,10 +64,30 @@ inline std::atomic<long>& capture_failures() {
   static std::atomic<long> n{0};
   return n;
 }
-// Held around a call that must not run while another thread captures.
+// What this thread holds of capture_guard: nothing, the lock exclusively (an
+// OutsideCaptures further up its stack, e.g. a graph key's first run, which may make
+// buffers), or shared (it is capturing).
+enum class GuardHeld : unsigned char { None, Exclusive, Shared };
+inline GuardHeld& guard_held() {
+  thread_local GuardHeld held = GuardHeld::None;
+  return held;
+}
+// Held around a call that must not run while another thread captures. Nested in one
+// already held by this thread it locks nothing (shared_mutex is not recursive: it would
+// wait for itself); inside this thread's own capture it locks nothing either (the call
+// fails that capture, and GraphCache runs the work directly).
 class OutsideCaptures {
  public:
-  OutsideCaptures() : lock_(capture_guard()) {}
+  OutsideCaptures() {
+    if (guard_held() != GuardHeld::None) return;
+    lock_ = std::unique_lock<std::shared_mutex>(capture_guard());
+    guard_held() = GuardHeld::Exclusive;
+  }
+  ~OutsideCaptures() {
+    if (lock_.owns_lock()) guard_held() = GuardHeld::None;
+  }
+  OutsideCaptures(const OutsideCaptures&) = delete;
+  OutsideCaptures& operator=(const OutsideCaptures&) = delete;
 
  private:
   std::unique_lock<std::shared_mutex> lock_;
@@ -326,11 +346,13 @@ class GraphCache {
       {
         std::shared_lock<std::shared_mutex> capturing(capture_guard());  // no device-wide call meanwhile
         HSI_CUDA_CHECK(cudaStreamBeginCapture(stream, cudaStreamCaptureModeRelaxed));
+        guard_held() = GuardHeld::Shared;
         try {
           enqueue();
         } catch (const Error& e) {
           why = e.what();
         }
+        guard_held() = GuardHeld::None;
         ended = cudaStreamEndCapture(stream, &graph);
       }
       if (why.empty() && ended != cudaSuccess) why = std::string("cudaStreamEndCapture: ") + cudaGetErrorName(ended);
