@@ -831,4 +831,15 @@ TEST_CASE("newton_run: with min_margin a certified step closer to folding than t
   CHECK(r2.iterations == 0);
   CHECK(r2.certified);  // the start, which keeps it
   CHECK_THAT(r2.message, Catch::Matchers::Contains("below 1e-06 of sigma1"));
+  // A start nearer the fold than min_margin (an imported keyframe) is not frozen: its own
+  // share is the bar, and it may not get nearer.
+  FakeStepper near;
+  near.margin = [](double s) { return s == 0 ? 1e-9 : (s > 0.75 ? 1e-10 : 1e-8); };
+  NewtonOptions q;
+  q.min_margin = 1e-6;
+  q.max_iterations = 1;
+  const NewtonResult r3 = newton_run(near, true, true, Eigen::Vector2d(0, 0), q);
+  REQUIRE(r3.log.size() == 1);
+  CHECK(r3.log[0].step == 0.5);  // 1 (margin 1e-10 < the start's 1e-9) refused, 0.5 taken
+  CHECK(r3.certified);
 }

@@ -364,15 +364,19 @@ NewtonResult newton_run(NewtonStepper& st, bool certify, bool rotation_invariant
     res.message = "the starting map folds or degenerates at a sample (infinite energy)";
     return finish(E);
   }
+  // NewtonOptions::min_margin for the steps (0 until the start is certified; the start
+  // itself is not held to it): a step's certified map must keep at least this share of
+  // σ1 as margin, or the start's own share where that is smaller (a start closer to the
+  // fold than min_margin may still move, never closer to it).
+  double step_margin = 0;
   auto timed_certify = [&](double step, bool full) {
     const auto tc = Clock::now();
     CertificateResult c = st.certify(step, full);
     res.timing.certificate += ms_since(tc);
-    // NewtonOptions::min_margin: a certified map closer to folding than that is refused.
-    if (c.certified && opt.min_margin > 0 && !(c.min_margin >= opt.min_margin * c.sigma1_max)) {
+    if (step != 0 && c.certified && step_margin > 0 && !(c.min_margin >= step_margin * c.sigma1_max)) {
       char why[200];
       std::snprintf(why, sizeof why, "certified, but its margin min(|f_z| - |f_zbar|) = %.3g is below %.3g of sigma1 = %.3g (min_margin)",
-                    c.min_margin, opt.min_margin, c.sigma1_max);
+                    c.min_margin, step_margin, c.sigma1_max);
       c.certified = false;
       c.reason = why;
     }
@@ -394,6 +398,10 @@ NewtonResult newton_run(NewtonStepper& st, bool certify, bool rotation_invariant
       }
     }
   }
+  if (certify && opt.min_margin > 0)
+    step_margin = res.certificate.certified && res.certificate.sigma1_max > 0
+                      ? std::min(opt.min_margin, res.certificate.min_margin / res.certificate.sigma1_max)
+                      : opt.min_margin;
   // A certificate that passes has looked at every segment, so the line search's verdict
   // on the accepted step is the final map's full certificate: res.certificate follows x.
   double dE_prev = -1;  // the previous step's decrease (none yet)

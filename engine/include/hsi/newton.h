@@ -298,8 +298,9 @@ struct NewtonOptions {
   bool from_uncertified_start = true;
   // A step is accepted only where the certificate proves a margin: min over ∂Ω of
   // |f_z| − |f_zbar| (CertificateResult::min_margin, the certified lower bound of σ2) at
-  // least min_margin times the certified upper bound of σ1 (so κ ≤ 1/min_margin). 0:
-  // any certified map. Keyframe authoring asks for 1e-6 (KeyframeOptions): a drag that
+  // least min_margin times the certified upper bound of σ1 (so κ ≤ 1/min_margin), or the
+  // start's own share where that is smaller (a certified start nearer the fold may move,
+  // never nearer to it; the start itself is not held to it). 0: any certified map. Keyframe authoring asks for 1e-6 (KeyframeOptions): a drag that
   // would fold otherwise stops at a map whose margin is at round-off level, and that
   // map's coefficients in the interpolation's reduced space, equal to it up to
   // round-off, are not certified (the stress corpus' grid_6/bend_steps: the frames after
