@@ -162,10 +162,10 @@ struct SequenceStats {
 // evaluator, as runtime's make_newton_core gives with the CUDA core; else the setup's CPU
 // one. pipelined: InterpolationOptions::pipelined_overlap (the crossing search beside the
 // next solve; off: in series). crossing_reps > 0: the crossing search alone timed on
-// the frames' images too.
+// the frames' images too. chord: InterpolationOptions::chord_steps.
 template <class MakeCore>
 SequenceStats run_sequence(const Loaded& L, MakeCore&& make_core, int frames, bool gpu_boundary, bool pipelined = true,
-                           int crossing_reps = 0) {
+                           int crossing_reps = 0, bool chord = true) {
   SequenceStats s;
   auto t0 = Clock::now();
   std::unique_ptr<NewtonCore> core = make_core();
@@ -175,6 +175,7 @@ SequenceStats run_sequence(const Loaded& L, MakeCore&& make_core, int frames, bo
   t0 = Clock::now();
   InterpolationOptions o;
   o.pipelined_overlap = pipelined;
+  o.chord_steps = chord;
   Interpolator interp(*L.setup, L.times, L.maps, o, std::move(core), std::move(boundary));
   s.interpolator_ms = ms_since(t0);
   t0 = Clock::now();
@@ -313,8 +314,9 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "no CUDA device: %s\n", why.c_str());
     return 1;
   }
-  std::printf("Device: %s; CPU threads: %d; r = %.0f%%; PartProj\n", device ? why.c_str() : ("none (" + why + ")").c_str(),
-              omp_get_max_threads(), 100 * ratio_r);
+  std::printf("Device: %s; CPU threads: %d; r = %.0f%%; %s (the interpolation's default projection)\n",
+              device ? why.c_str() : ("none (" + why + ")").c_str(), omp_get_max_threads(), 100 * ratio_r,
+              to_string(InterpolationOptions{}.projection));
   if (device) std::printf("GPU clocks at the start: %s\n", hc::clocks().describe().c_str());
   std::printf("\n");
 
@@ -359,7 +361,9 @@ int main(int argc, char** argv) {
             "Eigen LLT (4n) CPU ms | ratio |\n|---|---|---|---|---|---|---|---|---|---|\n";
   seqs << "## Warm-started sequences (" << frames << " frames; per-iteration parts in ms)\n\n"
        << "cuda-host: the CUDA core driven call by call from the host (Cholesky and certificate on the CPU); "
-          "cuda: the whole solve on the GPU (cuSOLVER, GPU line search and certificate). t = ½: the frame midway "
+          "cuda: the whole solve on the GPU (cuSOLVER, GPU line search and certificate); -nochord: the same without chord "
+          "steps (InterpolationOptions::chord_steps off: every frame's systems built and factored at its own points). "
+          "t = ½: the frame midway "
           "between the first two keyframes solved from the first (no warm start). Set-up: the core made (the CUDA "
           "core runs every call of a solve once while it is made); interpolator: the Interpolator made (host); first "
           "frame: the first solved frame after both; mean, max, iterations and the per-iteration parts are over the "
@@ -423,11 +427,13 @@ int main(int argc, char** argv) {
       if (skip_sequence) continue;
       cpu.reset();  // the sequences make their own cores
       gpu.reset();
-      SequenceStats sc, sh, sg, ss;
+      SequenceStats sc, sh, sg, ss, sgn, scn;
       std::fprintf(stderr, "  sequence (CUDA, device loop)\n");
       sg = run_sequence(L, [&] { return hc::make_newton_core(*L.setup); }, frames, true, true, std::max(reps, 1));
       std::fprintf(stderr, "  sequence (CUDA, device loop, crossing search in series)\n");
       ss = run_sequence(L, [&] { return hc::make_newton_core(*L.setup); }, frames, true, false);
+      std::fprintf(stderr, "  sequence (CUDA, device loop, no chord steps)\n");
+      sgn = run_sequence(L, [&] { return hc::make_newton_core(*L.setup); }, frames, true, true, 0, false);
       {
         const bench::CrossingSearchTimes& c = sg.crossing;
         std::snprintf(row, sizeof row, "| %s | %d | %d | %d (%d) | %.3f | %.3f | %.1f | %s |\n", L.name.c_str(), G, c.points,
@@ -440,9 +446,11 @@ int main(int argc, char** argv) {
         sh = run_sequence(L, [&] { return hc::make_newton_core(L.setup->D_G, L.setup->H); }, frames, false);
         std::fprintf(stderr, "  sequence (CPU)\n");
         sc = run_sequence(L, [&] { return make_cpu_newton_core(L.setup->D_G, L.setup->H); }, frames, false);
+        std::fprintf(stderr, "  sequence (CPU, no chord steps)\n");
+        scn = run_sequence(L, [&] { return make_cpu_newton_core(L.setup->D_G, L.setup->H); }, frames, false, true, 0, false);
       }
       const std::pair<const char*, const SequenceStats*> rows[] = {
-          {"cpu", &sc}, {"cuda-host", &sh}, {"cuda", &sg}, {"cuda-series", &ss}};
+          {"cpu", &sc}, {"cpu-nochord", &scn}, {"cuda-host", &sh}, {"cuda", &sg}, {"cuda-nochord", &sgn}, {"cuda-series", &ss}};
       for (const auto& [label, s] : rows) {
         if (!s->ran) {
           std::snprintf(row, sizeof row, "| %s | %d | %s | skipped (--cpu-sequence-max-samples) | | | | | | | | | | | | | | |\n",

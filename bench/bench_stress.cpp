@@ -203,7 +203,7 @@ int main(int argc, char** argv) {
   std::string frames_opt = "60,100,500", projections_opt = "delete,fullproj,partproj", backend = "cpu", json_file, export_dir;
   std::string cache_file;
   int limit = 0, samples = 0, max_iterations = 100, jobs = 1, threads = 0;
-  bool paper_newton = false, author_only = false, trace = false, reverse_loops = false;
+  bool paper_newton = false, author_only = false, trace = false, reverse_loops = false, no_chord = false;
   double hessian_ratio = 0;
   double time_limit = 0;
   app.add_option("--corpus", corpus_file, "The corpus file")->capture_default_str();
@@ -230,6 +230,9 @@ int main(int argc, char** argv) {
             return {};
           },
           "in [0, 1]"));
+  app.add_flag("--no-chord", no_chord,
+               "Sequences without chord steps (InterpolationOptions::chord_steps off): every frame's Newton systems built "
+               "and factored at its own points, as before the chord steps");
   app.add_flag("--paper-newton", paper_newton,
                "The paper's plain projected Newton (rotation gauged, no exact Hessian): the reference the fix is measured against");
   app.add_option("--backend", backend, runtime::kBackendHelp)
@@ -338,10 +341,11 @@ int main(int argc, char** argv) {
   std::printf("Machine: %s, %d logical cores; backend %s; %d workers x %d OpenMP threads\n", machine.cpu.c_str(), machine.cores,
               backend.c_str(), jobs, omp_threads);
   std::printf("Corpus: %s (seed %d): %d of %zu sequences on %zu shapes; |G| %s; frames per interval %s; projections %s; "
-              "iteration cap %d%s%s\n\n",
+              "iteration cap %d%s%s%s\n\n",
               corpus_file.c_str(), corpus.seed, total_sequences, corpus.sequences.size(), plan.size(),
               samples > 0 ? std::to_string(samples).c_str() : "per sequence", frames_opt.c_str(), projections_opt.c_str(),
               max_iterations, paper_newton ? "; the paper's plain Newton (--paper-newton)" : "",
+              no_chord && !paper_newton ? "; no chord steps (--no-chord)" : "",
               reverse_loops ? "; every shape's loops reversed (--reverse-loops)" : "");
   std::printf("Per run: F frames per keyframe interval, F x (keyframes - 1) + 1 frames in all, warm-started; the\n"
               "keyframes themselves are not counted. at cap: iterations >= cap or not converged. it: Newton\n"
@@ -573,6 +577,7 @@ int main(int argc, char** argv) {
       InterpolationOptions o;
       o.exact_hessian_when_definite = o.free_rotation = !paper_newton;
       if (paper_newton) o.escalate_after_iterations = 0;  // the paper's projection throughout
+      o.chord_steps = !no_chord && !paper_newton;
       o.projection = run.p;
       o.max_iterations = max_iterations;
       runtime::NewtonCoreChoice core = runtime::make_newton_core(setup, runtime::parse_backend(backend), cuda);
@@ -621,7 +626,7 @@ int main(int argc, char** argv) {
   out["options"] = {{"corpus", corpus_file},     {"seed", corpus.seed},         {"samples", samples},
                     {"frames", frame_counts},    {"projections", split(projections_opt)}, {"max_iterations", max_iterations},
                     {"limit", limit},            {"paper_newton", paper_newton}, {"time_limit", time_limit},
-                    {"hessian_ratio", hessian_ratio},
+                    {"hessian_ratio", hessian_ratio}, {"chord_steps", !no_chord && !paper_newton},
                     {"reverse_loops", reverse_loops}};
   json runs_json = json::array(), shapes_json = json::array();
   std::map<RunKey, Stats> total;

@@ -32,7 +32,7 @@ void register_interpolate(CLI::App& app) {
     std::string projection = "fullproj";
     std::string backend = "auto";
     std::string timing;  // empty: the scene's keyframe timings
-    bool projected_only = false, gauged_rotation = false;
+    bool projected_only = false, gauged_rotation = false, no_chord = false;
     bool allow_unconverged = false;
   };
   auto o = std::make_shared<Opts>();
@@ -60,6 +60,9 @@ void register_interpolate(CLI::App& app) {
                 "Always use the projected Hessian (the paper's method), not the exact one where it is positive definite, and never switch to FullProj in a long solve");
   cmd->add_flag("--gauged-rotation", o->gauged_rotation,
                 "Keep the global rotation pinned by its gauge in projected systems instead of solving for it (the paper's method)");
+  cmd->add_flag("--no-chord", o->no_chord,
+                "Build every frame's Newton systems at its own points: no chord step solved with the previous frame's last "
+                "exact system (slower; the same frames within the tolerance)");
   cmd->add_option("--backend", o->backend, runtime::kBackendHelp)
       ->capture_default_str()
       ->check(CLI::IsMember(runtime::backend_names()));
@@ -99,6 +102,7 @@ void register_interpolate(CLI::App& app) {
     io.exact_hessian_when_definite = !o->projected_only;
     if (o->projected_only) io.escalate_after_iterations = 0;  // the chosen projection throughout
     io.free_rotation = !o->gauged_rotation;
+    io.chord_steps = !o->no_chord;
     io.timing = o->timing.empty() ? scene_timings(scene) : std::vector<KeyTiming>{*parse_key_timing(o->timing)};
     std::printf("Newton core: %s\n", runtime::describe(core.choice).c_str());
     Interpolator interp(*setup, times, maps, io, std::move(core.core), std::move(core.boundary));

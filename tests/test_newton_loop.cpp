@@ -55,11 +55,35 @@ struct FakeStepper : NewtonStepper {
   bool fullproj_right = false;   // FullProj systems are exact models (projected_scale ignored)
   HessianProjection projection_now = HessianProjection::PartProj;
 
+  // Chord steps (NewtonOptions::kept_system): keep() keeps the exact model A (a slot the
+  // test fills itself holds K); linearize_kept solves with kept_scale · K.
+  Eigen::Matrix2d K = Eigen::Matrix2d::Identity();
+  double kept_scale = 1;
+  int keeps = 0, kept_linearizations = 0;
+  bool kept_now = false;
+
   double start(const Eigen::VectorXd& x0) override {
     x_ = x0;
     return energy(x_);
   }
+  bool keep(KeptSystem& slot) override {
+    if (!exact_now || kept_now) return false;
+    ++keeps;
+    K = A;
+    slot.owner = this;
+    slot.generation = static_cast<std::uint64_t>(keeps);
+    slot.order = 2;
+    return true;
+  }
+  bool linearize_kept(const KeptSystem& slot) override {
+    if (slot.owner != this) return false;
+    ++kept_linearizations;
+    kept_now = true;
+    exact_now = false;
+    return true;
+  }
   double linearize(const HessianChoice& c) override {
+    kept_now = false;
     choices.push_back(c);
     exact_now = c.exact;
     all_now = c.all_samples;
@@ -70,6 +94,15 @@ struct FakeStepper : NewtonStepper {
     ridges.push_back(ridge);
     NewtonSystem s;
     s.diagonal_max = A.diagonal().cwiseAbs().maxCoeff();
+    if (kept_now) {
+      const Eigen::Vector2d g = A * (x_ - a);
+      d_ = -(kept_scale * K).inverse() * g;
+      s.factored = true;
+      s.slope = g.dot(d_);
+      s.gradient_norm = g.norm();
+      s.max_safe_step = std::numeric_limits<double>::infinity();
+      return s;
+    }
     if ((exact_now && !exact_definite) || (ridge == 0 && fail_factorisations-- > 0)) return s;
     if (exact_now && !all_now && subset_exact_indefinite) return s;
     if (exact_now && exact_negative > 0 && !(ridge > exact_negative)) return s;
@@ -842,4 +875,86 @@ TEST_CASE("newton_run: with min_margin a certified step closer to folding than t
   REQUIRE(r3.log.size() == 1);
   CHECK(r3.log[0].step == 0.5);  // 1 (margin 1e-10 < the start's 1e-9) refused, 0.5 taken
   CHECK(r3.certified);
+}
+
+TEST_CASE("newton_run: a solve's first step is a chord step with the kept system; its exact systems are kept",
+          "[newton][loop][chord]") {
+  // No slot: the loop keeps nothing and never asks for the kept system.
+  {
+    FakeStepper f;
+    const NewtonResult r = newton_run(f, true, true, Eigen::Vector2d(0, 0), {});
+    CHECK(r.converged);
+    CHECK(f.keeps == 0);
+    CHECK(f.kept_linearizations == 0);
+  }
+  // An empty slot: the solve runs as without one and keeps the exact system it factors.
+  KeptSystem slot;
+  {
+    FakeStepper f;
+    NewtonOptions o;
+    o.kept_system = &slot;
+    const NewtonResult r = newton_run(f, true, true, Eigen::Vector2d(0, 0), o);
+    CHECK(r.converged);
+    CHECK(f.kept_linearizations == 0);
+    CHECK(f.keeps >= 1);
+    CHECK_FALSE(slot.empty());
+    CHECK(slot.owner == &f);
+  }
+  // A kept system 10 % stiffer than the true Hessian: the first step is the chord's, in
+  // full, with no system built for it; the next system is the exact one, built at x, and
+  // kept in the slot.
+  FakeStepper f;
+  f.A << 2, 0.3, 0.3, 1;
+  f.energy = [&f](const Eigen::Vector2d& x) { return 2 + 0.5 * (x - f.a).dot(f.A * (x - f.a)) + 0.01 * std::pow((x - f.a).norm(), 3); };
+  f.K = f.A;
+  f.kept_scale = 1.1;
+  slot.owner = &f;
+  NewtonOptions o;
+  o.kept_system = &slot;
+  const NewtonResult r = newton_run(f, true, true, Eigen::Vector2d(0, 0), o);
+  INFO(r.message);
+  CHECK(r.converged);
+  CHECK(r.certified);
+  REQUIRE(r.iterations >= 1);
+  CHECK(r.log[0].chord);
+  CHECK(r.log[0].step == 1.0);
+  CHECK(r.log[0].backtracks == 0);
+  CHECK(f.kept_linearizations == 1);
+  for (size_t k = 1; k < r.log.size(); ++k) CHECK_FALSE(r.log[k].chord);
+  REQUIRE_FALSE(f.choices.empty());
+  CHECK(f.choices[0].exact);  // after the chord's full step: the exact system
+  CHECK(f.keeps >= 1);
+  CHECK(slot.generation == static_cast<std::uint64_t>(f.keeps));
+  CHECK((r.x - f.a).norm() < 1e-3);
+}
+
+TEST_CASE("newton_run: a chord step that fails Armijo in full is never taken: the iteration builds its system at x",
+          "[newton][loop][chord]") {
+  KeptSystem slot;
+  NewtonOptions o;
+  o.kept_system = &slot;
+  SECTION("a kept system 3x too soft: its full step overshoots") {
+    FakeStepper f;
+    f.K = f.A;
+    f.kept_scale = 0.3;
+    slot.owner = &f;
+    const NewtonResult r = newton_run(f, true, true, Eigen::Vector2d(0, 0), o);
+    CHECK(r.converged);
+    REQUIRE(r.log.size() >= 1);
+    CHECK_FALSE(r.log[0].chord);  // dropped before any step: no cut chord step taken
+    CHECK(r.log[0].backtracks == 0);
+    REQUIRE_FALSE(f.choices.empty());
+    CHECK_FALSE(f.choices[0].exact);  // a solve's first system: the projection, as without a slot
+    CHECK(f.keeps >= 1);  // the exact system that followed replaced the kept one
+    CHECK(f.kept_linearizations == 1);
+  }
+  SECTION("a slot this stepper cannot solve with: the loop as without one") {
+    FakeStepper f, other;
+    slot.owner = &other;
+    const NewtonResult r = newton_run(f, true, true, Eigen::Vector2d(0, 0), o);
+    CHECK(r.converged);
+    REQUIRE_FALSE(r.log.empty());
+    CHECK_FALSE(r.log[0].chord);
+    CHECK(f.kept_linearizations == 0);
+  }
 }

@@ -60,6 +60,13 @@ struct DeviceSpace {
   GraphCache graphs{graphs_enabled()};  // the stepper's calls, one graph per call shape
   bool own_cholesky = own_cholesky_enabled();  // dense_cholesky.h instead of cuSOLVER (device_newton.cpp, solve)
   int lwork = 0;
+  // A factor kept for chord steps (NewtonStepper::keep): cuSOLVER's lower factor, order
+  // kept_order; kept_count counts the keeps, a KeptSystem's generation names its own.
+  DeviceArray<double> Hk;
+  DeviceArray<double> ku, kuc, ka;  // its rotation frame: u (v layout, complex order) and a = Tᵀu, |u|²
+  std::uint64_t kept_count = 0;
+  int kept_order = 0;
+  double kept_diagonal_max = 0;
 };
 
 class CudaNewtonCore final : public NewtonCore {

@@ -43,7 +43,7 @@ constexpr int kParams = kSlots - kRidge;
 constexpr int param(Slot s) { return s - kRidge; }
 
 // Graph keys: the call, then what changes its sequence of work.
-enum Call : std::uint64_t { kStart = 1, kLinearize, kSolve, kTrialEnergies, kCertify, kAccept };
+enum Call : std::uint64_t { kStart = 1, kLinearize, kSolve, kTrialEnergies, kCertify, kAccept, kLinearizeKept };
 std::uint64_t key(Call call, std::uint64_t shape) { return call | shape << 8; }
 
 // The rotation generator applied to rows: in v layout (Re φ, Im φ, Re ψ, Im ψ blocks of n)
@@ -136,6 +136,10 @@ DeviceSpace& CudaNewtonCore::device_space(const MapSpace& space) {
   ds->v = DeviceArray<double>(4 * sz(n));
   ds->Hr = DeviceArray<double>(D * D);
   ds->Hr0 = DeviceArray<double>(D * D);
+  ds->Hk = DeviceArray<double>(D * D);
+  ds->ku = DeviceArray<double>(4 * sz(n));
+  ds->kuc = DeviceArray<double>(4 * sz(n));
+  ds->ka = DeviceArray<double>(D);
   ds->Y = DeviceArray<double>(4 * sz(n) * D);
   ds->full = DeviceArray<double>(4 * sz(M));
   ds->info = DeviceArray<int>(2);
@@ -188,6 +192,8 @@ class DeviceStepper final : public NewtonStepper {
 
   double linearize(const HessianChoice& choice) override {
     const int dim = S_.dim;
+    kept_ = false;
+    exact_ = choice.exact;
     m_ = choice.free_rotation ? dim + 1 : dim;
     rotation_ = choice.free_rotation;
     horizontal_ = rotation_ && choice.exact && !quad_;
@@ -200,21 +206,73 @@ class DeviceStepper final : public NewtonStepper {
     return S_.sc_down[kDiagMax];
   }
 
+  bool linearize_kept(const KeptSystem& slot) override {
+    const int dim = S_.dim;
+    if (slot.owner != &S_ || slot.generation != S_.kept_count || slot.order != S_.kept_order) return false;
+    if (slot.modulo_rotation != slot.free_rotation || (slot.free_rotation && quad_)) return false;
+    if (slot.order != (slot.free_rotation ? dim + 1 : dim)) return false;
+    kept_ = true;
+    exact_ = false;
+    m_ = slot.order;
+    rotation_ = horizontal_ = slot.free_rotation;
+    const std::uint64_t shape = std::uint64_t{rotation_} | std::uint64_t{quad_ != nullptr} << 1;
+    S_.graphs.run(key(kLinearizeKept, shape), st(), [&] {
+      // In the kept system's own rotation frame (NewtonOptions::kept_system; the host
+      // stepper's linearize_kept): its u as the last columns of Ta and Tca, its a = Tᵀu
+      // and |u|² (tmp), then the gradient and its horizontal part.
+      if (rotation_) {
+        const size_t n4 = 4 * sz(c_.n_), bytes = n4 * sizeof(double);
+        HSI_CUDA_CHECK(cudaMemcpyAsync(S_.Ta.get() + n4 * sz(dim), S_.ku.get(), bytes, cudaMemcpyDeviceToDevice, st()));
+        HSI_CUDA_CHECK(cudaMemcpyAsync(S_.Tca.get() + n4 * sz(dim), S_.kuc.get(), bytes, cudaMemcpyDeviceToDevice, st()));
+        HSI_CUDA_CHECK(cudaMemcpyAsync(S_.tmp.get(), S_.ka.get(), sz(m_) * sizeof(double), cudaMemcpyDeviceToDevice, st()));
+      }
+      enqueue_gradient(/*fresh_rotation=*/false);
+      if (horizontal_) HSI_CUDA_CHECK(kernels::horizontal_gradient(dim, S_.tmp.get(), S_.g.get(), st()));
+    });
+    return true;  // solve() synchronises
+  }
+
+  bool keep(KeptSystem& slot) override {
+    if (!factored_exact_ || kept_ || own_factor_) return false;
+    HSI_CUDA_CHECK(cudaMemcpyAsync(S_.Hk.get(), S_.Hr.get(), sz(m_) * sz(m_) * sizeof(double), cudaMemcpyDeviceToDevice, st()));
+    if (horizontal_) {  // its rotation frame (linearize's u and tmp = [a; |u|²])
+      const size_t n4 = 4 * sz(c_.n_), bytes = n4 * sizeof(double);
+      HSI_CUDA_CHECK(cudaMemcpyAsync(S_.ku.get(), S_.Ta.get() + n4 * sz(S_.dim), bytes, cudaMemcpyDeviceToDevice, st()));
+      HSI_CUDA_CHECK(cudaMemcpyAsync(S_.kuc.get(), S_.Tca.get() + n4 * sz(S_.dim), bytes, cudaMemcpyDeviceToDevice, st()));
+      HSI_CUDA_CHECK(cudaMemcpyAsync(S_.ka.get(), S_.tmp.get(), sz(m_) * sizeof(double), cudaMemcpyDeviceToDevice, st()));
+    }
+    S_.kept_order = m_;
+    S_.kept_diagonal_max = diagonal_max_;
+    slot.owner = &S_;
+    slot.generation = ++S_.kept_count;
+    slot.data.reset();
+    slot.order = m_;
+    slot.free_rotation = rotation_;
+    slot.modulo_rotation = horizontal_;
+    factored_exact_ = false;
+    return true;
+  }
+
   NewtonSystem solve(double ridge) override {
-    write_params([&] { S_.params[param(kRidge)] = ridge; });
-    const std::uint64_t shape = std::uint64_t{rotation_} | std::uint64_t{horizontal_} << 1 | std::uint64_t{quad_ != nullptr} << 2;
+    factored_exact_ = false;
+    own_factor_ = !kept_ && S_.own_cholesky && m_ <= kernels::kCholeskyPreferredMaxOrder;
+    if (!kept_) write_params([&] { S_.params[param(kRidge)] = ridge; });
+    const std::uint64_t shape = std::uint64_t{rotation_} | std::uint64_t{horizontal_} << 1 | std::uint64_t{quad_ != nullptr} << 2 |
+                                std::uint64_t{kept_} << 3;
     S_.graphs.run(key(kSolve, shape), st(), [&] { enqueue_solve(); });
-    params_read();
+    if (!kept_) params_read();
     HSI_CUDA_CHECK(cudaStreamSynchronize(st()));
     trial_step_ = std::numeric_limits<double>::quiet_NaN();
     NewtonSystem sys;
-    sys.diagonal_max = S_.sc_down[kDiagMax];
+    sys.diagonal_max = kept_ ? S_.kept_diagonal_max : S_.sc_down[kDiagMax];
+    if (!kept_) diagonal_max_ = sys.diagonal_max;
     sys.gradient_norm = std::sqrt(S_.sc_down[kGradNorm2]);
     sys.slope = S_.sc_down[kSlope];
     sys.max_safe_step = S_.sc_down[kSafeStep];
     // The factorisation's and the solve's own status: potrs after a failed potrf reads
     // an unfinished factor, whose numbers may well be finite.
     sys.factored = S_.info_down[0] == 0 && S_.info_down[1] == 0 && std::isfinite(sys.slope);
+    factored_exact_ = sys.factored && exact_ && !kept_;
     if (quad_) {
       q0_ = 0.5 * S_.sc_down[kQuad0] + S_.sc_down[kScratch] + quad_->k;
       q1_ = S_.sc_down[kQuad1];
@@ -311,8 +369,17 @@ class DeviceStepper final : public NewtonStepper {
   }
 
   void enqueue_linearize(const HessianChoice& choice) {
+    enqueue_gradient();
+    // Hessian: Hv (4n × 4n) as CudaNewtonCore::hessian(), then Hr = Taᵀ Hv Ta (+ Q).
+    c_.build_hessian(choice.projection, choice.exact, choice.all_samples);
+    enqueue_hessian_rest();
+  }
+
+  // The gradient g at x (m_ entries; with the rotation freed and fresh_rotation, u = R T x
+  // first, else the u already in Ta and Tca).
+  void enqueue_gradient(bool fresh_rotation = true) {
     const int n = c_.n_, dim = S_.dim;
-    if (rotation_) {  // u = R T x in both layouts, as the last columns of Ta and Tca
+    if (rotation_ && fresh_rotation) {  // u = R T x in both layouts, as the last columns of Ta and Tca
       HSI_CUDA_CHECK(cublasDgemv(c_.blas_, CUBLAS_OP_N, 4 * n, dim, &kOneD, S_.RT.get(), 4 * n, S_.xa.get(), 1, &kZeroD,
                                  S_.Ta.get() + sz(4 * n) * sz(dim), 1));
       HSI_CUDA_CHECK(cublasDgemv(c_.blas_, CUBLAS_OP_N, 4 * n, dim, &kOneD, S_.RTc.get(), 4 * n, S_.xa.get(), 1, &kZeroD,
@@ -328,8 +395,11 @@ class DeviceStepper final : public NewtonStepper {
       HSI_CUDA_CHECK(cublasDgemv(c_.blas_, CUBLAS_OP_N, dim, dim, &kOneD, S_.Q.get(), dim, S_.xa.get(), 1, &kOneD, S_.g.get(), 1));
       HSI_CUDA_CHECK(cublasDaxpy(c_.blas_, dim, &kOneD, S_.c.get(), 1, S_.g.get(), 1));
     }
-    // Hessian: Hv (4n × 4n) as CudaNewtonCore::hessian(), then Hr = Taᵀ Hv Ta (+ Q).
-    c_.build_hessian(choice.projection, choice.exact, choice.all_samples);
+  }
+
+  // The rest of linearize: the Hessian and the reduced system.
+  void enqueue_hessian_rest() {
+    const int n = c_.n_, dim = S_.dim;
     HSI_CUDA_CHECK(cublasDgemm(c_.blas_, CUBLAS_OP_N, CUBLAS_OP_N, 4 * n, m_, 4 * n, &kOneD, c_.Hv_.get(), 4 * n, S_.Ta.get(),
                                4 * n, &kZeroD, S_.Y.get(), 4 * n));
     HSI_CUDA_CHECK(cublasDgemm(c_.blas_, CUBLAS_OP_T, CUBLAS_OP_N, m_, m_, 4 * n, &kOneD, S_.Ta.get(), 4 * n, S_.Y.get(), 4 * n,
@@ -356,14 +426,19 @@ class DeviceStepper final : public NewtonStepper {
 
   void enqueue_solve() {
     const int n = c_.n_, dim = S_.dim, m = m_;
-    copy_params(kRidge, 1);
-    HSI_CUDA_CHECK(kernels::add_ridge(m, S_.Hr0.get(), S_.sc.get() + kRidge, S_.Hr.get(), st()));
+    if (!kept_) {
+      copy_params(kRidge, 1);
+      HSI_CUDA_CHECK(kernels::add_ridge(m, S_.Hr0.get(), S_.sc.get() + kRidge, S_.Hr.get(), st()));
+    }
     // d = −g, solved in place: cuSOLVER's Cholesky, or with HSI_CUDA_CHOLESKY=own ours
     // (dense_cholesky.h) up to its preferred order.
-    const bool own = S_.own_cholesky && m <= kernels::kCholeskyPreferredMaxOrder;
+    const bool own = own_factor_;
     HSI_CUDA_CHECK(cudaMemcpyAsync(S_.d.get(), S_.g.get(), sz(m) * sizeof(double), cudaMemcpyDeviceToDevice, st()));
     HSI_CUDA_CHECK(cublasDscal(c_.blas_, m, &kMinusOneD, S_.d.get(), 1));
-    if (own) {  // factor and forward substitution in one kernel, then back substitution
+    if (kept_) {  // the kept factor (keep): the triangular solves only
+      HSI_CUDA_CHECK(cudaMemsetAsync(S_.info.get(), 0, sizeof(int), st()));
+      HSI_CUDA_CHECK(cusolverDnDpotrs(c_.solver_, CUBLAS_FILL_MODE_LOWER, m, 1, S_.Hk.get(), m, S_.d.get(), m, S_.info.get() + 1));
+    } else if (own) {  // factor and forward substitution in one kernel, then back substitution
       HSI_CUDA_CHECK(kernels::cholesky_factor_solve(m, S_.Hr.get(), m, S_.d.get(), S_.info.get(), st()));
       HSI_CUDA_CHECK(cudaMemsetAsync(S_.info.get() + 1, 0, sizeof(int), st()));  // the solve has no status of its own
     } else {
@@ -422,6 +497,11 @@ class DeviceStepper final : public NewtonStepper {
   int m_ = 0;
   bool rotation_ = false;
   bool horizontal_ = false;  // the exact system modulo the rotation (linearize)
+  bool kept_ = false;            // linearize_kept: solve() solves with the kept factor S_.Hk
+  bool exact_ = false;           // the last linearize() built the exact Hessian
+  bool factored_exact_ = false;  // the last solve() factored it (keep() may copy S_.Hr)
+  bool own_factor_ = false;      // … with dense_cholesky.h's kernel (its factor is not kept)
+  double diagonal_max_ = 0;      // the last linearize()'s max |diag|
   double trial_step_ = std::numeric_limits<double>::quiet_NaN();  // the step xna holds
   double q0_ = 0, q1_ = 0, q2_ = 0;
 };
@@ -455,6 +535,8 @@ void CudaNewtonCore::warm_up() {
     // at the identity): the direction stays finite, so every later call sees numbers.
     const double ridge = 1e-3 * std::max(st.linearize(exact), 1.0);
     (void)st.solve(ridge);
+    KeptSystem kept;  // chord steps' calls (NewtonOptions::kept_system)
+    if (st.keep(kept) && st.linearize_kept(kept)) (void)st.solve(0);
     HessianChoice projected;
     projected.free_rotation = free_rotation;
     (void)st.linearize(projected);

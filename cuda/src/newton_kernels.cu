@@ -297,6 +297,16 @@ __global__ void horizontal_clear_kernel(int dim, int m, double* __restrict__ A, 
   }
 }
 
+// One block: g_i −= (g_dim/uu) a_i, then g_dim = 0.
+__global__ void horizontal_gradient_kernel(int dim, const double* __restrict__ a, double* __restrict__ g) {
+  const double f = g[dim] / a[dim];
+  __syncthreads();  // every thread has read g[dim] before it is cleared
+  for (int i = static_cast<int>(threadIdx.x); i <= dim; i += static_cast<int>(blockDim.x)) {
+    if (i < dim) g[i] -= f * a[i];
+    else g[i] = 0;
+  }
+}
+
 // One block: d[dim] = −(Σ_{i<dim} a_i d_i) / a[dim].
 __global__ void __launch_bounds__(kBlock) rotation_angle_kernel(int dim, const double* __restrict__ a, double* __restrict__ d) {
   double sum = 0;
@@ -525,6 +535,11 @@ cudaError_t horizontal_system(int dim, double* A, const double* a, double* g, cu
   horizontal_block_kernel<<<grid, block, 0, stream>>>(dim, m, A, a);
   if (const cudaError_t e = cudaGetLastError(); e != cudaSuccess) return e;
   horizontal_clear_kernel<<<1, kBlock, 0, stream>>>(dim, m, A, a, g);
+  return cudaGetLastError();
+}
+
+cudaError_t horizontal_gradient(int dim, const double* a, double* g, cudaStream_t stream) {
+  horizontal_gradient_kernel<<<1, kBlock, 0, stream>>>(dim, a, g);
   return cudaGetLastError();
 }
 

@@ -74,6 +74,9 @@ cudaError_t trial_point(int n, const double* x, const double* d, const double* s
 // − c a aᵀ/|u|⁴ (k = column dim of A, c = A_dim,dim), g_T −= (g_dim/|u|²) a, then row and
 // column dim of A and g_dim cleared.
 cudaError_t horizontal_system(int dim, double* A, const double* a, double* g, cudaStream_t stream);
+// The gradient's part of horizontal_system alone (a kept system's, chord steps):
+// g_T −= (g_dim/|u|²) a, then g_dim = 0.
+cudaError_t horizontal_gradient(int dim, const double* a, double* g, cudaStream_t stream);
 // d[dim] = −(Σ_{i<dim} a_i d_i) / a[dim]: the rotation's share of that system's step.
 cudaError_t rotation_angle(int dim, const double* a, double* d, cudaStream_t stream);
 // x = MapSpace::regauge(v) for v (4n, active coefficients) into x (dim).

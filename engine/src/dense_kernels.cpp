@@ -35,4 +35,23 @@ bool HSI_KERNEL(cholesky_solve)(const double* A, long m, double ridge, const dou
   return true;
 }
 
+bool HSI_KERNEL(cholesky_factor)(const double* A, long m, double ridge, double* L) {
+  Eigen::Map<Eigen::MatrixXd> l(L, m, m);
+  l.triangularView<Eigen::Lower>() = Eigen::Map<const Eigen::MatrixXd>(A, m, m);
+  l.diagonal().array() += ridge;
+  // In place over L's lower triangle (Eigen's LLT on a Ref: no copy of the matrix).
+  Eigen::LLT<Eigen::Ref<Eigen::MatrixXd>, Eigen::Lower> llt(l);
+  if (llt.info() != Eigen::Success) return false;
+  l.triangularView<Eigen::StrictlyUpper>().setZero();
+  return l.diagonal().allFinite();
+}
+
+void HSI_KERNEL(cholesky_solve_factored)(const double* L, long m, const double* b, double* x) {
+  const Eigen::Map<const Eigen::MatrixXd> l(L, m, m);
+  Eigen::Map<Eigen::VectorXd> y(x, m);
+  y = Eigen::Map<const Eigen::VectorXd>(b, m);
+  l.triangularView<Eigen::Lower>().solveInPlace(y);
+  l.triangularView<Eigen::Lower>().transpose().solveInPlace(y);
+}
+
 }  // namespace hsi::detail

@@ -23,11 +23,22 @@ void hessian_accumulate(const double* C, const double* W, long rows, long m, dou
 // read), by Cholesky. False, x untouched, where A + ridge I is not positive definite.
 bool cholesky_solve(const double* A, long m, double ridge, const double* b, double* x);
 
+// The same in two parts, for a factor solved with more than once (chord steps,
+// NewtonOptions::kept_system): L (m × m, column-major) = the lower Cholesky factor of
+// A + ridge I (L's strictly upper triangle is set to 0); false, L unspecified, where
+// A + ridge I is not positive definite. Then x = (L Lᵀ)⁻¹ b.
+bool cholesky_factor(const double* A, long m, double ridge, double* L);
+void cholesky_solve_factored(const double* L, long m, const double* b, double* x);
+
 // The builds, for tests and benchmarks; the _avx2_fma ones only on processors with both.
 void hessian_accumulate_baseline(const double* C, const double* W, long rows, long m, double* P);
 void hessian_accumulate_avx2_fma(const double* C, const double* W, long rows, long m, double* P);
 bool cholesky_solve_baseline(const double* A, long m, double ridge, const double* b, double* x);
 bool cholesky_solve_avx2_fma(const double* A, long m, double ridge, const double* b, double* x);
+bool cholesky_factor_baseline(const double* A, long m, double ridge, double* L);
+bool cholesky_factor_avx2_fma(const double* A, long m, double ridge, double* L);
+void cholesky_solve_factored_baseline(const double* L, long m, const double* b, double* x);
+void cholesky_solve_factored_avx2_fma(const double* L, long m, const double* b, double* x);
 bool dense_kernels_have_avx2_fma();  // the AVX2 + FMA build exists and this processor runs it
 const char* dense_kernels_name();     // "avx2+fma" or "baseline": the build the dispatchers run
 

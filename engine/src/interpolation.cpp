@@ -271,9 +271,14 @@ class CrossingThread {
 }  // namespace
 
 FrameResult Interpolator::frame(double t, const Eigen::VectorXd& warm_start, const CertificateResult* warm_certificate) {
+  return frame_searched(t, warm_start, warm_certificate, nullptr);
+}
+
+FrameResult Interpolator::frame_searched(double t, const Eigen::VectorXd& warm_start, const CertificateResult* warm_certificate,
+                                         KeptSystem* kept) {
   const auto t0 = Clock::now();
   bool search = false;
-  FrameResult r = frame_before_crossings(t, warm_start, warm_certificate, boundary_values_[0], search);
+  FrameResult r = frame_before_crossings(t, warm_start, warm_certificate, boundary_values_[0], search, kept);
   if (search) {
     const auto tp = Clock::now();
     r.overlap = setup_.overlap.check_points(points_of(boundary_values_[0]), crossing_workspace_);
@@ -284,7 +289,8 @@ FrameResult Interpolator::frame(double t, const Eigen::VectorXd& warm_start, con
 }
 
 FrameResult Interpolator::frame_before_crossings(double t, const Eigen::VectorXd& warm_start,
-                                                 const CertificateResult* warm_certificate, MapValues& image, bool& search) {
+                                                 const CertificateResult* warm_certificate, MapValues& image, bool& search,
+                                                 KeptSystem* kept) {
   const auto t0 = Clock::now();
   search = false;
   FrameResult r;
@@ -337,6 +343,7 @@ FrameResult Interpolator::frame_before_crossings(double t, const Eigen::VectorXd
   for (size_t j = 0; !start && j < key_x_.size(); ++j)  // a keyframe's own coefficients: its start certificate
     if (x0.size() == key_x_[j].size() && x0 == key_x_[j]) start = &key_start_certificate_[j];
   if (start) no.start_certificate = start;  // certified or not (NewtonOptions::from_uncertified_start)
+  no.kept_system = kept;
   tp = Clock::now();
   const NewtonResult n = newton_solve(*core_, setup_.metric_space, &setup_.certifier, nullptr, x0, no);
   r.parts.solve = ms_since(tp);
@@ -395,6 +402,10 @@ std::vector<FrameResult> Interpolator::sequence(const std::vector<double>& times
   // limit whose reduced coefficients the certificate refuses: every frame after a failed
   // one was reported certified without a step, bench_stress grid_6/bend_steps).
   bool warm_is_key = false;
+  // The last exact Newton system of the frames so far, for the next frame's chord steps
+  // (InterpolationOptions::chord_steps).
+  KeptSystem kept;
+  KeptSystem* const chord = options_.chord_steps ? &kept : nullptr;
   // Pipelined: solved frame i's crossing search runs on `crossings` while frame i + 1 is
   // solved and its image made (into the other of the two image buffers); then the
   // sequence waits for frame i's search, completes frame i and calls progress for it.
@@ -422,9 +433,9 @@ std::vector<FrameResult> Interpolator::sequence(const std::vector<double>& times
     const CertificateResult* start = warm.size() == 0 || warm_is_key ? nullptr : &warm_certificate;
     bool search = false;
     if (options_.pipelined_overlap)
-      out.push_back(frame_before_crossings(t, warm, start, boundary_values_[static_cast<size_t>(buffer)], search));
+      out.push_back(frame_before_crossings(t, warm, start, boundary_values_[static_cast<size_t>(buffer)], search, chord));
     else
-      out.push_back(frame(t, warm, start));
+      out.push_back(frame_searched(t, warm, start, chord));
     if (out.back().certified) {
       warm = out.back().x;
       warm_certificate = out.back().certificate;

@@ -216,11 +216,9 @@ class HostStepper final : public NewtonStepper {
   }
 
   double linearize(const HessianChoice& choice) override {
-    if (!gradient_valid_) {
-      gv_ = core_.gradient();
-      gradient_valid_ = true;
-    }
-    const Eigen::VectorXd& gv = gv_;
+    kept_.reset();
+    exact_ = choice.exact;
+    const Eigen::VectorXd& gv = gradient_at_x();
     const Eigen::MatrixXd Hv = core_.hessian(choice.projection, choice.exact, choice.all_samples);
     Eigen::VectorXd g = T_.transpose() * gv;
     Eigen::MatrixXd H = T_.transpose() * Hv * T_;
@@ -263,13 +261,69 @@ class HostStepper final : public NewtonStepper {
     return H_.diagonal().cwiseAbs().maxCoeff();
   }
 
+  bool linearize_kept(const KeptSystem& slot) override {
+    const auto* kept = slot.owner == &space_ ? static_cast<const Kept*>(slot.data.get()) : nullptr;
+    const Eigen::Index dim = space_.dim();
+    if (!kept || kept->L.rows() != dim || (slot.free_rotation && !slot.modulo_rotation) ||
+        (slot.free_rotation && quad_))
+      return false;
+    const Eigen::VectorXd& gv = gradient_at_x();
+    Eigen::VectorXd g = T_.transpose() * gv;
+    if (quad_) g += quad_->Q * x_ + quad_->c;
+    rotation_ = horizontal_ = slot.free_rotation;
+    if (rotation_) {
+      // The kept system's own rotation frame (u, a = Tᵀu at the point it was built):
+      // its system is the Hessian on steps T d + θ u orthogonal to that u, nearly
+      // singular along the d whose T d is nearly u; with this point's u instead, g has
+      // a part along that d and the chord step runs far along it (twist scene: |d| 1381
+      // against 1.6 for the exact step, the energy up by 141).
+      u_ = kept->u;
+      g.conservativeResize(dim + 1);
+      g(dim) = u_.dot(gv);
+      a_ = kept->a;
+      uu_ = kept->uu;
+      gh_ = g.head(dim) - (g(dim) / uu_) * a_;
+    }
+    g_ = std::move(g);
+    kept_ = std::static_pointer_cast<const Kept>(slot.data);
+    exact_ = false;
+    return true;
+  }
+
+  bool keep(KeptSystem& slot) override {
+    if (!factored_exact_ || kept_) return false;
+    auto kept = std::make_shared<Kept>();
+    kept->L.swap(L_);  // solve() factors anew into L_ each time
+    kept->diagonal_max = H_.diagonal().cwiseAbs().maxCoeff();
+    if (horizontal_) {
+      kept->u = u_;
+      kept->a = a_;
+      kept->uu = uu_;
+    }
+    slot.owner = &space_;
+    slot.generation = 0;
+    slot.order = static_cast<int>(kept->L.rows());
+    slot.free_rotation = rotation_;
+    slot.modulo_rotation = horizontal_;
+    slot.data = std::move(kept);
+    factored_exact_ = false;
+    return true;
+  }
+
   NewtonSystem solve(double ridge) override {
     NewtonSystem sys;
-    sys.diagonal_max = H_.diagonal().cwiseAbs().maxCoeff();
+    factored_exact_ = false;
+    sys.diagonal_max = kept_ ? kept_->diagonal_max : H_.diagonal().cwiseAbs().maxCoeff();
     sys.gradient_norm = horizontal_ ? gh_.norm() : g_.head(space_.dim()).norm();
     const Eigen::VectorXd rhs = horizontal_ ? Eigen::VectorXd(-gh_) : Eigen::VectorXd(-g_);
     Eigen::VectorXd sol(rhs.size());
-    if (!detail::cholesky_solve(H_.data(), H_.rows(), ridge, rhs.data(), sol.data())) return sys;
+    if (kept_) {
+      detail::cholesky_solve_factored(kept_->L.data(), kept_->L.rows(), rhs.data(), sol.data());
+    } else {
+      L_.resize(H_.rows(), H_.cols());
+      if (!detail::cholesky_factor(H_.data(), H_.rows(), ridge, L_.data())) return sys;
+      detail::cholesky_solve_factored(L_.data(), L_.rows(), rhs.data(), sol.data());
+    }
     if (horizontal_) {
       d_.resize(sol.size() + 1);
       d_ << sol, -a_.dot(sol) / uu_;
@@ -278,6 +332,7 @@ class HostStepper final : public NewtonStepper {
     }
     if (!d_.allFinite()) return sys;
     sys.factored = true;
+    factored_exact_ = exact_ && !kept_;
     sys.slope = g_.dot(d_);
     dv_ = T_ * d_.head(space_.dim());
     if (rotation_) dv_ += d_(space_.dim()) * u_;
@@ -309,6 +364,21 @@ class HostStepper final : public NewtonStepper {
   Eigen::VectorXd x() override { return x_; }
 
  private:
+  // A factor kept past its solve (keep, KeptSystem::data).
+  struct Kept {
+    Eigen::MatrixXd L;
+    double diagonal_max = 0;
+    Eigen::VectorXd u, a;  // the rotation frame it was built in (horizontal systems)
+    double uu = 1;
+  };
+
+  const Eigen::VectorXd& gradient_at_x() {
+    if (!gradient_valid_) {
+      gv_ = core_.gradient();
+      gradient_valid_ = true;
+    }
+    return gv_;
+  }
   double quad_value(const Eigen::VectorXd& x) const { return quad_ ? quad_->value(x) : 0.0; }
   Eigen::VectorXd trial(double step) const {
     if (!rotation_) return x_ + step * d_;
@@ -323,7 +393,10 @@ class HostStepper final : public NewtonStepper {
   Eigen::VectorXd x_, g_, d_, dv_, u_, gv_, a_, gh_;
   double uu_ = 1;
   bool horizontal_ = false;  // the system is the exact one on the quotient by the rotation (H_ is m × m)
-  Eigen::MatrixXd H_;
+  Eigen::MatrixXd H_, L_;  // the system, and its factor from the last solve()
+  std::shared_ptr<const Kept> kept_;  // linearize_kept's: the next solve() solves with it
+  bool exact_ = false;           // the last linearize() built the exact Hessian
+  bool factored_exact_ = false;  // the last solve() factored it (keep() may take L_)
   bool rotation_ = false;
   bool gradient_valid_ = false;  // gv_ is the core's gradient at x_
 };
@@ -409,6 +482,7 @@ NewtonResult newton_run(NewtonStepper& st, bool certify, bool rotation_invariant
   bool all_samples = false;  // the subset H's model failed: Hessians over all of G from now on
   int cut_iterations = 0;    // iterations whose step Armijo cut (NewtonOptions::escalate_after_cut_iterations)
   HessianProjection projection = opt.projection;  // NewtonOptions::escalate_projection once it failed too
+  KeptSystem* const kept = opt.kept_system;  // chord steps (NewtonOptions::kept_system)
 
   for (int it = 0; it < opt.max_iterations; ++it) {
     const auto t_it = Clock::now();
@@ -434,12 +508,41 @@ NewtonResult newton_run(NewtonStepper& st, bool certify, bool rotation_invariant
     // and after a projected step that Armijo cut (the projection's model overshot; with
     // an exact step that Armijo cut the projection comes next): NewtonOptions::exact_after_cut.
     const NewtonIteration* prev = res.log.empty() ? nullptr : &res.log.back();
+    // 1a. A chord step, first in the solve: the kept factor (the last exact system of an
+    //     earlier solve, NewtonOptions::kept_system) with the gradient at x. Its first
+    //     trial step (the line search's first batch, asked now) must pass Armijo, or the
+    //     iteration builds its system at x instead, as without a slot.
+    std::array<double, kTrialBatch> steps{}, energies{};
+    int batch_begin = 0, batch_size = 0;  // the line search's trial batch (its first one asked here for a chord)
+    if (kept && !kept->empty() && !prev) {
+      t0 = Clock::now();
+      const bool solvable = st.linearize_kept(*kept);
+      res.timing.energy_gradient += ms_since(t0);
+      if (solvable) factor(0);
+      if (sys.factored && sys.slope < -opt.descent_slope * scale) {
+        t0 = Clock::now();
+        batch_size = std::min(kTrialBatch, opt.max_backtracks + 1);
+        double sj = std::min(1.0, opt.safe_fraction * sys.max_safe_step);
+        for (int j = 0; j < batch_size; ++j, sj *= opt.shrink) steps[static_cast<size_t>(j)] = sj;
+        st.trial_energies(std::span<const double>(steps.data(), static_cast<size_t>(batch_size)),
+                          std::span<double>(energies.data(), static_cast<size_t>(batch_size)));
+        res.timing.line_search += ms_since(t0);
+        if (!(energies[0] <= E + opt.armijo * steps[0] * sys.slope)) {
+          sys = NewtonSystem{};  // overshoots: built at x instead
+          batch_size = 0;
+        }
+      } else {
+        sys = NewtonSystem{};  // (no descent along it: the system at x decides)
+      }
+      log.chord = sys.factored;
+    }
     const bool prev_full = prev && prev->step >= 1.0;
     const bool prev_cut = prev && opt.exact_after_cut && !prev->exact_hessian && prev->backtracks > prev->certificate_rejections;
-    if (opt.exact_hessian_when_definite && (prev_full || prev_cut)) {
+    if (!log.chord && opt.exact_hessian_when_definite && (prev_full || prev_cut)) {
       const double diagonal_max = build({true, projection, rotation_invariant && opt.exact_modulo_rotation, all_samples});
       factor(opt.exact_ridge * diagonal_max);
       log.exact_hessian = sys.factored;
+      if (sys.factored && kept) st.keep(*kept);  // the next solve's chord steps start from it
       // Indefinite, and the projections have not converged in shift_after iterations: the
       // exact system shifted past its lowest eigenvalue (NewtonOptions::shift_after).
       if (!sys.factored && opt.shift_after > 0 && it >= opt.shift_after) {
@@ -452,7 +555,7 @@ NewtonResult newton_run(NewtonStepper& st, bool certify, bool rotation_invariant
         log.exact_hessian = log.shifted = sys.factored;
       }
     }
-    if (!sys.factored) {
+    if (!log.chord && !sys.factored) {
       build({false, projection, rotation_invariant && opt.free_rotation && projection != HessianProjection::Delete, all_samples});
       double ridge = 0;
       for (int attempt = 0; attempt < opt.max_ridge_attempts; ++attempt) {
@@ -492,8 +595,6 @@ NewtonResult newton_run(NewtonStepper& st, bool certify, bool rotation_invariant
     double E_new = E;
     bool accepted = false;
     std::string last_refusal;  // the certificate's reason for the last step it refused
-    std::array<double, kTrialBatch> steps{}, energies{};
-    int batch_begin = 0, batch_size = 0;
     for (int bt = 0; bt <= opt.max_backtracks; ++bt, s *= opt.shrink) {
       if (bt >= batch_begin + batch_size) {
         batch_begin = bt;
@@ -584,7 +685,9 @@ NewtonResult newton_run(NewtonStepper& st, bool certify, bool rotation_invariant
     // The model overshot: the subset's Hessian is wrong (or the step is near a fold,
     // where all of G is the better model too).
     // Over all of G and still cut: the projection is the wrong model (escalate_projection).
-    const int cuts = log.backtracks - log.certificate_rejections;
+    // (A chord step that Armijo cut says the kept system is off, not the subset H: the
+    // solve goes on with systems built at x, and the escalation rules count those only.)
+    const int cuts = log.chord ? 0 : log.backtracks - log.certificate_rejections;
     if (opt.escalate_after_cuts > 0 && cuts >= opt.escalate_after_cuts) {
       if (all_samples && !log.exact_hessian) projection = opt.escalate_projection;
       all_samples = true;

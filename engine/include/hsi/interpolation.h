@@ -46,6 +46,11 @@ struct InterpolationOptions {
   // same as in series (false: as frame() does); FrameResult::parts.crossings_wait says
   // what the search still cost the caller.
   bool pipelined_overlap = true;
+  // Interpolator::sequence solves each frame with chord steps from the previous frame's
+  // last exact Newton system (NewtonOptions::kept_system): a warm-started frame then
+  // mostly builds and factors no system at all (issue #23). false: every frame's systems
+  // built at its own points, as frame() does.
+  bool chord_steps = true;
 };
 
 // Pose of a map: the centroid of the boundary's image (by arc length) and the
@@ -205,8 +210,11 @@ class Interpolator {
   // frame() but for the crossing search: the image it is to search is left in `image`
   // and `search` set (a keyframe or held frame has its overlap from set-up: not set);
   // ms does not count it.
+  // kept: the sequence's chord slot (InterpolationOptions::chord_steps), or null.
   FrameResult frame_before_crossings(double t, const Eigen::VectorXd& warm_start, const CertificateResult* warm_certificate,
-                                     MapValues& image, bool& search);
+                                     MapValues& image, bool& search, KeptSystem* kept = nullptr);
+  FrameResult frame_searched(double t, const Eigen::VectorXd& warm_start, const CertificateResult* warm_certificate,
+                             KeptSystem* kept);
 
   const ShapeSetup& setup_;
   std::vector<double> times_;

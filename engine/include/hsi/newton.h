@@ -100,6 +100,20 @@ struct HessianChoice {
   bool all_samples = false;
 };
 
+// A factored exact Newton system kept past the solve that made it, for chord steps in
+// later solves (NewtonOptions::kept_system): in the form its stepper keeps it (the host
+// stepper: the factor, here; the CUDA stepper: on the device, where `generation` tells
+// whether another solve has replaced it since). Only a stepper of the same owner (the
+// same space, and for the CUDA core the same device workspace) solves with it.
+struct KeptSystem {
+  const void* owner = nullptr;    // null: nothing kept
+  std::uint64_t generation = 0;   // the owner's count of systems kept when this one was
+  std::shared_ptr<void> data;     // the owner's own form (the host stepper's factor)
+  int order = 0;                  // the system's order, and what it was made as:
+  bool free_rotation = false, modulo_rotation = false;
+  bool empty() const { return owner == nullptr; }
+};
+
 // What a stepper reports about the system it solved: (H + ridge I) d = −g.
 struct NewtonSystem {
   bool factored = false;       // Cholesky succeeded and d is finite
@@ -130,6 +144,14 @@ class NewtonStepper {
   // x ← x ⊕ step·d: exactly the point certify(step, ·) looked at.
   virtual void accept(double step) = 0;
   virtual Eigen::VectorXd x() = 0;
+  // Chord steps (NewtonOptions::kept_system). keep: the system the last solve() factored
+  // (an exact one, successfully) into `slot`, replacing what it held; false where this
+  // stepper keeps none (the slot is then left as it was). linearize_kept: linearize() for
+  // the kept system: the gradient at x, and the next solve() solves with the slot's
+  // factor (its ridge ignored); false, nothing done, where the slot is not this
+  // stepper's to solve with.
+  virtual bool keep(KeptSystem& /*slot*/) { return false; }
+  virtual bool linearize_kept(const KeptSystem& /*slot*/) { return false; }
 };
 
 // The host stepper: reduced-space algebra with Eigen over the core's per-call interface.
@@ -310,12 +332,28 @@ struct NewtonOptions {
   // previous frame's solution), certified or not: not computed again. Must be of
   // space.expand(x0) exactly.
   const CertificateResult* start_certificate = nullptr;
+  // Chord steps (issue #23: a warm-started frame built and factored two systems, the first
+  // step's projected one and the exact one whose decrement ends the solve: ~0.7 of a CUDA
+  // frame's ~1 ms, most of a CPU frame). With a slot here (the caller keeps it between
+  // solves: an interpolation sequence's frames), every exact system the loop factors is
+  // kept in it (the last one replaces the others), and a solve's first step is a chord
+  // step: the gradient at x solved with the kept factor (the previous frame's last exact
+  // Hessian, built at this frame's start), in that system's own rotation frame; no
+  // Hessian is built and nothing is factored. Its full step must pass Armijo, else the
+  // iteration builds its system at x as without a slot; the iterations after it are the
+  // loop's own. (Chord steps after the first were tried, on the tests' twist scene: every
+  // second one overshot, |d| 3x the exact step's, and failed Armijo; the kept Hessian is
+  // off along some direction once the map has moved by a step, cause not established;
+  // with this point's rotation frame instead of the kept one's, |d| was 1000x.)
+  // null: no chord step.
+  KeptSystem* kept_system = nullptr;
 };
 
 struct NewtonIteration {
   double energy = 0, gradient_norm = 0, step = 0, max_safe_step = 0;
   double decrement2 = 0;          // −gᵀd: the squared Newton decrement (predicted decrease of a full step ×2)
   bool exact_hessian = false;     // the system used the unprojected Hessian
+  bool chord = false;             // … kept from an earlier solve (NewtonOptions::kept_system), not built at x
   bool shifted = false;           // … shifted to be definite (NewtonOptions::shift_after)
   bool all_samples = false;       // the Hessian was built over all of G (escalated), not the subset H
   // The projection a projected system used (NewtonOptions::escalate_projection once the
