@@ -281,12 +281,11 @@ namespace {
 // the order they are made: the interpolator's set-up makes one per keyframe, then each
 // solve one) refuses the certificate at step 0 if i is in refuse_start, and every
 // certificate if i is in refuse_all.
-class RefusingCore final : public NewtonCore {
+// The CPU core with every call forwarded: the test cores below override what they watch.
+class ForwardingCore : public NewtonCore {
  public:
-  RefusingCore(const ShapeSetup& s, std::set<int> refuse_start, std::set<int> refuse_all)
-      : inner_(make_cpu_newton_core(s.D_G, s.H)), refuse_start_(std::move(refuse_start)), refuse_all_(std::move(refuse_all)) {}
+  explicit ForwardingCore(const ShapeSetup& s) : inner_(make_cpu_newton_core(s.D_G, s.H)) {}
   int n() const override { return inner_->n(); }
-  const char* name() const override { return "refusing cpu"; }
   void set_targets(const std::vector<Metric>& g) override { inner_->set_targets(g); }
   void set_coefficients(const Eigen::VectorXd& v) override { inner_->set_coefficients(v); }
   double energy() override { return inner_->energy(); }
@@ -295,6 +294,16 @@ class RefusingCore final : public NewtonCore {
   void set_direction(const Eigen::VectorXd& dv) override { inner_->set_direction(dv); }
   double max_safe_step() override { return inner_->max_safe_step(); }
   double energy_at(double s) override { return inner_->energy_at(s); }
+
+ protected:
+  std::unique_ptr<NewtonCore> inner_;
+};
+
+class RefusingCore final : public ForwardingCore {
+ public:
+  RefusingCore(const ShapeSetup& s, std::set<int> refuse_start, std::set<int> refuse_all)
+      : ForwardingCore(s), refuse_start_(std::move(refuse_start)), refuse_all_(std::move(refuse_all)) {}
+  const char* name() const override { return "refusing cpu"; }
   std::unique_ptr<NewtonStepper> make_stepper(const MapSpace& space, const Certifier* certifier, const QuadraticTerm* quad) override {
     const int i = made_++;
     return std::make_unique<Stepper>(make_host_stepper(*inner_, space, certifier, quad), refuse_start_.count(i) > 0,
@@ -321,7 +330,6 @@ class RefusingCore final : public NewtonCore {
     std::unique_ptr<NewtonStepper> inner;
     bool refuse_start, refuse_all;
   };
-  std::unique_ptr<NewtonCore> inner_;
   std::set<int> refuse_start_, refuse_all_;
   int made_ = 0;
 };
@@ -364,26 +372,15 @@ TEST_CASE("frames after a keyframe whose coefficients are not certified are flag
 
 namespace {
 // The CPU core, counting the Hessians asked of it.
-class CountingCore final : public NewtonCore {
+class CountingCore final : public ForwardingCore {
  public:
-  explicit CountingCore(const ShapeSetup& s) : inner_(make_cpu_newton_core(s.D_G, s.H)) {}
-  int n() const override { return inner_->n(); }
+  using ForwardingCore::ForwardingCore;
   const char* name() const override { return "counting cpu"; }
-  void set_targets(const std::vector<Metric>& g) override { inner_->set_targets(g); }
-  void set_coefficients(const Eigen::VectorXd& v) override { inner_->set_coefficients(v); }
-  double energy() override { return inner_->energy(); }
-  Eigen::VectorXd gradient() override { return inner_->gradient(); }
   Eigen::MatrixXd hessian(HessianProjection p, bool exact, bool all) override {
     ++hessians;
     return inner_->hessian(p, exact, all);
   }
-  void set_direction(const Eigen::VectorXd& dv) override { inner_->set_direction(dv); }
-  double max_safe_step() override { return inner_->max_safe_step(); }
-  double energy_at(double s) override { return inner_->energy_at(s); }
   int hessians = 0;
-
- private:
-  std::unique_ptr<NewtonCore> inner_;
 };
 }  // namespace
 

@@ -24,17 +24,6 @@ void HSI_KERNEL(hessian_accumulate)(const double* C, const double* W, long rows,
   p.rightCols(m).triangularView<Eigen::Lower>() += c.transpose() * w.rightCols(m);
 }
 
-bool HSI_KERNEL(cholesky_solve)(const double* A, long m, double ridge, const double* b, double* x) {
-  Eigen::MatrixXd a = Eigen::Map<const Eigen::MatrixXd>(A, m, m);
-  a.diagonal().array() += ridge;
-  const Eigen::LLT<Eigen::MatrixXd, Eigen::Lower> llt(a);
-  if (llt.info() != Eigen::Success) return false;
-  const Eigen::VectorXd y = llt.solve(Eigen::Map<const Eigen::VectorXd>(b, m));
-  if (!y.allFinite()) return false;
-  Eigen::Map<Eigen::VectorXd>(x, m) = y;
-  return true;
-}
-
 bool HSI_KERNEL(cholesky_factor)(const double* A, long m, double ridge, double* L) {
   Eigen::Map<Eigen::MatrixXd> l(L, m, m);
   l.triangularView<Eigen::Lower>() = Eigen::Map<const Eigen::MatrixXd>(A, m, m);
@@ -52,6 +41,17 @@ void HSI_KERNEL(cholesky_solve_factored)(const double* L, long m, const double* 
   y = Eigen::Map<const Eigen::VectorXd>(b, m);
   l.triangularView<Eigen::Lower>().solveInPlace(y);
   l.triangularView<Eigen::Lower>().transpose().solveInPlace(y);
+}
+
+bool HSI_KERNEL(cholesky_solve)(const double* A, long m, double ridge, const double* b, double* x) {
+  // The two parts below (the host stepper's path), x written only on success.
+  Eigen::MatrixXd L(m, m);
+  if (!HSI_KERNEL(cholesky_factor)(A, m, ridge, L.data())) return false;
+  Eigen::VectorXd y(m);
+  HSI_KERNEL(cholesky_solve_factored)(L.data(), m, b, y.data());
+  if (!y.allFinite()) return false;
+  Eigen::Map<Eigen::VectorXd>(x, m) = y;
+  return true;
 }
 
 }  // namespace hsi::detail

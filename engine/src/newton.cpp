@@ -555,7 +555,7 @@ NewtonResult newton_run(NewtonStepper& st, bool certify, bool rotation_invariant
         log.exact_hessian = log.shifted = sys.factored;
       }
     }
-    if (!log.chord && !sys.factored) {
+    if (!sys.factored) {  // (a chord system is factored)
       build({false, projection, rotation_invariant && opt.free_rotation && projection != HessianProjection::Delete, all_samples});
       double ridge = 0;
       for (int attempt = 0; attempt < opt.max_ridge_attempts; ++attempt) {
