@@ -344,7 +344,11 @@ struct NewtonOptions {
   // loop's own. (Chord steps after the first were tried, on the tests' twist scene: every
   // second one overshot, |d| 3x the exact step's, and failed Armijo; the kept Hessian is
   // off along some direction once the map has moved by a step, cause not established;
-  // with this point's rotation frame instead of the kept one's, |d| was 1000x.)
+  // with this point's rotation frame instead of the kept one's, |d| was 1000x. Measured
+  // again on bar_holes, 60 frames: after the chord step, gᵀK⁻¹g is 100 to 26,000 times
+  // the exact decrement there, with the rotation freed or gauged, while at the start
+  // the two agree within 1 to 5 %; so neither a second chord step nor a stopping test
+  // on the kept system, Deuflhard's simplified Newton, can replace the exact system.)
   // null: no chord step.
   KeptSystem* kept_system = nullptr;
 };
