@@ -162,10 +162,11 @@ struct SequenceStats {
 // evaluator, as runtime's make_newton_core gives with the CUDA core; else the setup's CPU
 // one. pipelined: InterpolationOptions::pipelined_overlap (the crossing search beside the
 // next solve; off: in series). crossing_reps > 0: the crossing search alone timed on
-// the frames' images too. chord: InterpolationOptions::chord_steps.
+// the frames' images too. chord: InterpolationOptions::chord_steps; exact:
+// InterpolationOptions::exact_samples.
 template <class MakeCore>
 SequenceStats run_sequence(const Loaded& L, MakeCore&& make_core, int frames, bool gpu_boundary, bool pipelined = true,
-                           int crossing_reps = 0, bool chord = true) {
+                           int crossing_reps = 0, bool chord = true, ExactSamples exact = InterpolationOptions{}.exact_samples) {
   SequenceStats s;
   auto t0 = Clock::now();
   std::unique_ptr<NewtonCore> core = make_core();
@@ -176,6 +177,7 @@ SequenceStats run_sequence(const Loaded& L, MakeCore&& make_core, int frames, bo
   InterpolationOptions o;
   o.pipelined_overlap = pipelined;
   o.chord_steps = chord;
+  o.exact_samples = exact;
   Interpolator interp(*L.setup, L.times, L.maps, o, std::move(core), std::move(boundary));
   s.interpolator_ms = ms_since(t0);
   t0 = Clock::now();
@@ -362,7 +364,10 @@ int main(int argc, char** argv) {
   seqs << "## Warm-started sequences (" << frames << " frames; per-iteration parts in ms)\n\n"
        << "cuda-host: the CUDA core driven call by call from the host (Cholesky and certificate on the CPU); "
           "cuda: the whole solve on the GPU (cuSOLVER, GPU line search and certificate); -nochord: the same without chord "
-          "steps (InterpolationOptions::chord_steps off: every frame's systems built and factored at its own points). "
+          "steps (InterpolationOptions::chord_steps off: every frame's systems built and factored at its own points); "
+          "-exact-all / -exact-subset: exact systems' Hessians over all of G / over H, -exact-then-all: over H, then over G "
+          "where that is not positive definite (InterpolationOptions::exact_samples; the other rows: its default, Auto: "
+          "the core's choice, over H on the CPU and over G on CUDA). "
           "t = ½: the frame midway "
           "between the first two keyframes solved from the first (no warm start). Set-up: the core made (the CUDA "
           "core runs every call of a solve once while it is made); interpolator: the Interpolator made (host); first "
@@ -427,13 +432,17 @@ int main(int argc, char** argv) {
       if (skip_sequence) continue;
       cpu.reset();  // the sequences make their own cores
       gpu.reset();
-      SequenceStats sc, sh, sg, ss, sgn, scn;
+      SequenceStats sc, sh, sg, ss, sgn, scn, sga, sgt, sca, sct;
       std::fprintf(stderr, "  sequence (CUDA, device loop)\n");
       sg = run_sequence(L, [&] { return hc::make_newton_core(*L.setup); }, frames, true, true, std::max(reps, 1));
       std::fprintf(stderr, "  sequence (CUDA, device loop, crossing search in series)\n");
       ss = run_sequence(L, [&] { return hc::make_newton_core(*L.setup); }, frames, true, false);
       std::fprintf(stderr, "  sequence (CUDA, device loop, no chord steps)\n");
       sgn = run_sequence(L, [&] { return hc::make_newton_core(*L.setup); }, frames, true, true, 0, false);
+      std::fprintf(stderr, "  sequence (CUDA, device loop, exact systems over H)\n");
+      sga = run_sequence(L, [&] { return hc::make_newton_core(*L.setup); }, frames, true, true, 0, true, ExactSamples::Subset);
+      std::fprintf(stderr, "  sequence (CUDA, device loop, exact systems over H, then G where indefinite)\n");
+      sgt = run_sequence(L, [&] { return hc::make_newton_core(*L.setup); }, frames, true, true, 0, true, ExactSamples::SubsetThenAll);
       {
         const bench::CrossingSearchTimes& c = sg.crossing;
         std::snprintf(row, sizeof row, "| %s | %d | %d | %d (%d) | %.3f | %.3f | %.1f | %s |\n", L.name.c_str(), G, c.points,
@@ -448,9 +457,14 @@ int main(int argc, char** argv) {
         sc = run_sequence(L, [&] { return make_cpu_newton_core(L.setup->D_G, L.setup->H); }, frames, false);
         std::fprintf(stderr, "  sequence (CPU, no chord steps)\n");
         scn = run_sequence(L, [&] { return make_cpu_newton_core(L.setup->D_G, L.setup->H); }, frames, false, true, 0, false);
+        std::fprintf(stderr, "  sequence (CPU, exact systems over all of G)\n");
+        sca = run_sequence(L, [&] { return make_cpu_newton_core(L.setup->D_G, L.setup->H); }, frames, false, true, 0, true, ExactSamples::All);
+        std::fprintf(stderr, "  sequence (CPU, exact systems over H, then G where indefinite)\n");
+        sct = run_sequence(L, [&] { return make_cpu_newton_core(L.setup->D_G, L.setup->H); }, frames, false, true, 0, true, ExactSamples::SubsetThenAll);
       }
       const std::pair<const char*, const SequenceStats*> rows[] = {
-          {"cpu", &sc}, {"cpu-nochord", &scn}, {"cuda-host", &sh}, {"cuda", &sg}, {"cuda-nochord", &sgn}, {"cuda-series", &ss}};
+          {"cpu", &sc}, {"cpu-nochord", &scn}, {"cpu-exact-all", &sca}, {"cpu-exact-then-all", &sct}, {"cuda-host", &sh},
+          {"cuda", &sg}, {"cuda-nochord", &sgn}, {"cuda-exact-subset", &sga}, {"cuda-exact-then-all", &sgt}, {"cuda-series", &ss}};
       for (const auto& [label, s] : rows) {
         if (!s->ran) {
           std::snprintf(row, sizeof row, "| %s | %d | %s | skipped (--cpu-sequence-max-samples) | | | | | | | | | | | | | | |\n",

@@ -146,11 +146,14 @@ void print_row(const RunKey& k, const Stats& s) {
               s.quantile(0.99), s.max(), s.at_cap, s.certified, s.not_converged(), s.ms_per_frame());
 }
 
-// The frames of a run solved as Interpolator::frame solves them (the blended metric,
-// newton_solve warm-started from the previous frame), each Newton iteration printed.
+// The frames of a run solved as Interpolator::sequence solves them (the blended metric,
+// newton_solve warm-started from the previous frame, chord steps from the last exact
+// system when the options have them), each Newton iteration printed.
 void trace_run(Interpolator& interp, const ShapeSetup& setup, const std::vector<double>& key_times, int frames,
                const std::string& what) {
-  const NewtonOptions no = frame_newton_options(interp.options());
+  NewtonOptions no = frame_newton_options(interp.options());
+  KeptSystem kept;
+  if (interp.options().chord_steps) no.kept_system = &kept;
   const std::vector<double> times = sequence_times({interp.t_begin(), interp.t_end()}, frames);
   Eigen::VectorXd x;
   std::string out = "trace " + what + "\n";
@@ -165,7 +168,7 @@ void trace_run(Interpolator& interp, const ShapeSetup& setup, const std::vector<
     std::snprintf(b, sizeof b, "  t %.4f: %d it, %s\n", times[i], r.iterations, r.message.c_str());
     out += b;
     for (const NewtonIteration& k : r.log) {
-      std::snprintf(b, sizeof b, "    E %.12f step %.3g %s %s dec2 %.3g |g| %.3g smax %.3g bt %d rej %d\n", k.energy, k.step,
+      std::snprintf(b, sizeof b, "    E %.12f step %.3g %s%s %s dec2 %.3g |g| %.3g smax %.3g bt %d rej %d\n", k.energy, k.step, k.chord ? "chord " : "",
                     k.shifted ? "shift" : k.exact_hessian ? "exact" : to_string(k.projection), k.all_samples ? "G" : "H", k.decrement2, k.gradient_norm, k.max_safe_step, k.backtracks,
                     k.certificate_rejections);
       out += b;
@@ -205,6 +208,7 @@ int main(int argc, char** argv) {
   int limit = 0, samples = 0, max_iterations = 100, jobs = 1, threads = 0;
   bool paper_newton = false, author_only = false, trace = false, reverse_loops = false, no_chord = false;
   double hessian_ratio = 0;
+  std::string exact_samples = to_string(InterpolationOptions{}.exact_samples);
   double time_limit = 0;
   app.add_option("--corpus", corpus_file, "The corpus file")->capture_default_str();
   app.add_option("--shapes", shapes_opt, "Only these shapes (comma-separated names)");
@@ -230,6 +234,12 @@ int main(int argc, char** argv) {
             return {};
           },
           "in [0, 1]"));
+  app.add_option("--exact-samples", exact_samples,
+                 "The samples the exact Newton systems' Hessians sum over in the runs (InterpolationOptions::exact_samples): "
+                 "subset (H), subset-then-all (H, then all of G where H's is not positive definite), all (G), auto (the core's "
+                 "choice: subset on the CPU, all on CUDA)")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"subset", "subset-then-all", "all", "auto"}));
   app.add_flag("--no-chord", no_chord,
                "Sequences without chord steps (InterpolationOptions::chord_steps off): every frame's Newton systems built "
                "and factored at its own points, as before the chord steps");
@@ -341,10 +351,10 @@ int main(int argc, char** argv) {
   std::printf("Machine: %s, %d logical cores; backend %s; %d workers x %d OpenMP threads\n", machine.cpu.c_str(), machine.cores,
               backend.c_str(), jobs, omp_threads);
   std::printf("Corpus: %s (seed %d): %d of %zu sequences on %zu shapes; |G| %s; frames per interval %s; projections %s; "
-              "iteration cap %d%s%s%s\n\n",
+              "iteration cap %d; exact systems over %s%s%s%s\n\n",
               corpus_file.c_str(), corpus.seed, total_sequences, corpus.sequences.size(), plan.size(),
               samples > 0 ? std::to_string(samples).c_str() : "per sequence", frames_opt.c_str(), projections_opt.c_str(),
-              max_iterations, paper_newton ? "; the paper's plain Newton (--paper-newton)" : "",
+              max_iterations, exact_samples.c_str(), paper_newton ? "; the paper's plain Newton (--paper-newton)" : "",
               no_chord && !paper_newton ? "; no chord steps (--no-chord)" : "",
               reverse_loops ? "; every shape's loops reversed (--reverse-loops)" : "");
   std::printf("Per run: F frames per keyframe interval, F x (keyframes - 1) + 1 frames in all, warm-started; the\n"
@@ -578,6 +588,7 @@ int main(int argc, char** argv) {
       o.exact_hessian_when_definite = o.free_rotation = !paper_newton;
       if (paper_newton) o.escalate_after_iterations = 0;  // the paper's projection throughout
       o.chord_steps = !no_chord && !paper_newton;
+      o.exact_samples = parse_exact_samples(exact_samples);
       o.projection = run.p;
       o.max_iterations = max_iterations;
       runtime::NewtonCoreChoice core = runtime::make_newton_core(setup, runtime::parse_backend(backend), cuda);
@@ -626,7 +637,7 @@ int main(int argc, char** argv) {
   out["options"] = {{"corpus", corpus_file},     {"seed", corpus.seed},         {"samples", samples},
                     {"frames", frame_counts},    {"projections", split(projections_opt)}, {"max_iterations", max_iterations},
                     {"limit", limit},            {"paper_newton", paper_newton}, {"time_limit", time_limit},
-                    {"hessian_ratio", hessian_ratio}, {"chord_steps", !no_chord && !paper_newton},
+                    {"hessian_ratio", hessian_ratio}, {"chord_steps", !no_chord && !paper_newton}, {"exact_samples", exact_samples},
                     {"reverse_loops", reverse_loops}};
   json runs_json = json::array(), shapes_json = json::array();
   std::map<RunKey, Stats> total;

@@ -30,6 +30,7 @@ void register_interpolate(CLI::App& app) {
     int frames = 500, samples = 0, png_count = 16, max_iterations = 100, per_interval = 0;
     double ratio = 0, tolerance = 5e-8;
     std::string projection = "fullproj";
+    std::string exact_samples = to_string(InterpolationOptions{}.exact_samples);
     std::string backend = "auto";
     std::string timing;  // empty: the scene's keyframe timings
     bool projected_only = false, gauged_rotation = false, no_chord = false;
@@ -52,6 +53,12 @@ void register_interpolate(CLI::App& app) {
   cmd->add_option("--tolerance", o->tolerance, "Stop a frame when its energy decreases by less than this fraction of itself (and not in a slow linear crawl)")->capture_default_str();
   cmd->add_option("--max-iterations", o->max_iterations, "Newton iterations per frame at most")->capture_default_str();
   cmd->add_option("--projection", o->projection, "Hessian PSD projection: fullproj, partproj (the paper's) or delete")->capture_default_str();
+  cmd->add_option("--exact-samples", o->exact_samples,
+                  "The samples the exact Newton systems' Hessians sum over: subset (H, r|G|, as the projected ones), "
+                  "subset-then-all (H, then all of G where H's is not positive definite), all (G: fewer iterations, a "
+                  "dearer Hessian on the CPU) or auto (the core's choice: subset on the CPU, all on CUDA)")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"subset", "subset-then-all", "all", "auto"}));
   cmd->add_option("--timing", o->timing,
                   "How every keyframe interval is travelled: linear (the paper's), smooth (C1 through the keyframes), ease "
                   "(in and out) or hold (default: each keyframe's \"timing\" in the scene, else linear)")
@@ -103,6 +110,7 @@ void register_interpolate(CLI::App& app) {
     if (o->projected_only) io.escalate_after_iterations = 0;  // the chosen projection throughout
     io.free_rotation = !o->gauged_rotation;
     io.chord_steps = !o->no_chord;
+    io.exact_samples = parse_exact_samples(o->exact_samples);
     io.timing = o->timing.empty() ? scene_timings(scene) : std::vector<KeyTiming>{*parse_key_timing(o->timing)};
     std::printf("Newton core: %s\n", runtime::describe(core.choice).c_str());
     Interpolator interp(*setup, times, maps, io, std::move(core.core), std::move(core.boundary));

@@ -314,8 +314,10 @@ TEST_CASE("CUDA core results are deterministic and its initial state is defined"
 namespace {
 // Interpolates `frames` frames of a bundled scene with the CPU core and with the CUDA
 // core running whole solves on the device, and compares them frame by frame.
-void compare_sequences(const std::filesystem::path& path, int frames, int samples) {
-  INFO(path.filename().string() << ", " << frames << " frames, |G| = " << samples);
+// Both with the same exact_samples (the default, Auto, differs by core: Subset on the
+// CPU, All on CUDA).
+void compare_sequences(const std::filesystem::path& path, int frames, int samples, ExactSamples exact) {
+  INFO(path.filename().string() << ", " << frames << " frames, |G| = " << samples << ", exact systems over " << to_string(exact));
   const Scene scene = load_scene(path);
   const auto setup = make_shape_setup(scene, samples, 0.2);
   std::vector<double> times;
@@ -325,8 +327,10 @@ void compare_sequences(const std::filesystem::path& path, int frames, int sample
     times.push_back(k.time);
     maps.push_back(*k.coefficients);
   }
-  Interpolator cpu(*setup, times, maps);
-  Interpolator gpu(*setup, times, maps, {}, hsi::cuda::make_newton_core(*setup));
+  InterpolationOptions o;
+  o.exact_samples = exact;
+  Interpolator cpu(*setup, times, maps, o);
+  Interpolator gpu(*setup, times, maps, o, hsi::cuda::make_newton_core(*setup));
   REQUIRE(std::string(gpu.core().name()) == "cuda");
   const auto fc = cpu.sequence(frames), fg = gpu.sequence(frames);
   REQUIRE(fc.size() == fg.size());
@@ -359,8 +363,8 @@ void compare_sequences(const std::filesystem::path& path, int frames, int sample
     CHECK(fg[i].certificate.sigma2_min == Approx(fc[i].certificate.sigma2_min).epsilon(1e-3));
     CHECK(fg[i].certificate.k_max == Approx(fc[i].certificate.k_max).epsilon(1e-3));
   }
-  std::printf("[cuda] %s: %d frames, equal iteration counts in %d, largest map difference %.2e of the size\n",
-              path.filename().string().c_str(), frames, same_iterations, worst);
+  std::printf("[cuda] %s: %d frames, exact systems over %s, equal iteration counts in %d, largest map difference %.2e of the size\n",
+              path.filename().string().c_str(), frames, to_string(exact), same_iterations, worst);
   // The loop's decisions at a threshold (the stopping tests at the tolerance, whether
   // the exact system factors) can fall either way by round-off: on the H100, blob took
   // one iteration more or less in 4 of 40 frames (maps 1.5e-7 of the size apart). Each
@@ -375,12 +379,14 @@ void compare_sequences(const std::filesystem::path& path, int frames, int sample
 TEST_CASE("a 500-frame sequence solved on the GPU matches the CPU one frame by frame", "[cuda][sequence]") {
   HSI_REQUIRE_GPU();
   for (const auto& p : test::asset_scenes())
-    if (p.filename() == "two_holes.json") compare_sequences(p, 500, 10000);
+    if (p.filename() == "two_holes.json")
+      for (const ExactSamples e : {ExactSamples::Subset, ExactSamples::All}) compare_sequences(p, 500, 10000, e);
 }
 
 TEST_CASE("sequences solved on the GPU match the CPU on every bundled scene", "[cuda][sequence]") {
   HSI_REQUIRE_GPU();
-  for (const auto& p : test::asset_scenes()) compare_sequences(p, 40, 10000);
+  for (const auto& p : test::asset_scenes())
+    for (const ExactSamples e : {ExactSamples::Subset, ExactSamples::All}) compare_sequences(p, 40, 10000, e);
 }
 
 TEST_CASE("the GPU certificate agrees with the CPU certificate", "[cuda][certify]") {
@@ -479,7 +485,8 @@ TEST_CASE("the GPU certificate finds a zero of f_z inside and a fold between bre
 TEST_CASE("a short sequence solved on the GPU matches the CPU", "[cuda][small]") {
   HSI_REQUIRE_GPU();
   for (const auto& p : test::asset_scenes())
-    if (p.filename() == "annulus.json") compare_sequences(p, 6, 4000);
+    if (p.filename() == "annulus.json")
+      for (const ExactSamples e : {ExactSamples::Subset, ExactSamples::All}) compare_sequences(p, 6, 4000, e);
 }
 
 // The CUDA core keeps the keyframes' metric sets on the device and blends them there

@@ -294,6 +294,7 @@ class ForwardingCore : public NewtonCore {
   void set_direction(const Eigen::VectorXd& dv) override { inner_->set_direction(dv); }
   double max_safe_step() override { return inner_->max_safe_step(); }
   double energy_at(double s) override { return inner_->energy_at(s); }
+  ExactSamples preferred_exact_samples() const override { return inner_->preferred_exact_samples(); }
 
  protected:
   std::unique_ptr<NewtonCore> inner_;

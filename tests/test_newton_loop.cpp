@@ -478,9 +478,12 @@ struct FrameSums {
   int iterations = 0, exact = 0, not_converged = 0, uncertified = 0;
   std::vector<double> energies;
 };
-FrameSums solve_frames(const ShapeSetup& setup, Interpolator& interp, int frames, bool modulo_rotation) {
+FrameSums solve_frames(const ShapeSetup& setup, Interpolator& interp, int frames, bool modulo_rotation,
+                       ExactSamples exact = ExactSamples::Subset, HessianProjection projection = HessianProjection::PartProj) {
   NewtonOptions o;
   o.exact_modulo_rotation = modulo_rotation;
+  o.exact_samples = exact;
+  o.projection = projection;
   FrameSums s;
   Eigen::VectorXd x = interp.frame(interp.t_begin()).x;
   for (int i = 1; i < frames; ++i) {
@@ -956,5 +959,148 @@ TEST_CASE("newton_run: a chord step that fails Armijo in full is never taken: th
     REQUIRE_FALSE(r.log.empty());
     CHECK_FALSE(r.log[0].chord);
     CHECK(f.kept_linearizations == 0);
+  }
+}
+
+TEST_CASE("newton_run: exact_samples builds the exact system over all of G (All) or where H's does not factor (SubsetThenAll)",
+          "[newton][loop]") {
+  // The exact system over the subset H indefinite, over G definite (issue #20: links/bend
+  // at every PartProj solution): Subset falls back to the projection every time,
+  // SubsetThenAll tries G next and takes it, All asks G at once.
+  int iterations[3] = {0, 0, 0};
+  for (const ExactSamples e : {ExactSamples::Subset, ExactSamples::SubsetThenAll, ExactSamples::All}) {
+    FakeStepper f;
+    f.A << 1, 0, 0, 1e-3;
+    f.projected_scale = {1, 20};  // the projection too stiff along the slow axis: projected steps fall short
+    f.subset_exact_indefinite = true;
+    f.energy = [&f](const Eigen::Vector2d& x) { return 2 + 0.5 * (x - f.a).dot(f.A * (x - f.a)) + 0.1 * std::pow((x - f.a).norm(), 3); };
+    NewtonOptions o;
+    o.exact_samples = e;
+    const NewtonResult r = newton_run(f, true, true, Eigen::Vector2d(0, 0), o);
+    INFO("exact_samples " << to_string(e));
+    CHECK(r.converged);
+    int exact_on_h = 0, exact_on_g = 0, exact_steps = 0;
+    for (size_t k = 0; k < f.choices.size(); ++k) {
+      const HessianChoice& c = f.choices[k];
+      if (!c.exact) continue;
+      (c.all_samples ? exact_on_g : exact_on_h)++;
+      // SubsetThenAll: each exact system over H that failed is followed by one over G.
+      if (e == ExactSamples::SubsetThenAll && !c.all_samples) {
+        REQUIRE(k + 1 < f.choices.size());
+        CHECK(f.choices[k + 1].exact);
+        CHECK(f.choices[k + 1].all_samples);
+      }
+    }
+    for (const NewtonIteration& it : r.log) {
+      exact_steps += it.exact_hessian;
+      if (it.exact_hessian) CHECK(it.all_samples);  // the log says which samples the system summed over
+    }
+    switch (e) {
+      case ExactSamples::Subset:
+        CHECK(exact_on_g == 0);
+        CHECK(exact_steps == 0);
+        break;
+      case ExactSamples::SubsetThenAll:
+        CHECK(exact_on_h > 0);
+        CHECK(exact_on_g == exact_on_h);
+        CHECK(exact_steps > 0);
+        break;
+      case ExactSamples::All:
+        CHECK(exact_on_h == 0);
+        CHECK(exact_steps > 0);
+        break;
+      case ExactSamples::Auto:
+        break;  // (not run here: newton_solve resolves it, below)
+    }
+    iterations[static_cast<int>(e)] = r.iterations;
+  }
+  CHECK(iterations[1] < iterations[0]);
+  CHECK(iterations[2] < iterations[0]);
+  CHECK(parse_exact_samples("subset-then-all") == ExactSamples::SubsetThenAll);
+  CHECK_THROWS_AS(parse_exact_samples("G"), InputError);
+}
+
+TEST_CASE("the exact system over all of G ends PartProj's frames where the subset's is indefinite (links/bend)",
+          "[newton][interpolation][stress]") {
+  // links/bend at |G| 2,000 (bench_stress --trace): at every PartProj solution the exact
+  // system over H has an eigenvalue of about -2e-7 against a largest of 16 and the loop
+  // finishes on the projection; over G it is definite and Newton ends in fewer steps.
+  const stress::Corpus c = stress::load_corpus(HSI_STRESS_DIR "/corpus.json");
+  const auto q = std::find_if(c.sequences.begin(), c.sequences.end(), [](const stress::Sequence& s) { return s.id == "links/bend"; });
+  REQUIRE(q != c.sequences.end());
+  Scene scene = stress::sequence_scene(stress::load_shape(c, c.shape(q->shape)), *q, 2000);
+  const auto setup = make_shape_setup(scene, 2000);
+  const stress::Authored a = stress::author(scene, *setup);
+  Interpolator interp(*setup, a.times, a.maps);
+  const FrameSums subset = solve_frames(*setup, interp, 12, true, ExactSamples::Subset);
+  const FrameSums then_all = solve_frames(*setup, interp, 12, true, ExactSamples::SubsetThenAll);
+  const FrameSums all = solve_frames(*setup, interp, 12, true, ExactSamples::All);
+  INFO("iterations (exact): subset " << subset.iterations << " (" << subset.exact << "), subset then all " << then_all.iterations
+                                     << " (" << then_all.exact << "), all " << all.iterations << " (" << all.exact << ")");
+  for (const FrameSums* f : {&subset, &then_all, &all}) CHECK(f->not_converged + f->uncertified == 0);
+  CHECK(then_all.exact > subset.exact);
+  CHECK(then_all.iterations < subset.iterations);
+  CHECK(all.iterations < subset.iterations);
+  // The same frames, within the solves' tolerance.
+  for (size_t i = 0; i < subset.energies.size(); ++i) {
+    CHECK(std::abs(then_all.energies[i] - subset.energies[i]) < 1e-6);
+    CHECK(std::abs(all.energies[i] - subset.energies[i]) < 1e-6);
+  }
+}
+
+namespace {
+// The CPU core, preferring the given exact samples, counting exact Hessians by samples.
+class PreferringCore final : public NewtonCore {
+ public:
+  PreferringCore(const ShapeSetup& s, ExactSamples prefer) : inner_(make_cpu_newton_core(s.D_G, s.H)), prefer_(prefer) {}
+  int n() const override { return inner_->n(); }
+  const char* name() const override { return "cpu (preferring)"; }
+  void set_targets(const std::vector<Metric>& g) override { inner_->set_targets(g); }
+  void set_coefficients(const Eigen::VectorXd& v) override { inner_->set_coefficients(v); }
+  double energy() override { return inner_->energy(); }
+  Eigen::VectorXd gradient() override { return inner_->gradient(); }
+  Eigen::MatrixXd hessian(HessianProjection p, bool exact, bool all) override {
+    if (exact) (all ? exact_on_g : exact_on_h)++;
+    return inner_->hessian(p, exact, all);
+  }
+  void set_direction(const Eigen::VectorXd& dv) override { inner_->set_direction(dv); }
+  double max_safe_step() override { return inner_->max_safe_step(); }
+  double energy_at(double s) override { return inner_->energy_at(s); }
+  ExactSamples preferred_exact_samples() const override { return prefer_; }
+  int exact_on_h = 0, exact_on_g = 0;
+
+ private:
+  std::unique_ptr<NewtonCore> inner_;
+  ExactSamples prefer_;
+};
+}  // namespace
+
+TEST_CASE("ExactSamples::Auto takes the core's choice (the CPU core: Subset; a core preferring All: all of G)", "[newton][loop]") {
+  const stress::Corpus c = stress::load_corpus(HSI_STRESS_DIR "/corpus.json");
+  const auto q = std::find_if(c.sequences.begin(), c.sequences.end(), [](const stress::Sequence& s) { return s.id == "links/bend"; });
+  REQUIRE(q != c.sequences.end());
+  Scene scene = stress::sequence_scene(stress::load_shape(c, c.shape(q->shape)), *q, 2000);
+  const auto setup = make_shape_setup(scene, 2000);
+  const stress::Authored a = stress::author(scene, *setup);
+  Interpolator interp(*setup, a.times, a.maps);
+  CHECK(make_cpu_newton_core(setup->D_G, setup->H)->preferred_exact_samples() == ExactSamples::Subset);
+  CHECK(InterpolationOptions{}.exact_samples == ExactSamples::Auto);
+  CHECK(NewtonOptions{}.exact_samples == ExactSamples::Subset);  // keyframe authoring: unchanged
+  const Eigen::VectorXd x0 = interp.frame(interp.t_begin()).x;
+  const double t = interp.t_begin() + 0.3 * (interp.t_end() - interp.t_begin());  // a frame far from its start: several steps
+  for (const ExactSamples prefer : {ExactSamples::Subset, ExactSamples::All}) {
+    PreferringCore core(*setup, prefer);
+    core.set_targets(interp.blended_metric(t));
+    NewtonOptions o;
+    o.exact_samples = ExactSamples::Auto;
+    const NewtonResult r = newton_solve(core, setup->metric_space, &setup->certifier, nullptr, x0, o);
+    INFO("preferring " << to_string(prefer) << ": exact Hessians over H " << core.exact_on_h << ", over G " << core.exact_on_g);
+    CHECK(r.converged);
+    if (prefer == ExactSamples::All) {
+      CHECK(core.exact_on_g > 0);
+      CHECK(core.exact_on_h == 0);
+    } else {
+      CHECK(core.exact_on_h > 0);
+    }
   }
 }

@@ -53,3 +53,21 @@ if(not_converged LESS 1 OR NOT listed EQUAL not_converged OR NOT stop0 STREQUAL 
    OR NOT RUN_OUTPUT MATCHES "not converged: t=[0-9.]+ iteration limit after 1 it")
   message(FATAL_ERROR "--max-iterations 1: ${not_converged} not converged, ${listed} listed, first stop '${stop0}', or no progress-line list")
 endif()
+
+# --exact-samples: a bad name refused before any work; all runs the slice, the JSON says
+# which ran; --trace marks the chord steps the runs take (a frame after the first).
+run(105 ${HSI_BENCH_STRESS} ${slice} --exact-samples G --json ${W}/badx.json)
+if(NOT RUN_OUTPUT MATCHES "--exact-samples" OR EXISTS ${W}/badx.json)
+  message(FATAL_ERROR "--exact-samples G was not refused with a message naming the option, or ran")
+endif()
+run(0 ${HSI_BENCH_STRESS} ${slice} --exact-samples all --trace --json ${W}/all.json)
+file(READ ${W}/all.json j)
+string(JSON exact GET "${j}" options exact_samples)
+string(JSON certified GET "${j}" total 0 certified)
+string(JSON not_converged GET "${j}" total 0 not_converged)
+if(NOT exact STREQUAL "all" OR NOT certified EQUAL 2 OR NOT not_converged EQUAL 0)
+  message(FATAL_ERROR "--exact-samples all: options say '${exact}', ${certified} certified (want 2), ${not_converged} not converged")
+endif()
+if(NOT RUN_OUTPUT MATCHES "step [0-9.e+-]+ chord " OR NOT RUN_OUTPUT MATCHES " exact G dec2")
+  message(FATAL_ERROR "--trace shows no chord step or no exact system over G:\n${RUN_OUTPUT}")
+endif()

@@ -127,6 +127,7 @@ class CudaNewtonCore final : public NewtonCore {
 
   int n() const override { return n_; }
   const char* name() const override { return "cuda"; }
+  ExactSamples preferred_exact_samples() const override { return ExactSamples::All; }
 
   void set_targets(const std::vector<Metric>& g) override {
     if (g.size() != sz(G_)) throw InputError("target metrics do not match the samples");

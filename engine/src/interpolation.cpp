@@ -463,6 +463,7 @@ NewtonOptions frame_newton_options(const InterpolationOptions& o) {
   no.exact_hessian_when_definite = o.exact_hessian_when_definite;
   no.free_rotation = o.free_rotation;
   no.escalate_after_iterations = o.escalate_after_iterations;
+  no.exact_samples = o.exact_samples;
   return no;
 }
 

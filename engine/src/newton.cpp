@@ -415,6 +415,12 @@ NewtonResult newton_solve(NewtonCore& core, const MapSpace& space, const Certifi
   std::unique_ptr<NewtonStepper> stepper = core.make_stepper(space, certifier, quad);
   if (!stepper) stepper = make_host_stepper(core, space, certifier, quad);
   const bool rotation_invariant = space.gauge() == Gauge::ModuloRigid && !quad;
+  if (opt.exact_samples == ExactSamples::Auto) {
+    NewtonOptions o = opt;
+    o.exact_samples = core.preferred_exact_samples();
+    if (o.exact_samples == ExactSamples::Auto) o.exact_samples = ExactSamples::Subset;
+    return newton_run(*stepper, o.certify && certifier, rotation_invariant, x0, o);
+  }
   return newton_run(*stepper, opt.certify && certifier, rotation_invariant, x0, opt);
 }
 
@@ -536,11 +542,20 @@ NewtonResult newton_run(NewtonStepper& st, bool certify, bool rotation_invariant
       }
       log.chord = sys.factored;
     }
+    bool exact_on_all = false;  // the exact system (tried below) summed over all of G
     const bool prev_full = prev && prev->step >= 1.0;
     const bool prev_cut = prev && opt.exact_after_cut && !prev->exact_hessian && prev->backtracks > prev->certificate_rejections;
     if (!log.chord && opt.exact_hessian_when_definite && (prev_full || prev_cut)) {
-      const double diagonal_max = build({true, projection, rotation_invariant && opt.exact_modulo_rotation, all_samples});
+      // Over H or over all of G (NewtonOptions::exact_samples).
+      const bool exact_modulo = rotation_invariant && opt.exact_modulo_rotation;
+      exact_on_all = all_samples || opt.exact_samples == ExactSamples::All;
+      double diagonal_max = build({true, projection, exact_modulo, exact_on_all});
       factor(opt.exact_ridge * diagonal_max);
+      if (!sys.factored && !exact_on_all && opt.exact_samples == ExactSamples::SubsetThenAll) {
+        exact_on_all = true;
+        diagonal_max = build({true, projection, exact_modulo, true});
+        factor(opt.exact_ridge * diagonal_max);
+      }
       log.exact_hessian = sys.factored;
       if (sys.factored && kept) st.keep(*kept);  // the next solve's chord steps start from it
       // Indefinite, and the projections have not converged in shift_after iterations: the
@@ -590,7 +605,7 @@ NewtonResult newton_run(NewtonStepper& st, bool certify, bool rotation_invariant
     // 2. Armijo backtracking from min(1, safe_fraction · s_max); a step is taken only if
     //    the certificate passes at the new map.
     t0 = Clock::now();
-    log.all_samples = all_samples;
+    log.all_samples = all_samples || (log.exact_hessian && exact_on_all);
     double s = std::min(1.0, opt.safe_fraction * sys.max_safe_step);
     double E_new = E;
     bool accepted = false;
@@ -751,6 +766,24 @@ const char* to_string(NewtonStop stop) {
   return "?";
 }
 
+const char* to_string(ExactSamples e) {
+  switch (e) {
+    case ExactSamples::Subset: return "subset";
+    case ExactSamples::SubsetThenAll: return "subset-then-all";
+    case ExactSamples::All: return "all";
+    case ExactSamples::Auto: return "auto";
+  }
+  return "?";
+}
+
+ExactSamples parse_exact_samples(const std::string& name) {
+  if (name == "subset") return ExactSamples::Subset;
+  if (name == "subset-then-all") return ExactSamples::SubsetThenAll;
+  if (name == "all") return ExactSamples::All;
+  if (name == "auto") return ExactSamples::Auto;
+  throw InputError("unknown exact-Hessian samples '" + name + "' (use subset, subset-then-all, all or auto)");
+}
+
 std::uint64_t NewtonCore::next_target_token() {
   static std::atomic<std::uint64_t> next{1};
   return next.fetch_add(1);
@@ -795,6 +828,7 @@ class BorrowedCore final : public NewtonCore {
   void set_direction(const Eigen::VectorXd& dv) override { core_.set_direction(dv); }
   double max_safe_step() override { return core_.max_safe_step(); }
   double energy_at(double s) override { return core_.energy_at(s); }
+  ExactSamples preferred_exact_samples() const override { return core_.preferred_exact_samples(); }
   std::uint64_t set_target_keys(std::vector<std::vector<Metric>> keys, std::vector<std::vector<Metric>> log_keys) override {
     return core_.set_target_keys(std::move(keys), std::move(log_keys));
   }

@@ -35,6 +35,19 @@ struct InterpolationOptions {
   // NewtonOptions::escalate_after_iterations: a frame still solving after this many
   // iterations switches to FullProj (0: never).
   int escalate_after_iterations = 20;
+  // NewtonOptions::exact_samples for the frames' solves: by default the core's choice
+  // (NewtonCore::preferred_exact_samples: over H on the CPU, over all of G on the GPU).
+  // Measured (issue #20, 2026-11-29; bench_stress on one H200, the CUDA core, 2 sequences
+  // per shape, 100 frames per interval, 5,148 frames per projection): FullProj 1.71 /
+  // 1.64 / 1.44 iterations per frame with Subset / SubsetThenAll / All, 7.4 / 6.4 / 5.5 ms
+  // per frame with 16 solves sharing the GPU; on the bundled scenes, 1.0–1.1 iterations
+  // per frame with any of them, bench_cuda's warm frame is 0.81 / 0.82 / 0.84 ms (annulus)
+  // on the GPU and 5.0 / 5.5 / 8.9 ms on the CPU (16 threads). SubsetThenAll is no
+  // default: whether H's exact system factors is decided by round-off near the solution,
+  // and the paths then part (two_holes, 500 frames, CPU core: 1 or 2 OpenMP threads gave
+  // 1.24 and 1.65 iterations per frame, equal counts in 285 frames; the CPU and CUDA
+  // cores 271 of 500). With Subset or All the two thread counts agree in every frame.
+  ExactSamples exact_samples = ExactSamples::Auto;
   // How each keyframe interval is travelled (timing.h): one per keyframe (the interval
   // leaving it; the last is unused), or one for all; empty: Linear everywhere (the
   // paper's linear blend of the metrics and the pose).

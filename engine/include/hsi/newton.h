@@ -34,6 +34,23 @@ struct NewtonOptions;
 struct NewtonResult;
 class NewtonStepper;
 
+// The samples an exact Newton system sums its Hessian over. The energy and gradient
+// always sum over all of G; the paper builds Hessians over the subset H (r|G|) for speed.
+// Near the solution the subset's exact Hessian is not the energy's: at the minimiser of
+// the energy over G it can be indefinite (bench_stress, issue #20: links/bend at |G|
+// 2,000, one eigenvalue of −2e-7 against a largest of 16 at every PartProj solution,
+// while over G it is definite), so the loop falls back to the projection and needs a
+// step more, and where it is definite its Newton decrement is not the energy's, so the
+// decrement test ends fewer solves.
+enum class ExactSamples {
+  Subset,          // over H, as every other Hessian (the paper's speed-up)
+  SubsetThenAll,   // over H; where that is not positive definite, over G before the projection
+  All,             // over G (|G|/|H| times the Hessian's work; on the GPU that work is small)
+  Auto             // the core's own choice (NewtonCore::preferred_exact_samples); newton_run alone: Subset
+};
+const char* to_string(ExactSamples e);
+ExactSamples parse_exact_samples(const std::string& name);  // "subset" | "subset-then-all" | "all" | "auto"
+
 // Per-iteration sample work. Coefficients are the active real vector
 // v = (Re φ_a, Im φ_a, Re ψ_a, Im ψ_a) ∈ R^{4n} of MapSpace.
 class NewtonCore {
@@ -52,6 +69,12 @@ class NewtonCore {
   virtual void set_direction(const Eigen::VectorXd& dv) = 0;
   virtual double max_safe_step() = 0;              // first s > 0 with |a + s da| = |b + s db| at a sample
   virtual double energy_at(double s) = 0;          // energy at v + s dv
+  // ExactSamples::Auto resolved (newton_solve): the samples this core's exact systems
+  // should sum over. The CPU core: Subset (over all of G its Hessian costs |G|/|H| times
+  // the work, 1.8-2.2x a warm frame on the bundled scenes, bench_cuda); the CUDA core:
+  // All (that work is small next to its latencies, and the exact system over G is the
+  // energy's: fewer iterations, decisions that do not hinge on round-off).
+  virtual ExactSamples preferred_exact_samples() const { return ExactSamples::Subset; }
 
   // Targets as a blend of metric sets the core keeps (an interpolator's keyframes, set
   // once): blend_targets(token, w, false) sets Σ_j w_j keys_j per sample, with
@@ -177,6 +200,7 @@ struct QuadraticTerm {
 // Every threshold newton_solve decides by. Energies are compared relative to |E|, so a
 // test means the same whatever the energy's scale (the interpolation energy is ≥ 2; an
 // authoring energy adds a positional term).
+
 struct NewtonOptions {
   int max_iterations = 100;
   // Converged when a step the line search took as first offered (min(1, safe_fraction ·
@@ -236,6 +260,9 @@ struct NewtonOptions {
   // hinge_posed, one negative eigenvalue in iterations 2-8 of a frame), so the loop fell
   // back to the projection there and converged only linearly.
   bool exact_modulo_rotation = true;
+  // Which samples the exact system's Hessian sums over (ExactSamples). Projected systems
+  // use the subset H until a rule above moves them to all of G.
+  ExactSamples exact_samples = ExactSamples::Subset;
   // Free the global rotation in projected systems (HessianChoice::free_rotation): a PSD
   // projection gives the rotation, along which the energy is flat, a curvature that the
   // rotation gauge Re φ_r = 0 otherwise spreads over every other direction, and Newton
@@ -359,7 +386,8 @@ struct NewtonIteration {
   bool exact_hessian = false;     // the system used the unprojected Hessian
   bool chord = false;             // … kept from an earlier solve (NewtonOptions::kept_system), not built at x
   bool shifted = false;           // … shifted to be definite (NewtonOptions::shift_after)
-  bool all_samples = false;       // the Hessian was built over all of G (escalated), not the subset H
+  bool all_samples = false;       // the Hessian was built over all of G (escalated, or an exact system by
+                                  // NewtonOptions::exact_samples), not the subset H
   // The projection a projected system used (NewtonOptions::escalate_projection once the
   // solve's own failed).
   HessianProjection projection = HessianProjection::PartProj;
