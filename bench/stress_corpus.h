@@ -44,6 +44,11 @@ struct Corpus {
       if (s.name == name) return s;
     throw std::runtime_error("stress corpus: no shape " + name);
   }
+  const Sequence& sequence(const std::string& id) const {
+    for (const Sequence& q : sequences)
+      if (q.id == id) return q;
+    throw std::runtime_error("stress corpus: no sequence " + id);
+  }
 };
 
 inline Corpus load_corpus(const std::filesystem::path& file) {

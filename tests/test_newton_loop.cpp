@@ -499,16 +499,27 @@ FrameSums solve_frames(const ShapeSetup& setup, Interpolator& interp, int frames
   }
   return s;
 }
+// A corpus sequence at |G| = 2,000, its keyframes authored, ready to interpolate.
+struct CorpusRun {
+  std::shared_ptr<const ShapeSetup> setup;
+  stress::Authored authored;
+};
+CorpusRun corpus_run(const std::string& id) {
+  const stress::Corpus c = stress::load_corpus(HSI_STRESS_DIR "/corpus.json");
+  const stress::Sequence& q = c.sequence(id);
+  Scene scene = stress::sequence_scene(stress::load_shape(c, c.shape(q.shape)), q, 2000);
+  CorpusRun r;
+  r.setup = make_shape_setup(scene, 2000);
+  r.authored = stress::author(scene, *r.setup);
+  return r;
+}
 }  // namespace
 
 TEST_CASE("the exact system modulo the rotation converges in fewer iterations than the gauged one (annulus/hinge_posed)",
           "[newton][interpolation][stress]") {
-  const stress::Corpus c = stress::load_corpus(HSI_STRESS_DIR "/corpus.json");
-  const auto q = std::find_if(c.sequences.begin(), c.sequences.end(), [](const stress::Sequence& s) { return s.id == "annulus/hinge_posed"; });
-  REQUIRE(q != c.sequences.end());
-  Scene scene = stress::sequence_scene(stress::load_shape(c, c.shape(q->shape)), *q, 2000);
-  const auto setup = make_shape_setup(scene, 2000);
-  const stress::Authored a = stress::author(scene, *setup);
+  const CorpusRun run = corpus_run("annulus/hinge_posed");
+  const auto& setup = run.setup;
+  const stress::Authored& a = run.authored;
   Interpolator interp(*setup, a.times, a.maps);
   const FrameSums gauged = solve_frames(*setup, interp, 10, false);
   const FrameSums quotient = solve_frames(*setup, interp, 10, true);
@@ -1025,12 +1036,9 @@ TEST_CASE("the exact system over all of G ends PartProj's frames where the subse
   // links/bend at |G| 2,000 (bench_stress --trace): at every PartProj solution the exact
   // system over H has an eigenvalue of about -2e-7 against a largest of 16 and the loop
   // finishes on the projection; over G it is definite and Newton ends in fewer steps.
-  const stress::Corpus c = stress::load_corpus(HSI_STRESS_DIR "/corpus.json");
-  const auto q = std::find_if(c.sequences.begin(), c.sequences.end(), [](const stress::Sequence& s) { return s.id == "links/bend"; });
-  REQUIRE(q != c.sequences.end());
-  Scene scene = stress::sequence_scene(stress::load_shape(c, c.shape(q->shape)), *q, 2000);
-  const auto setup = make_shape_setup(scene, 2000);
-  const stress::Authored a = stress::author(scene, *setup);
+  const CorpusRun run = corpus_run("links/bend");
+  const auto& setup = run.setup;
+  const stress::Authored& a = run.authored;
   Interpolator interp(*setup, a.times, a.maps);
   const FrameSums subset = solve_frames(*setup, interp, 12, true, ExactSamples::Subset);
   const FrameSums then_all = solve_frames(*setup, interp, 12, true, ExactSamples::SubsetThenAll);
@@ -1076,12 +1084,9 @@ class PreferringCore final : public NewtonCore {
 }  // namespace
 
 TEST_CASE("ExactSamples::Auto takes the core's choice (the CPU core: Subset; a core preferring All: all of G)", "[newton][loop]") {
-  const stress::Corpus c = stress::load_corpus(HSI_STRESS_DIR "/corpus.json");
-  const auto q = std::find_if(c.sequences.begin(), c.sequences.end(), [](const stress::Sequence& s) { return s.id == "links/bend"; });
-  REQUIRE(q != c.sequences.end());
-  Scene scene = stress::sequence_scene(stress::load_shape(c, c.shape(q->shape)), *q, 2000);
-  const auto setup = make_shape_setup(scene, 2000);
-  const stress::Authored a = stress::author(scene, *setup);
+  const CorpusRun run = corpus_run("links/bend");
+  const auto& setup = run.setup;
+  const stress::Authored& a = run.authored;
   Interpolator interp(*setup, a.times, a.maps);
   CHECK(make_cpu_newton_core(setup->D_G, setup->H)->preferred_exact_samples() == ExactSamples::Subset);
   CHECK(InterpolationOptions{}.exact_samples == ExactSamples::Auto);
