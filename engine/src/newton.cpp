@@ -415,13 +415,10 @@ NewtonResult newton_solve(NewtonCore& core, const MapSpace& space, const Certifi
   std::unique_ptr<NewtonStepper> stepper = core.make_stepper(space, certifier, quad);
   if (!stepper) stepper = make_host_stepper(core, space, certifier, quad);
   const bool rotation_invariant = space.gauge() == Gauge::ModuloRigid && !quad;
-  if (opt.exact_samples == ExactSamples::Auto) {
-    NewtonOptions o = opt;
-    o.exact_samples = core.preferred_exact_samples();
-    if (o.exact_samples == ExactSamples::Auto) o.exact_samples = ExactSamples::Subset;
-    return newton_run(*stepper, o.certify && certifier, rotation_invariant, x0, o);
-  }
-  return newton_run(*stepper, opt.certify && certifier, rotation_invariant, x0, opt);
+  NewtonOptions o = opt;  // ExactSamples::Auto resolved by the core
+  if (o.exact_samples == ExactSamples::Auto) o.exact_samples = core.preferred_exact_samples();
+  if (o.exact_samples == ExactSamples::Auto) o.exact_samples = ExactSamples::Subset;
+  return newton_run(*stepper, o.certify && certifier, rotation_invariant, x0, o);
 }
 
 NewtonResult newton_run(NewtonStepper& st, bool certify, bool rotation_invariant, const Eigen::VectorXd& x0,

@@ -200,7 +200,6 @@ struct QuadraticTerm {
 // Every threshold newton_solve decides by. Energies are compared relative to |E|, so a
 // test means the same whatever the energy's scale (the interpolation energy is ≥ 2; an
 // authoring energy adds a positional term).
-
 struct NewtonOptions {
   int max_iterations = 100;
   // Converged when a step the line search took as first offered (min(1, safe_fraction ·
