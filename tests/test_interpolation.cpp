@@ -3,6 +3,7 @@
 #include <catch2/catch.hpp>
 
 #include <set>
+#include <thread>
 
 #include "hsi/frames_io.h"
 #include "hsi/interpolation.h"
@@ -66,6 +67,42 @@ TEST_CASE("blended metric is linear between the neighbouring keyframes", "[inter
   // Keyframe 1's metric is its own pull-back metric (Eq. 5).
   const MapValues v = evaluate_map(evaluate_basis(S.setup->cage, S.setup->G.points, kBasisD), S.maps[1]);
   CHECK((m1[5] - pullback_metric(v.f_z(5), v.fzbar_conj(5))).norm() < 1e-12);
+}
+
+TEST_CASE("the setup's interpolation rows are the basis at G, evaluated once for every thread", "[interpolation]") {
+  const Shape s = test::annulus(1.0, 0.45, 64);
+  const ShapeSetup setup(s, build_cage(s), 500, 0.2);
+  // Many threads ask at once (a batch's workers building interpolators): one evaluation,
+  // the same rows for all.
+  std::vector<const InterpolationRows*> seen(6, nullptr);
+  {
+    std::vector<std::thread> pool;
+    for (size_t t = 0; t < seen.size(); ++t) pool.emplace_back([&, t] { seen[t] = &setup.interpolation_rows(); });
+    for (std::thread& t : pool) t.join();
+  }
+  for (const InterpolationRows* r : seen) CHECK(r == seen.front());
+  const InterpolationRows& rows = *seen.front();
+  const BasisRows fresh = evaluate_basis(setup.cage, setup.G.points, kBasisC | kBasisD);
+  CHECK(rows.D.D == fresh.D);  // bit for bit: the rows each Interpolator evaluated before
+  CHECK(rows.D.C.size() == 0);
+  REQUIRE(rows.c_mean.size() == fresh.C.cols());
+  // The pose's sums, from their definition.
+  cd mean_w = 0;
+  for (const cd& w : setup.G.points) mean_w += w;
+  mean_w /= static_cast<double>(setup.G.size());
+  for (Eigen::Index j = 0; j < fresh.C.cols(); ++j) {
+    cd m = 0, r = 0, rb = 0;
+    for (Eigen::Index i = 0; i < fresh.C.rows(); ++i) {
+      const cd u = setup.G.points[static_cast<size_t>(i)] - mean_w;
+      m += fresh.C(i, j);
+      r += std::conj(u) * fresh.C(i, j);
+      rb += u * fresh.C(i, j);
+    }
+    m /= static_cast<double>(setup.G.size());
+    CHECK(std::abs(rows.c_mean(j) - m) <= 1e-12 * (1 + std::abs(m)));
+    CHECK(std::abs(rows.c_rot(j) - r) <= 1e-10 * (1 + std::abs(r)));
+    CHECK(std::abs(rows.c_rot_bar(j) - rb) <= 1e-10 * (1 + std::abs(rb)));
+  }
 }
 
 TEST_CASE("pose of a rigid motion of the identity is that motion", "[interpolation]") {

@@ -41,19 +41,11 @@ Interpolator::Interpolator(const ShapeSetup& setup, std::vector<double> times, s
   if (boundary_ && boundary_->size() != setup_.overlap.breakpoints().size())
     throw InputError("interpolation: the boundary evaluator is made for " + std::to_string(boundary_->size()) +
                      " points; the overlap check has " + std::to_string(setup_.overlap.breakpoints().size()) + " breakpoints");
-  {
-    const MatrixXcd C = evaluate_basis(setup_.cage, setup_.G.points, kBasisC).C;
-    const double count = static_cast<double>(setup_.G.size());
-    cd cw = 0;
-    for (const cd& w : setup_.G.points) cw += w;
-    cw /= count;
-    VectorXcd u(static_cast<Eigen::Index>(setup_.G.size()));
-    for (Eigen::Index i = 0; i < u.size(); ++i) u(i) = setup_.G.points[static_cast<size_t>(i)] - cw;
-    c_mean_ = C.colwise().sum() / count;
-    c_rot_ = u.conjugate().transpose() * C;  // Σ conj(u_i) C_ij
-    c_rot_bar_ = u.transpose() * C;          // Σ u_i C_ij
-  }
-  const BasisRows D = evaluate_basis(setup_.cage, setup_.G.points, kBasisD);
+  const InterpolationRows& rows = setup_.interpolation_rows();  // evaluated once per shape
+  c_mean_ = rows.c_mean;
+  c_rot_ = rows.c_rot;
+  c_rot_bar_ = rows.c_rot_bar;
+  const BasisRows& D = rows.D;
   for (size_t k = 0; k < keys_.size(); ++k) {
     const CertificateResult c = setup_.certifier.certify(keys_[k]);
     if (!c.certified) throw InputError("keyframe " + std::to_string(k) + " is not locally injective: " + c.reason);

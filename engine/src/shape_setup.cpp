@@ -21,6 +21,25 @@ ShapeSetup::ShapeSetup(Shape s, Cage c, int samples, double hessian_ratio)
       overlap(cage, certifier.segments()),
       size(bounding_box(shape).diagonal()) {}
 
+const InterpolationRows& ShapeSetup::interpolation_rows() const {
+  std::call_once(lazy_->once, [this] {
+    InterpolationRows& r = lazy_->rows;
+    BasisRows rows = evaluate_basis(cage, G.points, kBasisC | kBasisD);
+    const MatrixXcd& C = rows.C;
+    const double count = static_cast<double>(G.size());
+    cd cw = 0;
+    for (const cd& w : G.points) cw += w;
+    cw /= count;
+    VectorXcd u(static_cast<Eigen::Index>(G.size()));
+    for (Eigen::Index i = 0; i < u.size(); ++i) u(i) = G.points[static_cast<size_t>(i)] - cw;
+    r.c_mean = C.colwise().sum() / count;
+    r.c_rot = u.conjugate().transpose() * C;  // Σ conj(u_i) C_ij
+    r.c_rot_bar = u.transpose() * C;          // Σ u_i C_ij
+    r.D.D = std::move(rows.D);
+  });
+  return lazy_->rows;
+}
+
 std::unique_ptr<ShapeSetup> make_shape_setup(const Scene& scene, int samples, double hessian_ratio) {
   return std::make_unique<ShapeSetup>(scene.shape, scene_cage(scene), samples > 0 ? samples : scene.samples,
                                       hessian_ratio > 0 ? hessian_ratio : scene.hessian_ratio);

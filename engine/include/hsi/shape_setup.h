@@ -3,13 +3,26 @@
 #pragma once
 
 #include <memory>
+#include <mutex>
 
+#include "hsi/basis.h"
 #include "hsi/certificate.h"
 #include "hsi/map_space.h"
 #include "hsi/overlap.h"
 #include "hsi/scene_io.h"
 
 namespace hsi {
+
+// The basis at G as interpolation needs it beyond D_G (Interpolator: the keyframes'
+// metrics, the pose's Procrustes sums), evaluated once per shape on first use. An
+// Interpolator built per sequence evaluated these itself, |G| × (m + N) complex rows
+// twice: 60 % of its set-up, 150-230 ms on one thread on the bundled scenes, paid again
+// by every worker of a batch that met the sequence (issue #23, batched baking).
+struct InterpolationRows {
+  BasisRows D;  // D rows at G, every column (D only; C and E empty)
+  // With w̄ the mean of G and u_i = w_i − w̄: Σ_i C_ij / |G|, Σ_i conj(u_i) C_ij, Σ_i u_i C_ij.
+  Eigen::RowVectorXcd c_mean, c_rot, c_rot_bar;
+};
 
 struct ShapeSetup {
   Shape shape;
@@ -24,6 +37,17 @@ struct ShapeSetup {
   double size = 1;        // bounding-box diagonal of the shape
 
   ShapeSetup(Shape shape, Cage cage, int samples, double hessian_ratio);
+
+  // InterpolationRows, evaluated by the first call (others wait for it; safe from many
+  // threads at once), then kept for the setup's life.
+  const InterpolationRows& interpolation_rows() const;
+
+ private:
+  struct Lazy {
+    std::once_flag once;
+    InterpolationRows rows;
+  };
+  std::unique_ptr<Lazy> lazy_ = std::make_unique<Lazy>();
 };
 
 // From a scene: its cage (user-given or automatic) and its sample settings;
