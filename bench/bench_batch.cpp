@@ -33,6 +33,15 @@ namespace {
 using Clock = std::chrono::steady_clock;
 double s_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
 
+std::vector<std::string> split(const std::string& s) {
+  std::vector<std::string> out;
+  std::stringstream in(s);
+  std::string item;
+  while (std::getline(in, item, ','))
+    if (!item.empty()) out.push_back(item);
+  return out;
+}
+
 std::vector<int> parse_list(const std::string& s) {
   std::vector<int> out;
   std::stringstream in(s);
@@ -52,7 +61,8 @@ struct Row {
   int workers = 0;
   size_t frames = 0, certified = 0, converged = 0, failed = 0;
   double seconds = 0, set_up_s = 0;
-  int cores = 0, runs = 0;
+  int cores = 0, runs = 0, interpolators = 0;
+  std::string wait = "-";  // the CUDA wait (--cuda-wait); "-" on the CPU
   std::string same;  // identical to the first batch row
 };
 
@@ -87,6 +97,7 @@ int main(int argc, char** argv) {
   int sequences = 64, frames = 100, samples = 0, threads_per_worker = 1;
   double ratio = 0;
   bool skip_single = false;
+  std::string waits_list = "auto";
   app.add_option("--backend", backend, runtime::kBackendHelp)->capture_default_str()->check(CLI::IsMember(runtime::backend_names()));
   app.add_option("--workers", workers_list, "Batch worker counts W, comma-separated")->capture_default_str();
   app.add_option("--sequences", sequences, "Sequences S, made from the bundled scenes in turn")->capture_default_str()->check(CLI::Range(1, 100000));
@@ -99,11 +110,19 @@ int main(int argc, char** argv) {
       ->capture_default_str()
       ->check(CLI::Range(0, 4096));
   app.add_option("--assets", assets, "Folder of scene files (.json with two or more keyframes)")->capture_default_str();
+  app.add_option("--cuda-wait", waits_list,
+                 std::string("How the workers wait for the GPU, comma-separated: every W runs with each (") + runtime::kCudaWaitHelp + ")")
+      ->capture_default_str();
   app.add_flag("--skip-single", skip_single, "Leave out the one-at-a-time path (the speed-up column is then empty)");
   CLI11_PARSE(app, argc, argv);
   std::vector<int> worker_counts;
+  const std::vector<std::string> waits = split(waits_list);
   try {
     worker_counts = parse_list(workers_list);
+    if (waits.empty()) throw CLI::ValidationError("--cuda-wait", "no wait given");
+    for (const std::string& w : waits)
+      if (w != "auto" && w != "spin" && w != "yield" && w != "block")
+        throw CLI::ValidationError("--cuda-wait", "'" + w + "' is not one of auto, spin, yield, block");
   } catch (const CLI::Error& e) {
     return app.exit(e);
   }
@@ -119,7 +138,7 @@ int main(int argc, char** argv) {
     return 1;
   }
   const BatchCoreFactory make_core = [used = choice.used, cuda](const ShapeSetup& setup) {
-    return runtime::make_newton_core(setup, used, cuda).core;
+    return runtime::make_newton_core(setup, used, cuda, false).core;
   };
 
   // The scenes, then the sequences.
@@ -194,6 +213,7 @@ int main(int argc, char** argv) {
       Interpolator I(*q.setup, q.key_times, q.keyframes, q.options, make_core(*q.setup));
       row.set_up_s += s_since(ts);
       ++row.cores;
+      ++row.interpolators;
       count(row, I.sequence(q.times));
       std::fprintf(stderr, "\r[one at a time] %zu/%zu frames   ", row.frames, total);
     }
@@ -203,42 +223,51 @@ int main(int argc, char** argv) {
     rows.push_back(row);
   }
   std::vector<BatchSequenceResult> first;
-  for (int W : worker_counts) {
-    BatchOptions o;
-    o.workers = W;
-    o.threads_per_worker = threads_per_worker;
-    o.make_core = make_core;
-    const BatchResult r = solve_batch(batch, o, [&](const FrameResult&, int, int, size_t done, size_t all) {
-      if (done % 100 == 0 || done == all) std::fprintf(stderr, "\r[batch W = %d] %zu/%zu frames   ", W, done, all);
-      return true;
-    });
-    std::fprintf(stderr, "\n");
-    Row row;
-    row.path = "batch";
-    row.workers = r.stats.workers;
-    row.seconds = r.stats.seconds;
-    row.set_up_s = r.stats.set_up_s;
-    row.cores = r.stats.cores_made;
-    row.runs = r.stats.runs;
-    for (const BatchSequenceResult& s : r.sequences) {
-      count(row, s.frames);
-      if (!s.error.empty()) {
-        ++row.failed;
-        std::fprintf(stderr, "bench_batch: W = %d: %s\n", W, s.error.c_str());
+  const bool on_gpu = choice.used == runtime::Backend::Cuda;
+  for (const std::string& wait : on_gpu ? waits : std::vector<std::string>{"-"})
+    for (int W : worker_counts) {
+      if (on_gpu)
+        if (const std::string why = runtime::set_cuda_wait(wait); !why.empty()) {
+          std::fprintf(stderr, "bench_batch: --cuda-wait %s: %s\n", wait.c_str(), why.c_str());
+          return 1;
+        }
+      BatchOptions o;
+      o.workers = W;
+      o.threads_per_worker = threads_per_worker;
+      o.make_core = make_core;
+      const BatchResult r = solve_batch(batch, o, [&](const FrameResult&, int, int, size_t done, size_t all) {
+        if (done % 100 == 0 || done == all) std::fprintf(stderr, "\r[batch W = %d, wait %s] %zu/%zu frames   ", W, wait.c_str(), done, all);
+        return true;
+      });
+      std::fprintf(stderr, "\n");
+      Row row;
+      row.path = "batch";
+      row.wait = wait;
+      row.workers = r.stats.workers;
+      row.seconds = r.stats.seconds;
+      row.set_up_s = r.stats.set_up_s;
+      row.cores = r.stats.cores_made;
+      row.interpolators = r.stats.interpolators_built;
+      row.runs = r.stats.runs;
+      for (const BatchSequenceResult& s : r.sequences) {
+        count(row, s.frames);
+        if (!s.error.empty()) {
+          ++row.failed;
+          std::fprintf(stderr, "bench_batch: W = %d: %s\n", W, s.error.c_str());
+        }
       }
+      if (first.empty()) {
+        first = r.sequences;
+        row.same = "(first)";
+      } else {
+        row.same = same_frames(first, r.sequences) ? "yes" : "NO";
+      }
+      rows.push_back(row);
     }
-    if (first.empty()) {
-      first = r.sequences;
-      row.same = "(first)";
-    } else {
-      row.same = same_frames(first, r.sequences) ? "yes" : "NO";
-    }
-    rows.push_back(row);
-  }
 
   const double base = skip_single ? 0 : static_cast<double>(rows.front().frames) / rows.front().seconds;
-  std::printf("| path | W | frames | s | frames/s | speed-up | set-up s (summed) | cores made | runs | certified | converged | same frames as first batch row |\n");
-  std::printf("|---|---|---|---|---|---|---|---|---|---|---|---|\n");
+  std::printf("| path | CUDA wait | W | frames | s | frames/s | speed-up | set-up s (summed) | cores made | interpolators | runs | certified | converged | same frames as first batch row |\n");
+  std::printf("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
   bool all_certified = true;
   for (const Row& r : rows) {
     const double fps = static_cast<double>(r.frames) / std::max(r.seconds, 1e-12);
@@ -246,8 +275,8 @@ int main(int argc, char** argv) {
     all_certified = all_certified && every;
     char speed[32] = "";
     if (base > 0) std::snprintf(speed, sizeof speed, "%.2fx", fps / base);
-    std::printf("| %s | %d | %zu | %.2f | %.0f | %s | %.2f | %d | %d | %zu%s | %zu | %s |\n", r.path.c_str(), r.workers, r.frames, r.seconds,
-                fps, speed, r.set_up_s, r.cores, r.runs, r.certified, every ? "" : " (NOT ALL CERTIFIED)", r.converged,
+    std::printf("| %s | %s | %d | %zu | %.2f | %.0f | %s | %.2f | %d | %d | %d | %zu%s | %zu | %s |\n", r.path.c_str(), r.wait.c_str(), r.workers,
+                r.frames, r.seconds, fps, speed, r.set_up_s, r.cores, r.interpolators, r.runs, r.certified, every ? "" : " (NOT ALL CERTIFIED)", r.converged,
                 r.same.empty() ? "-" : r.same.c_str());
   }
   std::printf("\n%s\n", all_certified ? "every frame of every path certified" : "SOME FRAMES NOT CERTIFIED (or sequences failed): see the table");

@@ -218,3 +218,32 @@ TEST_CASE("subdivision evaluates the map like the basis does", "[certificate]") 
   CHECK(a.sigma1_max >= b.observed_sigma1_max - 1e-12);
   CHECK(a.sigma2_min <= b.observed_sigma2_min + 1e-12);
 }
+
+// What the CUDA core's device certificate now takes from the setup's certifier instead of
+// evaluating again (DeviceCertifier(const Certifier&, ...)): the same rows and weights a
+// fresh evaluation gives, in the layout its upload checks (S × M rows; W over the cage's
+// m vertices beside Wh over its N holes).
+TEST_CASE("the certifier's breakpoint rows and weights are those evaluated afresh, S x M", "[certificate]") {
+  const Shape s = test::annulus(1.0, 0.4, 48);
+  const Cage cage = build_cage(s);
+  const BoundarySamples G = sample_boundary(s, 700);
+  const Certifier c(s, cage, G);
+  const CertificateSegments seg = certificate_segments(s, G);
+  const Eigen::Index S = static_cast<Eigen::Index>(seg.size()), m = cage.vertex_count(), N = cage.hole_count();
+  REQUIRE(c.breakpoint_count() == S);
+  const BasisRows rows = evaluate_basis(cage, seg.points, kBasisD | kBasisE);
+  CHECK(c.breakpoint_D() == rows.D);
+  CHECK(c.breakpoint_E() == rows.E);
+  CHECK(c.breakpoint_D().rows() == S);
+  CHECK(c.breakpoint_D().cols() == m + N);
+  const CertificateWeights w = certificate_weights(cage, seg);
+  const CertificateWeights& cw = c.weights();
+  CHECK(cw.W == w.W);
+  CHECK(cw.Wh == w.Wh);
+  CHECK(cw.WD == w.WD);
+  CHECK(cw.WE == w.WE);
+  CHECK(cw.touches == w.touches);
+  CHECK((cw.W.rows() == S && cw.W.cols() == m));
+  CHECK((cw.Wh.rows() == S && cw.Wh.cols() == N));
+  CHECK((cw.WD.rows() == S && cw.WD.cols() == m + N && cw.WE.cols() == m + N));
+}

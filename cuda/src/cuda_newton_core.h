@@ -117,7 +117,7 @@ class CudaNewtonCore final : public NewtonCore {
     HSI_CUDA_CHECK(cudaStreamSynchronize(s));
     if (setup) {
       setup_ = setup;
-      certifier_ = std::make_unique<DeviceCertifier>(setup->shape, setup->cage, setup->G, stream_, blas_);
+      certifier_ = std::make_unique<DeviceCertifier>(setup->certifier, setup->cage, stream_, blas_);  // its rows, not evaluated again
     }
     warm_up();
   }

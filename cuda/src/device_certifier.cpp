@@ -19,6 +19,17 @@ DeviceCertifier::DeviceCertifier(const Shape& shape, const Cage& cage, const Bou
                                  cublasHandle_t blas)
     : stream_(stream), blas_(blas) {
   const CertificateSegments seg = certificate_segments(shape, samples);
+  const BasisRows rows = evaluate_basis(cage, seg.points, kBasisD | kBasisE);
+  upload(cage, seg, rows.D, rows.E, certificate_weights(cage, seg));  // the weights as the CPU reference's
+}
+
+DeviceCertifier::DeviceCertifier(const hsi::Certifier& host, const Cage& cage, cudaStream_t stream, cublasHandle_t blas)
+    : stream_(stream), blas_(blas) {
+  upload(cage, host.segments(), host.breakpoint_D(), host.breakpoint_E(), host.weights());
+}
+
+void DeviceCertifier::upload(const Cage& cage, const CertificateSegments& seg, const MatrixXcd& D, const MatrixXcd& E,
+                             const CertificateWeights& w) {
   m_ = cage.vertex_count();
   N_ = cage.hole_count();
   M_ = m_ + N_;
@@ -31,11 +42,13 @@ DeviceCertifier::DeviceCertifier(const Shape& shape, const Cage& cage, const Bou
     z.insert(z.end(), l.begin(), l.end());
     begin.push_back(static_cast<int>(z.size()));
   }
-  const BasisRows rows = evaluate_basis(cage, seg.points, kBasisD | kBasisE);
+  // D, E, WD, WE: S × M; [W | Wh]: S × M (W over the cage's vertices, Wh its holes).
+  const auto s_by_m = [&](const auto& X) { return X.rows() == S_ && X.cols() == M_; };
+  if (!s_by_m(D) || !s_by_m(E) || !s_by_m(w.WD) || !s_by_m(w.WE) || w.W.rows() != S_ || w.Wh.rows() != S_ ||
+      w.W.cols() + w.Wh.cols() != M_ || w.touches.size() != sz(S_))
+    throw InputError("hsi::cuda certificate: the basis rows or weights do not match the segments and the cage");
   MatrixXcd DE(2 * static_cast<Eigen::Index>(S_), M_);
-  DE << rows.D, rows.E;
-  // The rounding allowances' weights, as the CPU reference's.
-  const CertificateWeights w = certificate_weights(cage, seg);
+  DE << D, E;
   Eigen::MatrixXd WDE(2 * static_cast<Eigen::Index>(S_), M_), WWh(static_cast<Eigen::Index>(S_), M_);
   WDE << w.WD, w.WE;
   WWh << w.W, w.Wh;
@@ -159,9 +172,10 @@ struct Certifier::Impl {
   BlasHandle blas{stream};
   DeviceCertifier certifier;
   Impl(const Shape& shape, const Cage& cage, const BoundarySamples& samples) : certifier(shape, cage, samples, stream, blas) {}
+  explicit Impl(const ShapeSetup& s) : certifier(s.certifier, s.cage, stream, blas) {}
 };
 
-Certifier::Certifier(const ShapeSetup& s) : impl_(std::make_unique<Impl>(s.shape, s.cage, s.G)) {}
+Certifier::Certifier(const ShapeSetup& s) : impl_(std::make_unique<Impl>(s)) {}
 Certifier::Certifier(const Shape& shape, const Cage& cage, const BoundarySamples& samples)
     : impl_(std::make_unique<Impl>(shape, cage, samples)) {}
 Certifier::~Certifier() = default;

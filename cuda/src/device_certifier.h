@@ -16,6 +16,9 @@ class DeviceCertifier {
  public:
   DeviceCertifier(const Shape& shape, const Cage& cage, const BoundarySamples& samples, cudaStream_t stream,
                   cublasHandle_t blas);
+  // The same from a host certifier of the same shape, cage and samples (a ShapeSetup's):
+  // its segments, basis rows and weights uploaded as they are, not evaluated again.
+  DeviceCertifier(const hsi::Certifier& host, const Cage& cage, cudaStream_t stream, cublasHandle_t blas);
 
   int coefficient_count() const { return M_; }  // M = m + N complex per φ and ψ
   int segment_count() const { return S_; }
@@ -29,6 +32,8 @@ class DeviceCertifier {
   CertificateResult certify(const HarmonicMap& map, const CertificateOptions& options = {});
 
  private:
+  void upload(const Cage& cage, const CertificateSegments& seg, const MatrixXcd& D, const MatrixXcd& E, const CertificateWeights& w);
+
   int m_ = 0, N_ = 0, M_ = 0, S_ = 0;
   cudaStream_t stream_;
   cublasHandle_t blas_;

@@ -42,6 +42,25 @@ bool device_available(std::string* why) {
   }
 }
 
+bool set_host_wait(HostWait wait, std::string* why) {
+  unsigned flags = 0;
+  cudaError_t e = cudaGetDeviceFlags(&flags);
+  if (e == cudaSuccess) {
+    const unsigned schedule = wait == HostWait::Spin    ? cudaDeviceScheduleSpin
+                              : wait == HostWait::Yield ? cudaDeviceScheduleYield
+                              : wait == HostWait::Block ? cudaDeviceScheduleBlockingSync
+                                                        : cudaDeviceScheduleAuto;
+    // cudaGetDeviceFlags reports cudaDeviceMapHost, which cudaSetDeviceFlags does not take back.
+    e = cudaSetDeviceFlags((flags & ~static_cast<unsigned>(cudaDeviceScheduleMask | cudaDeviceMapHost)) | schedule);
+  }
+  if (e != cudaSuccess) {
+    if (why) *why = std::string("cudaSetDeviceFlags: ") + cudaGetErrorName(e) + ", " + cudaGetErrorString(e);
+    cudaGetLastError();
+    return false;
+  }
+  return true;
+}
+
 namespace {
 void check_inputs(const MatrixXcd& D, const std::vector<int>& H) {
   if (D.rows() < 1 || D.cols() < 1) throw InputError("hsi::cuda: the basis matrix D is empty");

@@ -153,6 +153,9 @@ Certifier::Certifier(Certifier&&) noexcept = default;
 Certifier& Certifier::operator=(Certifier&&) noexcept = default;
 int Certifier::breakpoint_count() const { return static_cast<int>(impl_->seg.size()); }
 const CertificateSegments& Certifier::segments() const { return impl_->seg; }
+const MatrixXcd& Certifier::breakpoint_D() const { return impl_->D; }
+const MatrixXcd& Certifier::breakpoint_E() const { return impl_->E; }
+const CertificateWeights& Certifier::weights() const { return impl_->weights; }
 
 namespace {
 

@@ -54,6 +54,26 @@ CudaStatus cuda_status() {
   return s;
 }
 
+const char* const kCudaWaitHelp =
+    "How host threads wait for the GPU: auto (CUDA's choice: spin, one core busy per waiting thread), spin, yield or block";
+
+std::string set_cuda_wait(std::string_view name) {
+#if HSI_RUNTIME_CUDA
+  using hsi::cuda::HostWait;
+  const HostWait w = name == "auto"    ? HostWait::Auto
+                     : name == "spin"  ? HostWait::Spin
+                     : name == "yield" ? HostWait::Yield
+                     : name == "block" ? HostWait::Block
+                                       : throw InputError("CUDA wait '" + std::string(name) + "' is not one of auto, spin, yield, block");
+  std::string why;
+  return hsi::cuda::set_host_wait(w, &why) ? "" : why;
+#else
+  if (name != "auto" && name != "spin" && name != "yield" && name != "block")
+    throw InputError("CUDA wait '" + std::string(name) + "' is not one of auto, spin, yield, block");
+  return built::kNoCuda;
+#endif
+}
+
 BackendChoice choose_backend(Backend requested, const CudaStatus& cuda) {
   BackendChoice c;
   c.requested = requested;
@@ -128,13 +148,13 @@ std::unique_ptr<MeshEvaluator> cuda_mesh_evaluator(const Cage& cage, std::span<c
 
 }  // namespace
 
-NewtonCoreChoice make_newton_core(const ShapeSetup& setup, Backend requested, const CudaStatus& cuda) {
+NewtonCoreChoice make_newton_core(const ShapeSetup& setup, Backend requested, const CudaStatus& cuda, bool with_boundary) {
   NewtonCoreChoice r;
   r.core = make_on_backend<NewtonCore>(
       requested, cuda, "core", r.choice,
       [&] {
         std::unique_ptr<NewtonCore> core = cuda_core(setup);
-        r.boundary = cuda_mesh_evaluator(setup.cage, setup.overlap.breakpoints().points, {});
+        if (with_boundary) r.boundary = cuda_mesh_evaluator(setup.cage, setup.overlap.breakpoints().points, {});
         return core;
       },
       [&] {

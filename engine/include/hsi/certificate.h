@@ -134,6 +134,13 @@ class Certifier {
   CertificateResult certify(const HarmonicMap& map, const CertificateOptions& options = {}) const;
   int breakpoint_count() const;
   const CertificateSegments& segments() const;
+  // What certify reads besides the map, for another backend's certificate made from
+  // this one rather than evaluated again (the CUDA core's: 0.3-0.8 s on one thread per
+  // core made): the basis rows at the breakpoints (breakpoint_count() × (m + N), every
+  // column) and the Lipschitz bound's distance weights.
+  const MatrixXcd& breakpoint_D() const;
+  const MatrixXcd& breakpoint_E() const;
+  const CertificateWeights& weights() const;
 
  private:
   struct Impl;

@@ -23,6 +23,16 @@ class Error : public std::runtime_error {
 // without a GPU or driver it returns false and, if `why` is given, says why.
 bool device_available(std::string* why = nullptr);
 
+// How host threads wait for this device's work (the CUDA context's scheduling flag;
+// cudaSetDeviceFlags): Auto is CUDA's heuristic, which spins while the process has fewer
+// contexts than the machine has cores (always, for us): each waiting thread keeps a core
+// busy. A batch with as many workers as cores (hsi/batch.h) then leaves none to the
+// sequences' crossing searches; Yield or Block frees them at some latency per wait.
+enum class HostWait { Auto, Spin, Yield, Block };
+// Sets it for the current device, whether or not its context exists yet; false (and
+// `why`) where CUDA refuses. Applies to every thread's later waits.
+bool set_host_wait(HostWait wait, std::string* why = nullptr);
+
 // D: the active basis rows D(w) at the samples G (|G| × n); H: indices into G (the
 // Hessian subset). Uploads D once; throws Error if the device cannot be used and
 // InputError on inconsistent input. The core lives on the CUDA device current when it

@@ -38,6 +38,13 @@ struct CudaStatus {
 // Never throws: "this hsi was built without CUDA", "no CUDA device (cudaGetDeviceCount: ...)", ...
 CudaStatus cuda_status();
 
+// How host threads wait for the GPU (hsi::cuda::HostWait): auto (CUDA's heuristic: spin,
+// a core busy per waiting thread), spin, yield or block. For batches with as many
+// workers as cores (bench_batch --cuda-wait). "" when set, else why not (no CUDA in this
+// build, or CUDA refused). Throws InputError for a name not among these four.
+std::string set_cuda_wait(std::string_view name);
+extern const char* const kCudaWaitHelp;
+
 // What a request gave.
 struct BackendChoice {
   Backend requested = Backend::Auto;
@@ -70,7 +77,10 @@ struct NewtonCoreChoice {
 };
 NewtonCoreChoice make_newton_core(const ShapeSetup& setup, Backend requested);
 // The same, the CUDA status already known (a front-end that makes many cores asks once).
-NewtonCoreChoice make_newton_core(const ShapeSetup& setup, Backend requested, const CudaStatus& cuda);
+// with_boundary = false: no `boundary` evaluator (for callers that take the core alone: a
+// batch's core factory, authoring), whose rows at the breakpoints cost ~0.1 s of host
+// time per core made.
+NewtonCoreChoice make_newton_core(const ShapeSetup& setup, Backend requested, const CudaStatus& cuda, bool with_boundary = true);
 
 // f at a fixed set of points (a mesh's vertices) from cached basis rows
 // (hsi/mesh_evaluator.h), on the backend a request gives, decided as for the Newton
