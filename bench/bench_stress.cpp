@@ -209,7 +209,7 @@ int main(int argc, char** argv) {
   bool paper_newton = false, author_only = false, trace = false, reverse_loops = false, no_chord = false;
   double hessian_ratio = 0;
   std::string exact_samples = to_string(InterpolationOptions{}.exact_samples);
-  double time_limit = 0;
+  double time_limit = 0, projected_decrement_stop = InterpolationOptions{}.projected_decrement_stop;
   app.add_option("--corpus", corpus_file, "The corpus file")->capture_default_str();
   app.add_option("--shapes", shapes_opt, "Only these shapes (comma-separated names)");
   app.add_option("--families", families_opt, "Only shapes of these families: bundled, thin, grid, sprite");
@@ -240,6 +240,11 @@ int main(int argc, char** argv) {
                  "choice: subset on the CPU, all on CUDA)")
       ->capture_default_str()
       ->check(CLI::IsMember({"subset", "subset-then-all", "all", "auto"}));
+  app.add_option("--projected-decrement-stop", projected_decrement_stop,
+                 "Converged also when a projected system's decrement is below this fraction of the tolerance "
+                 "(InterpolationOptions::projected_decrement_stop; 0: never)")
+      ->capture_default_str()
+      ->check(CLI::Range(0.0, 1.0));
   app.add_flag("--no-chord", no_chord,
                "Sequences without chord steps (InterpolationOptions::chord_steps off): every frame's Newton systems built "
                "and factored at its own points, as before the chord steps");
@@ -351,10 +356,10 @@ int main(int argc, char** argv) {
   std::printf("Machine: %s, %d logical cores; backend %s; %d workers x %d OpenMP threads\n", machine.cpu.c_str(), machine.cores,
               backend.c_str(), jobs, omp_threads);
   std::printf("Corpus: %s (seed %d): %d of %zu sequences on %zu shapes; |G| %s; frames per interval %s; projections %s; "
-              "iteration cap %d; exact systems over %s%s%s%s\n\n",
+              "iteration cap %d; exact systems over %s; projected-decrement stop %g%s%s%s\n\n",
               corpus_file.c_str(), corpus.seed, total_sequences, corpus.sequences.size(), plan.size(),
               samples > 0 ? std::to_string(samples).c_str() : "per sequence", frames_opt.c_str(), projections_opt.c_str(),
-              max_iterations, exact_samples.c_str(), paper_newton ? "; the paper's plain Newton (--paper-newton)" : "",
+              max_iterations, exact_samples.c_str(), projected_decrement_stop, paper_newton ? "; the paper's plain Newton (--paper-newton)" : "",
               no_chord && !paper_newton ? "; no chord steps (--no-chord)" : "",
               reverse_loops ? "; every shape's loops reversed (--reverse-loops)" : "");
   std::printf("Per run: F frames per keyframe interval, F x (keyframes - 1) + 1 frames in all, warm-started; the\n"
@@ -498,7 +503,7 @@ int main(int argc, char** argv) {
   const runtime::CudaStatus cuda = runtime::cuda_status();
   KeyframeOptions authoring;
   authoring.make_core = [&](const ShapeSetup& s) {
-    return std::move(runtime::make_newton_core(s, runtime::parse_backend(backend), cuda).core);
+    return std::move(runtime::make_newton_core(s, runtime::parse_backend(backend), cuda, false).core);
   };
   run_pool(to_author, jobs, omp_threads, in_time, [&](int i) {
     Item& it = items[static_cast<size_t>(i)];
@@ -589,6 +594,7 @@ int main(int argc, char** argv) {
       if (paper_newton) o.escalate_after_iterations = 0;  // the paper's projection throughout
       o.chord_steps = !no_chord && !paper_newton;
       o.exact_samples = parse_exact_samples(exact_samples);
+      o.projected_decrement_stop = projected_decrement_stop;
       o.projection = run.p;
       o.max_iterations = max_iterations;
       runtime::NewtonCoreChoice core = runtime::make_newton_core(setup, runtime::parse_backend(backend), cuda);
@@ -638,7 +644,7 @@ int main(int argc, char** argv) {
                     {"frames", frame_counts},    {"projections", split(projections_opt)}, {"max_iterations", max_iterations},
                     {"limit", limit},            {"paper_newton", paper_newton}, {"time_limit", time_limit},
                     {"hessian_ratio", hessian_ratio}, {"chord_steps", !no_chord && !paper_newton}, {"exact_samples", exact_samples},
-                    {"reverse_loops", reverse_loops}};
+                    {"projected_decrement_stop", projected_decrement_stop}, {"reverse_loops", reverse_loops}};
   json runs_json = json::array(), shapes_json = json::array();
   std::map<RunKey, Stats> total;
   std::map<std::string, std::map<RunKey, Stats>> by_shape;

@@ -1109,3 +1109,38 @@ TEST_CASE("ExactSamples::Auto takes the core's choice (the CPU core: Subset; a c
     }
   }
 }
+
+TEST_CASE("newton_run: projected_decrement_stop ends a solve whose projected decrement is below its share of the tolerance",
+          "[newton][loop]") {
+  // The exact system never factors (near-rigid maps, issue #20): without the rule a solve
+  // that starts within round-off of the minimum still takes a projected step.
+  const auto solve = [](double offset, double fraction, Eigen::Vector2d scale) {
+    FakeStepper f;
+    f.exact_definite = false;
+    f.projected_scale = scale;
+    NewtonOptions o;
+    o.projected_decrement_stop = fraction;
+    // E − 2 = ½|x − a|² = offset² (A = I): the projected decrement −gᵀd/2 is offset² / scale.
+    const Eigen::Vector2d x0 = f.a + Eigen::Vector2d(std::sqrt(2.0) * offset, 0);
+    return newton_run(f, true, true, x0, o);
+  };
+  const double tol = NewtonOptions{}.tolerance * 2;  // tolerance·|E| at E ≈ 2
+  // Decrement 0.5% of the tolerance: the rule (1%) stops before any step; off, a step is taken.
+  {
+    const NewtonResult on = solve(std::sqrt(0.005 * tol), 0.01, {1, 1});
+    CHECK(on.converged);
+    CHECK(on.iterations == 0);
+    CHECK(on.message.find("projected Newton decrement") != std::string::npos);
+    const NewtonResult off = solve(std::sqrt(0.005 * tol), 0, {1, 1});
+    CHECK(off.converged);
+    CHECK(off.iterations == 1);
+    CHECK(off.message.find("projected Newton decrement") == std::string::npos);
+  }
+  // 5% of the tolerance: above the rule's share, the step is taken.
+  CHECK(solve(std::sqrt(0.05 * tol), 0.01, {1, 1}).iterations == 1);
+  // A projection 10x too stiff along the gradient understates the decrement tenfold: the
+  // share is the margin for that (decrement 0.5% of the tolerance: its model says 0.05%).
+  const NewtonResult stiff = solve(std::sqrt(0.005 * tol), 0.01, {10, 10});
+  CHECK(stiff.iterations == 0);
+  CHECK(stiff.converged);
+}

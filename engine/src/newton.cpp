@@ -598,6 +598,12 @@ NewtonResult newton_run(NewtonStepper& st, bool certify, bool rotation_invariant
       res.message = "converged (Newton decrement below tolerance)";
       break;
     }
+    if (!log.exact_hessian && !log.chord && opt.projected_decrement_stop > 0 &&
+        -slope / 2 < opt.projected_decrement_stop * opt.tolerance * std::max(std::abs(E), 1e-300)) {
+      res.stop = NewtonStop::Converged;
+      res.message = "converged (projected Newton decrement below its share of the tolerance)";
+      break;
+    }
 
     // 2. Armijo backtracking from min(1, safe_fraction · s_max); a step is taken only if
     //    the certificate passes at the new map.

@@ -213,6 +213,16 @@ struct NewtonOptions {
   // lowered the energy by 4e-8 with a decrement of 3e-4 left, and the frame was called
   // converged).
   double tolerance = 5e-8;
+  // Also converged: a projected system (not a chord one) whose decrement −gᵀd/2 is below
+  // this fraction of tolerance·|E| (0: never). A projection clamps curvature up, so its
+  // decrement can understate what is left by the factor it overstates curvature along
+  // the gradient; the fraction is the margin for that. Where the exact system does not
+  // factor near a solution (issue #20: at near-rigid maps the exact Hessian over G has an
+  // eigenvalue of −2e-7 against a largest of 16, PartProj's accurate first step lands
+  // there, blob/spin), the frame otherwise takes one more projected step whose decrease
+  // (in the traces: what its model predicted, ~1e-9 at E = 2) stops it. Interpolation
+  // sets 0.01 (InterpolationOptions::projected_decrement_stop, measured there); authoring 0.
+  double projected_decrement_stop = 0;
   HessianProjection projection = HessianProjection::PartProj;
   // Once a full step was taken (or, with exact_after_cut, a projected step that Armijo
   // cut), use the unprojected Hessian whenever its reduced system is positive definite
