@@ -33,15 +33,6 @@ namespace {
 using Clock = std::chrono::steady_clock;
 double s_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
 
-std::vector<std::string> split(const std::string& s) {
-  std::vector<std::string> out;
-  std::stringstream in(s);
-  std::string item;
-  while (std::getline(in, item, ','))
-    if (!item.empty()) out.push_back(item);
-  return out;
-}
-
 std::vector<int> parse_list(const std::string& s) {
   std::vector<int> out;
   std::stringstream in(s);
@@ -97,7 +88,7 @@ int main(int argc, char** argv) {
   int sequences = 64, frames = 100, samples = 0, threads_per_worker = 1;
   double ratio = 0;
   bool skip_single = false;
-  std::string waits_list = "auto";
+  std::vector<std::string> waits = {"auto"};
   app.add_option("--backend", backend, runtime::kBackendHelp)->capture_default_str()->check(CLI::IsMember(runtime::backend_names()));
   app.add_option("--workers", workers_list, "Batch worker counts W, comma-separated")->capture_default_str();
   app.add_option("--sequences", sequences, "Sequences S, made from the bundled scenes in turn")->capture_default_str()->check(CLI::Range(1, 100000));
@@ -110,19 +101,16 @@ int main(int argc, char** argv) {
       ->capture_default_str()
       ->check(CLI::Range(0, 4096));
   app.add_option("--assets", assets, "Folder of scene files (.json with two or more keyframes)")->capture_default_str();
-  app.add_option("--cuda-wait", waits_list,
+  app.add_option("--cuda-wait", waits,
                  std::string("How the workers wait for the GPU, comma-separated: every W runs with each (") + runtime::kCudaWaitHelp + ")")
-      ->capture_default_str();
+      ->delimiter(',')
+      ->capture_default_str()
+      ->check(CLI::IsMember({"auto", "spin", "yield", "block"}));
   app.add_flag("--skip-single", skip_single, "Leave out the one-at-a-time path (the speed-up column is then empty)");
   CLI11_PARSE(app, argc, argv);
   std::vector<int> worker_counts;
-  const std::vector<std::string> waits = split(waits_list);
   try {
     worker_counts = parse_list(workers_list);
-    if (waits.empty()) throw CLI::ValidationError("--cuda-wait", "no wait given");
-    for (const std::string& w : waits)
-      if (w != "auto" && w != "spin" && w != "yield" && w != "block")
-        throw CLI::ValidationError("--cuda-wait", "'" + w + "' is not one of auto, spin, yield, block");
   } catch (const CLI::Error& e) {
     return app.exit(e);
   }
