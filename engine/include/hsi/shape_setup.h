@@ -39,7 +39,9 @@ struct ShapeSetup {
   ShapeSetup(Shape shape, Cage cage, int samples, double hessian_ratio);
 
   // InterpolationRows, evaluated by the first call (others wait for it; safe from many
-  // threads at once), then kept for the setup's life.
+  // threads at once), then kept for the setup's life: |G| × (m + N) complex, as much
+  // memory as D_G (an Interpolator held the same rows only while it was made; a setup
+  // that never interpolates, e.g. the viewer's authoring, never evaluates them).
   const InterpolationRows& interpolation_rows() const;
 
  private:
