@@ -151,6 +151,25 @@ TEST_CASE("the backend factory on this machine", "[runtime]") {
   CHECK(automatic.core->energy() == Approx(cpu.core->energy()).epsilon(1e-12));
 }
 
+TEST_CASE("the CUDA wait: a bad name refused; each name set where CUDA runs, else why not", "[runtime]") {
+  CHECK_THROWS_AS(runtime::set_cuda_wait("busy"), InputError);
+  CHECK_THROWS_WITH(runtime::set_cuda_wait(""), Contains("auto, spin, yield, block"));
+  const runtime::CudaStatus cuda = runtime::cuda_status();
+  for (const char* name : {"yield", "block", "spin", "auto"}) {  // auto last: the process's default again
+    INFO(name);
+    const std::string why = runtime::set_cuda_wait(name);
+    if (cuda.available) CHECK(why.empty());
+    else CHECK_FALSE(why.empty());
+  }
+  if (cuda.available) {  // a core made after it still solves
+    const auto setup = small_setup();
+    runtime::NewtonCoreChoice c = runtime::make_newton_core(*setup, Backend::Cuda);
+    const Eigen::VectorXd v = setup->map_space.T() * setup->map_space.reduce(identity_map(setup->cage)).x;
+    c.core->set_coefficients(v);
+    CHECK(std::isfinite(c.core->energy()));
+  }
+}
+
 TEST_CASE("certifier names, a bad name refused, unavailable ones saying why", "[runtime][certify]") {
   const auto& names = runtime::certifier_names();
   CHECK(std::vector<std::string_view>(names.begin(), names.end()) == std::vector<std::string_view>{"cpu", "cuda", "vulkan"});

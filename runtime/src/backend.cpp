@@ -2,6 +2,9 @@
 // has CUDA: HSI_RUNTIME_CUDA is set by runtime/CMakeLists.txt when cuda/ is built.
 #include "hsi/runtime/backend.h"
 
+#include <algorithm>
+#include <iterator>
+
 #include "built.h"
 #include "hsi/domain.h"
 #if HSI_RUNTIME_CUDA
@@ -58,18 +61,13 @@ const char* const kCudaWaitHelp =
     "How host threads wait for the GPU: auto (CUDA's choice: spin, one core busy per waiting thread), spin, yield or block";
 
 std::string set_cuda_wait(std::string_view name) {
+  static constexpr std::string_view kNames[] = {"auto", "spin", "yield", "block"};  // HostWait's order
+  const auto it = std::find(std::begin(kNames), std::end(kNames), name);
+  if (it == std::end(kNames)) throw InputError("CUDA wait '" + std::string(name) + "' is not one of auto, spin, yield, block");
 #if HSI_RUNTIME_CUDA
-  using hsi::cuda::HostWait;
-  const HostWait w = name == "auto"    ? HostWait::Auto
-                     : name == "spin"  ? HostWait::Spin
-                     : name == "yield" ? HostWait::Yield
-                     : name == "block" ? HostWait::Block
-                                       : throw InputError("CUDA wait '" + std::string(name) + "' is not one of auto, spin, yield, block");
   std::string why;
-  return hsi::cuda::set_host_wait(w, &why) ? "" : why;
+  return hsi::cuda::set_host_wait(static_cast<hsi::cuda::HostWait>(it - std::begin(kNames)), &why) ? "" : why;
 #else
-  if (name != "auto" && name != "spin" && name != "yield" && name != "block")
-    throw InputError("CUDA wait '" + std::string(name) + "' is not one of auto, spin, yield, block");
   return built::kNoCuda;
 #endif
 }
