@@ -105,7 +105,7 @@ int main(int argc, char** argv) {
                  std::string("How the workers wait for the GPU, comma-separated: every W runs with each (") + runtime::kCudaWaitHelp + ")")
       ->delimiter(',')
       ->capture_default_str()
-      ->check(CLI::IsMember({"auto", "spin", "yield", "block"}));
+      ->check(CLI::IsMember(runtime::cuda_wait_names()));
   app.add_flag("--skip-single", skip_single, "Leave out the one-at-a-time path (the speed-up column is then empty)");
   CLI11_PARSE(app, argc, argv);
   std::vector<int> worker_counts;

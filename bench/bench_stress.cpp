@@ -51,6 +51,20 @@ std::vector<std::string> split(const std::string& s) {
   return out;
 }
 
+// A number in [0, 1], nan and trailing text refused (CLI::Range lets "nan" through: every
+// comparison with it is false); `zero` says what 0 means, in the message.
+CLI::Validator unit_interval(const std::string& zero) {
+  return CLI::Validator(
+      [zero](std::string& text) -> std::string {
+        char* end = nullptr;
+        const double r = std::strtod(text.c_str(), &end);
+        if (end == text.c_str() || *end != '\0' || !(r >= 0 && r <= 1))
+          return "expected a number in [0, 1] (" + zero + "), got '" + text + "'";
+        return {};
+      },
+      "in [0, 1]");
+}
+
 HessianProjection projection_from(const std::string& s) {
   if (s == "delete") return HessianProjection::Delete;
   if (s == "fullproj") return HessianProjection::FullProj;
@@ -225,15 +239,7 @@ int main(int argc, char** argv) {
   app.add_option("--hessian-ratio", hessian_ratio,
                  "The Hessian's share r of the samples G in the runs (0: each scene's own, default 0.2); authoring keeps the "
                  "scene's")
-      ->check(CLI::Validator(
-          [](std::string& text) -> std::string {  // CLI::Range lets "nan" through (every comparison is false)
-            char* end = nullptr;
-            const double r = std::strtod(text.c_str(), &end);
-            if (end == text.c_str() || *end != '\0' || !(r >= 0 && r <= 1))
-              return "expected a number in [0, 1] (0: each scene's own ratio), got '" + text + "'";
-            return {};
-          },
-          "in [0, 1]"));
+      ->check(unit_interval("0: each scene's own ratio"));
   app.add_option("--exact-samples", exact_samples,
                  "The samples the exact Newton systems' Hessians sum over in the runs (InterpolationOptions::exact_samples): "
                  "subset (H), subset-then-all (H, then all of G where H's is not positive definite), all (G), auto (the core's "
@@ -244,7 +250,7 @@ int main(int argc, char** argv) {
                  "Converged also when a projected system's decrement is below this fraction of the tolerance "
                  "(InterpolationOptions::projected_decrement_stop; 0: never)")
       ->capture_default_str()
-      ->check(CLI::Range(0.0, 1.0));
+      ->check(unit_interval("0: never"));
   app.add_flag("--no-chord", no_chord,
                "Sequences without chord steps (InterpolationOptions::chord_steps off): every frame's Newton systems built "
                "and factored at its own points, as before the chord steps");

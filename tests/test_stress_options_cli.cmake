@@ -16,6 +16,23 @@ foreach(bad 2 -0.5 nan inf abc 0.5x)
   endif()
 endforeach()
 
+# --projected-decrement-stop: the same refusal (nan included); a value given is the one
+# the JSON says ran.
+foreach(bad 2 -0.5 nan abc)
+  run(105 ${HSI_BENCH_STRESS} ${slice} --projected-decrement-stop "${bad}" --json ${W}/badp.json)
+  if(NOT RUN_OUTPUT MATCHES "--projected-decrement-stop: expected a number in \\[0, 1\\]" OR EXISTS ${W}/badp.json)
+    message(FATAL_ERROR "--projected-decrement-stop '${bad}' was not refused with a clear message, or ran")
+  endif()
+endforeach()
+run(0 ${HSI_BENCH_STRESS} ${slice} --projected-decrement-stop 0 --json ${W}/p0.json)
+file(READ ${W}/p0.json j)
+string(JSON pds GET "${j}" options projected_decrement_stop)
+string(JSON certified GET "${j}" total 0 certified)
+string(JSON frames GET "${j}" total 0 frames)
+if(NOT pds EQUAL 0 OR NOT certified EQUAL frames)
+  message(FATAL_ERROR "--projected-decrement-stop 0: the JSON says ${pds}, ${certified} of ${frames} certified")
+endif()
+
 # --frames takes counts >= 1 and 'mid' (each interval's midpoint solved cold).
 foreach(bad 0 -3 abc 5x mid2)
   run(2 ${HSI_BENCH_STRESS} --sequences annulus/hinge --samples 2000 --frames "${bad}" --jobs 1 --json ${W}/badf.json)

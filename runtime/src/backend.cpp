@@ -3,7 +3,6 @@
 #include "hsi/runtime/backend.h"
 
 #include <algorithm>
-#include <iterator>
 
 #include "built.h"
 #include "hsi/domain.h"
@@ -60,13 +59,18 @@ CudaStatus cuda_status() {
 const char* const kCudaWaitHelp =
     "How host threads wait for the GPU: auto (CUDA's choice: spin, one core busy per waiting thread), spin, yield or block";
 
+const std::vector<std::string>& cuda_wait_names() {
+  static const std::vector<std::string> names = {"auto", "spin", "yield", "block"};  // HostWait's order
+  return names;
+}
+
 std::string set_cuda_wait(std::string_view name) {
-  static constexpr std::string_view kNames[] = {"auto", "spin", "yield", "block"};  // HostWait's order
-  const auto it = std::find(std::begin(kNames), std::end(kNames), name);
-  if (it == std::end(kNames)) throw InputError("CUDA wait '" + std::string(name) + "' is not one of auto, spin, yield, block");
+  const std::vector<std::string>& names = cuda_wait_names();
+  const auto it = std::find(names.begin(), names.end(), name);
+  if (it == names.end()) throw InputError("CUDA wait '" + std::string(name) + "' is not one of auto, spin, yield, block");
 #if HSI_RUNTIME_CUDA
   std::string why;
-  return hsi::cuda::set_host_wait(static_cast<hsi::cuda::HostWait>(it - std::begin(kNames)), &why) ? "" : why;
+  return hsi::cuda::set_host_wait(static_cast<hsi::cuda::HostWait>(it - names.begin()), &why) ? "" : why;
 #else
   return built::kNoCuda;
 #endif

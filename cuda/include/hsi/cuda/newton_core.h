@@ -26,8 +26,8 @@ bool device_available(std::string* why = nullptr);
 // How host threads wait for this device's work (the CUDA context's scheduling flag;
 // cudaSetDeviceFlags): Auto is CUDA's heuristic, which spins while the process has fewer
 // contexts than the machine has cores (always, for us): each waiting thread keeps a core
-// busy. A batch with as many workers as cores (hsi/batch.h) then leaves none to the
-// sequences' crossing searches; Yield or Block frees them at some latency per wait.
+// busy; Yield and Block free it at some latency per wait. (Measured for a batch with as
+// many workers as cores, bench_batch --cuda-wait on one H200: no difference.)
 enum class HostWait { Auto, Spin, Yield, Block };
 // Sets it for the current device, whether or not its context exists yet; false (and
 // `why`) where CUDA refuses. Applies to every thread's later waits.

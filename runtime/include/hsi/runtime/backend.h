@@ -39,9 +39,12 @@ struct CudaStatus {
 CudaStatus cuda_status();
 
 // How host threads wait for the GPU (hsi::cuda::HostWait): auto (CUDA's heuristic: spin,
-// a core busy per waiting thread), spin, yield or block. For batches with as many
-// workers as cores (bench_batch --cuda-wait). "" when set, else why not (no CUDA in this
-// build, or CUDA refused). Throws InputError for a name not among these four.
+// a core busy per waiting thread), spin, yield or block; cuda_wait_names() in that order
+// (for an option's check). bench_batch --cuda-wait compares them: on one H200 with 16
+// workers on 16 cores they made no difference (2,131-2,188 frames/s, README). "" when
+// set, else why not (no CUDA in this build, or CUDA refused). Throws InputError for a
+// name not among these four.
+const std::vector<std::string>& cuda_wait_names();
 std::string set_cuda_wait(std::string_view name);
 extern const char* const kCudaWaitHelp;
 
