@@ -47,14 +47,43 @@ std::vector<int> parse_list(const std::string& s) {
   return out;
 }
 
+// A frame's wall clock split into its parts (FrameResult::parts, the solve by
+// NewtonResult::timing), summed over the frames that were solved (keyframes and held
+// frames cost nothing and are left out).
+struct PartSums {
+  size_t solved = 0;
+  double iterations = 0, ms = 0, targets = 0, solve = 0, pose = 0, image = 0, crossings = 0, crossings_wait = 0, distortion = 0;
+  NewtonResult::Timing t;
+  void add(const FrameResult& f) {
+    if (f.keyframe || f.held) return;  // the keyframe itself: nothing solved
+    ++solved;
+    iterations += f.iterations;
+    ms += f.ms;
+    targets += f.parts.targets;
+    solve += f.parts.solve;
+    pose += f.parts.pose;
+    image += f.parts.image;
+    crossings += f.parts.crossings;
+    crossings_wait += f.parts.crossings_wait;
+    distortion += f.parts.distortion;
+    t.energy_gradient += f.timing.energy_gradient;
+    t.hessian += f.timing.hessian;
+    t.solve += f.timing.solve;
+    t.line_search += f.timing.line_search;
+    t.certificate += f.timing.certificate;
+  }
+};
+
 struct Row {
   std::string path;
   int workers = 0;
   size_t frames = 0, certified = 0, converged = 0, failed = 0;
+  PartSums parts;
   double seconds = 0, set_up_s = 0;
   int cores = 0, runs = 0, interpolators = 0;
   std::string wait = "-";  // the CUDA wait (--cuda-wait); "-" on the CPU
-  std::string same;  // identical to the first batch row
+  std::string exact;       // the exact systems' samples (--exact-samples)
+  std::string same;  // identical to the first batch row of the same --exact-samples
 };
 
 void count(Row& row, const std::vector<FrameResult>& frames) {
@@ -62,6 +91,7 @@ void count(Row& row, const std::vector<FrameResult>& frames) {
   for (const FrameResult& f : frames) {
     row.certified += f.certified;
     row.converged += f.converged;
+    row.parts.add(f);
   }
 }
 
@@ -89,6 +119,7 @@ int main(int argc, char** argv) {
   double ratio = 0;
   bool skip_single = false;
   std::vector<std::string> waits = {"auto"};
+  std::vector<std::string> exacts = {to_string(InterpolationOptions{}.exact_samples)};
   app.add_option("--backend", backend, runtime::kBackendHelp)->capture_default_str()->check(CLI::IsMember(runtime::backend_names()));
   app.add_option("--workers", workers_list, "Batch worker counts W, comma-separated")->capture_default_str();
   app.add_option("--sequences", sequences, "Sequences S, made from the bundled scenes in turn")->capture_default_str()->check(CLI::Range(1, 100000));
@@ -106,6 +137,13 @@ int main(int argc, char** argv) {
       ->delimiter(',')
       ->capture_default_str()
       ->check(CLI::IsMember(runtime::cuda_wait_names()));
+  app.add_option("--exact-samples", exacts,
+                 "The samples the frames' exact Newton systems sum over, comma-separated: every W runs with each "
+                 "(InterpolationOptions::exact_samples: subset, subset-then-all, all, auto = the core's choice; the "
+                 "one-at-a-time path runs the first)")
+      ->delimiter(',')
+      ->capture_default_str()
+      ->check(CLI::IsMember({"subset", "subset-then-all", "all", "auto"}));
   app.add_flag("--skip-single", skip_single, "Leave out the one-at-a-time path (the speed-up column is then empty)");
   CLI11_PARSE(app, argc, argv);
   std::vector<int> worker_counts;
@@ -162,6 +200,7 @@ int main(int argc, char** argv) {
     // missed: one run); odd: every keyframe time a frame (a run per interval).
     const int intervals = static_cast<int>(L.times.size()) - 1;
     q.times = repeat % 2 == 0 ? sequence_times(L.times, F) : frame_times(L.times, std::max(1, (F - 1) / intervals));
+    q.options.exact_samples = parse_exact_samples(exacts.front());
     batch.push_back(std::move(q));
   }
   size_t total = 0;
@@ -195,6 +234,7 @@ int main(int argc, char** argv) {
     Row row;
     row.path = "one at a time";
     row.workers = 1;
+    row.exact = exacts.front();
     const auto t0 = Clock::now();
     for (const BatchSequence& q : batch) {
       const auto ts = Clock::now();
@@ -210,52 +250,56 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "\n");
     rows.push_back(row);
   }
-  std::vector<BatchSequenceResult> first;
   const bool on_gpu = choice.used == runtime::Backend::Cuda;
-  for (const std::string& wait : on_gpu ? waits : std::vector<std::string>{"-"})
-    for (int W : worker_counts) {
-      if (on_gpu)
-        if (const std::string why = runtime::set_cuda_wait(wait); !why.empty()) {
-          std::fprintf(stderr, "bench_batch: --cuda-wait %s: %s\n", wait.c_str(), why.c_str());
-          return 1;
+  for (const std::string& exact : exacts) {
+    for (BatchSequence& q : batch) q.options.exact_samples = parse_exact_samples(exact);
+    std::vector<BatchSequenceResult> first;  // this setting's first batch row
+    for (const std::string& wait : on_gpu ? waits : std::vector<std::string>{"-"})
+      for (int W : worker_counts) {
+        if (on_gpu)
+          if (const std::string why = runtime::set_cuda_wait(wait); !why.empty()) {
+            std::fprintf(stderr, "bench_batch: --cuda-wait %s: %s\n", wait.c_str(), why.c_str());
+            return 1;
+          }
+        BatchOptions o;
+        o.workers = W;
+        o.threads_per_worker = threads_per_worker;
+        o.make_core = make_core;
+        const BatchResult r = solve_batch(batch, o, [&](const FrameResult&, int, int, size_t done, size_t all) {
+          if (done % 100 == 0 || done == all) std::fprintf(stderr, "\r[batch W = %d, wait %s, exact %s] %zu/%zu frames   ", W, wait.c_str(), exact.c_str(), done, all);
+          return true;
+        });
+        std::fprintf(stderr, "\n");
+        Row row;
+        row.path = "batch";
+        row.wait = wait;
+        row.exact = exact;
+        row.workers = r.stats.workers;
+        row.seconds = r.stats.seconds;
+        row.set_up_s = r.stats.set_up_s;
+        row.cores = r.stats.cores_made;
+        row.interpolators = r.stats.interpolators_built;
+        row.runs = r.stats.runs;
+        for (const BatchSequenceResult& s : r.sequences) {
+          count(row, s.frames);
+          if (!s.error.empty()) {
+            ++row.failed;
+            std::fprintf(stderr, "bench_batch: W = %d: %s\n", W, s.error.c_str());
+          }
         }
-      BatchOptions o;
-      o.workers = W;
-      o.threads_per_worker = threads_per_worker;
-      o.make_core = make_core;
-      const BatchResult r = solve_batch(batch, o, [&](const FrameResult&, int, int, size_t done, size_t all) {
-        if (done % 100 == 0 || done == all) std::fprintf(stderr, "\r[batch W = %d, wait %s] %zu/%zu frames   ", W, wait.c_str(), done, all);
-        return true;
-      });
-      std::fprintf(stderr, "\n");
-      Row row;
-      row.path = "batch";
-      row.wait = wait;
-      row.workers = r.stats.workers;
-      row.seconds = r.stats.seconds;
-      row.set_up_s = r.stats.set_up_s;
-      row.cores = r.stats.cores_made;
-      row.interpolators = r.stats.interpolators_built;
-      row.runs = r.stats.runs;
-      for (const BatchSequenceResult& s : r.sequences) {
-        count(row, s.frames);
-        if (!s.error.empty()) {
-          ++row.failed;
-          std::fprintf(stderr, "bench_batch: W = %d: %s\n", W, s.error.c_str());
+        if (first.empty()) {
+          first = r.sequences;
+          row.same = "(first)";
+        } else {
+          row.same = same_frames(first, r.sequences) ? "yes" : "NO";
         }
+        rows.push_back(row);
       }
-      if (first.empty()) {
-        first = r.sequences;
-        row.same = "(first)";
-      } else {
-        row.same = same_frames(first, r.sequences) ? "yes" : "NO";
-      }
-      rows.push_back(row);
-    }
+  }
 
   const double base = skip_single ? 0 : static_cast<double>(rows.front().frames) / rows.front().seconds;
-  std::printf("| path | CUDA wait | W | frames | s | frames/s | speed-up | set-up s (summed) | cores made | interpolators | runs | certified | converged | same frames as first batch row |\n");
-  std::printf("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
+  std::printf("| path | exact systems | CUDA wait | W | frames | s | frames/s | speed-up | set-up s (summed) | cores made | interpolators | runs | certified | converged | same frames as first batch row |\n");
+  std::printf("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
   bool all_certified = true;
   for (const Row& r : rows) {
     const double fps = static_cast<double>(r.frames) / std::max(r.seconds, 1e-12);
@@ -263,9 +307,26 @@ int main(int argc, char** argv) {
     all_certified = all_certified && every;
     char speed[32] = "";
     if (base > 0) std::snprintf(speed, sizeof speed, "%.2fx", fps / base);
-    std::printf("| %s | %s | %d | %zu | %.2f | %.0f | %s | %.2f | %d | %d | %d | %zu%s | %zu | %s |\n", r.path.c_str(), r.wait.c_str(), r.workers,
+    std::printf("| %s | %s | %s | %d | %zu | %.2f | %.0f | %s | %.2f | %d | %d | %d | %zu%s | %zu | %s |\n", r.path.c_str(), r.exact.c_str(),
+                r.wait.c_str(), r.workers,
                 r.frames, r.seconds, fps, speed, r.set_up_s, r.cores, r.interpolators, r.runs, r.certified, every ? "" : " (NOT ALL CERTIFIED)", r.converged,
                 r.same.empty() ? "-" : r.same.c_str());
+  }
+  // Where a solved frame's wall clock goes, per row: what grows with W is what the
+  // workers contend for.
+  std::printf("\nWhere a solved frame's time goes (mean ms per solved frame, each part timed apart on the worker's thread; "
+              "crossings ran on a thread of their own, wait is what the worker waited for them; solve = E+grad + Hessian + "
+              "factor + line search + certificate):\n\n");
+  std::printf("| path | exact systems | CUDA wait | W | solved frames | it/frame | frame | targets | solve | E+grad | Hessian | factor | "
+              "line search | certificate | pose | image | crossings | wait | distortion |\n");
+  std::printf("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
+  for (const Row& r : rows) {
+    const PartSums& p = r.parts;
+    const double k = 1.0 / static_cast<double>(std::max<size_t>(p.solved, 1));
+    std::printf("| %s | %s | %s | %d | %zu | %.2f | %.3f | %.3f | %.3f | %.3f | %.3f | %.3f | %.3f | %.3f | %.3f | %.3f | %.3f | %.3f | %.3f |\n",
+                r.path.c_str(), r.exact.c_str(), r.wait.c_str(), r.workers, p.solved, p.iterations * k, p.ms * k, p.targets * k,
+                p.solve * k, p.t.energy_gradient * k, p.t.hessian * k, p.t.solve * k, p.t.line_search * k, p.t.certificate * k,
+                p.pose * k, p.image * k, p.crossings * k, p.crossings_wait * k, p.distortion * k);
   }
   std::printf("\n%s\n", all_certified ? "every frame of every path certified" : "SOME FRAMES NOT CERTIFIED (or sequences failed): see the table");
   return all_certified ? 0 : 3;

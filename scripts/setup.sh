@@ -2,7 +2,7 @@
 # Installs the Debian 12 packages hsi needs (idempotent; skips what is present).
 set -euo pipefail
 pkgs=(
-  build-essential cmake ninja-build pkg-config
+  build-essential cmake ninja-build pkg-config ccache
   libeigen3-dev catch2 nlohmann-json3-dev libcli11-dev libstb-dev libpng-dev
   libfreetype-dev fonts-dejavu-core libcgal-dev libpolyclipping-dev libcairo2-dev
   python3 python3-numpy

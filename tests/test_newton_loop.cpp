@@ -1144,3 +1144,46 @@ TEST_CASE("newton_run: projected_decrement_stop ends a solve whose projected dec
   CHECK(stiff.iterations == 0);
   CHECK(stiff.converged);
 }
+
+TEST_CASE("newton_run: checked_decrement_stop ends a solve whose projected decrement, scaled by the last step's model error, is below the tolerance",
+          "[newton][loop]") {
+  // The exact system never factors (near-rigid maps, issue #20). A projection `stiff`
+  // times the curvature (A = I): a full step leaves e(1 − 1/stiff) of the error e and
+  // lowers the energy by r = 2 − 1/stiff times its model's decrement, so the next
+  // decrement understates what is left by 1/(2 − r) = stiff.
+  const double tol = NewtonOptions{}.tolerance * 2;  // tolerance·|E| at E ≈ 2
+  const auto solve = [&](double stiff, double second_share, bool rule) {
+    FakeStepper f;
+    f.exact_definite = false;
+    f.projected_scale = {stiff, stiff};
+    NewtonOptions o;
+    o.checked_decrement_stop = rule;
+    o.expand_ratio = 0;  // full steps only: the rule reads the previous one
+    // The second system's decrement |e1|²/(2 stiff) is second_share of the tolerance.
+    const double e1 = std::sqrt(2 * stiff * second_share * tol), e0 = e1 / (1 - 1 / stiff);
+    return newton_run(f, true, true, f.a + Eigen::Vector2d(e0, 0), o);
+  };
+  // A model 5 % too stiff: the second decrement, 50 % of the tolerance, is 52.5 % once
+  // scaled: converged after one step. Without the rule the second step is taken.
+  {
+    const NewtonResult on = solve(1.05, 0.5, true);
+    CHECK(on.converged);
+    CHECK(on.iterations == 1);
+    CHECK(on.message.find("scaled by the last step's model error") != std::string::npos);
+    CHECK(on.energy - 2 < tol);  // what the stop left: below the tolerance
+    const NewtonResult off = solve(1.05, 0.5, false);
+    CHECK(off.converged);
+    CHECK(off.iterations == 2);
+    CHECK(off.message.find("scaled by the last step's model error") == std::string::npos);
+  }
+  // Ten times too stiff: the same share is 5 tolerances once scaled, so the step is
+  // taken (and later ones, until what is left is below the tolerance).
+  {
+    const NewtonResult stiff = solve(10, 0.5, true);
+    CHECK(stiff.iterations >= 2);
+    CHECK(stiff.converged);
+    CHECK(stiff.energy - 2 < tol);
+  }
+  // A second decrement above the tolerance is never scaled below it.
+  CHECK(solve(1.05, 1.5, true).iterations >= 2);
+}

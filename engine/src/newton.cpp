@@ -604,6 +604,18 @@ NewtonResult newton_run(NewtonStepper& st, bool certify, bool rotation_invariant
       res.message = "converged (projected Newton decrement below its share of the tolerance)";
       break;
     }
+    // The same with the stiffness the previous full step showed (NewtonOptions::
+    // checked_decrement_stop): its decrease over its model's, r, says the model's
+    // decrement understates what the energy offers by 1/(2 − r).
+    if (!log.exact_hessian && !log.chord && opt.checked_decrement_stop && prev && prev->step == 1.0 && prev->backtracks == 0 &&
+        prev->decrement2 > 0 && dE_prev > 0) {
+      const double r = std::max(1.0, dE_prev / (prev->decrement2 / 2));
+      if (r < 2 && -slope / 2 / (2 - r) < opt.tolerance * std::max(std::abs(E), 1e-300)) {
+        res.stop = NewtonStop::Converged;
+        res.message = "converged (projected Newton decrement, scaled by the last step's model error, below tolerance)";
+        break;
+      }
+    }
 
     // 2. Armijo backtracking from min(1, safe_fraction · s_max); a step is taken only if
     //    the certificate passes at the new map.

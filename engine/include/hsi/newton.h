@@ -223,6 +223,21 @@ struct NewtonOptions {
   // (in the traces: what its model predicted, ~1e-9 at E = 2) stops it. Interpolation
   // sets 0.01 (InterpolationOptions::projected_decrement_stop, measured there); authoring 0.
   double projected_decrement_stop = 0;
+  // Also converged: a projected system (not a chord one) whose decrement −gᵀd/2, scaled
+  // by how far the previous step's model understated its own decrease, is below
+  // tolerance·|E|. The previous step must be a full one (step 1, no backtrack) of this
+  // solve; with r its decrease over its model's −gᵀd/2, a quadratic model of curvature
+  // κ_m along its direction against the energy's κ gives r = 2 − κ/κ_m, so along it the
+  // energy offers 1/(2 − r) times what the model says (r ≤ 1, a model no stiffer than the
+  // energy: the decrement as it is; r ≥ 2: no stop). The 1 % of projected_decrement_stop
+  // is a margin for a stiffness not yet seen; this rule uses the one the solve has seen.
+  // Near-rigid frames (issue #20, bench_stress --trace, arm/drag with PartProj, CPU core,
+  // exact systems over G): the exact system over G never factors, every frame's first
+  // projected step lowers the energy by what its model said (r ≈ 1) and a second one by
+  // 3e-9 at a tolerance·|E| of 1e-7, a step the decrement below the tolerance already
+  // said was not worth taking. Interpolation turns it on
+  // (InterpolationOptions::checked_decrement_stop); authoring leaves it off.
+  bool checked_decrement_stop = false;
   HessianProjection projection = HessianProjection::PartProj;
   // Once a full step was taken (or, with exact_after_cut, a projected step that Armijo
   // cut), use the unprojected Hessian whenever its reduced system is positive definite
