@@ -83,6 +83,7 @@ struct Row {
   int cores = 0, runs = 0, interpolators = 0;
   std::string wait = "-";  // the CUDA wait (--cuda-wait); "-" on the CPU
   std::string exact;       // the exact systems' samples (--exact-samples)
+  std::string image;       // where the boundary's image is made (--image)
   std::string same;  // identical to the first batch row of the same --exact-samples
 };
 
@@ -120,6 +121,7 @@ int main(int argc, char** argv) {
   bool skip_single = false;
   std::vector<std::string> waits = {"auto"};
   std::vector<std::string> exacts = {to_string(InterpolationOptions{}.exact_samples)};
+  std::vector<std::string> images = {"backend"};
   app.add_option("--backend", backend, runtime::kBackendHelp)->capture_default_str()->check(CLI::IsMember(runtime::backend_names()));
   app.add_option("--workers", workers_list, "Batch worker counts W, comma-separated")->capture_default_str();
   app.add_option("--sequences", sequences, "Sequences S, made from the bundled scenes in turn")->capture_default_str()->check(CLI::Range(1, 100000));
@@ -144,6 +146,13 @@ int main(int argc, char** argv) {
       ->delimiter(',')
       ->capture_default_str()
       ->check(CLI::IsMember({"subset", "subset-then-all", "all", "auto"}));
+  app.add_option("--image", images,
+                 "Where each frame's image of the boundary (the overlap check's points) is made, comma-separated: every W "
+                 "runs with each (backend: on the core's backend, as hsi bake and the C API; host: the setup's CPU "
+                 "evaluator, on the worker's thread; the one-at-a-time path runs the first)")
+      ->delimiter(',')
+      ->capture_default_str()
+      ->check(CLI::IsMember({"backend", "host"}));
   app.add_flag("--skip-single", skip_single, "Leave out the one-at-a-time path (the speed-up column is then empty)");
   CLI11_PARSE(app, argc, argv);
   std::vector<int> worker_counts;
@@ -163,8 +172,12 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "bench_batch: %s\n", e.what());
     return 1;
   }
-  const BatchCoreFactory make_core = [used = choice.used, cuda](const ShapeSetup& setup) {
-    return runtime::make_newton_core(setup, used, cuda, false).core;
+  // The factories hsi bake and the C API use: the core, and on CUDA the image of the
+  // boundary on the GPU (--image host leaves it to the setup's CPU evaluator).
+  BatchOptions factories;
+  runtime::set_batch_backend(factories, choice.used, cuda);
+  const auto boundary_of = [&](const ShapeSetup& setup, bool host) {
+    return host || !factories.make_boundary ? nullptr : factories.make_boundary(setup);
   };
 
   // The scenes, then the sequences.
@@ -225,7 +238,7 @@ int main(int argc, char** argv) {
   // Warm-up outside every timing: libraries loaded, the first core's modules.
   {
     const BatchSequence& q = batch.front();
-    Interpolator I(*q.setup, q.key_times, q.keyframes, q.options, make_core(*q.setup));
+    Interpolator I(*q.setup, q.key_times, q.keyframes, q.options, factories.make_core(*q.setup), boundary_of(*q.setup, false));
     I.sequence(std::vector<double>(q.times.begin(), q.times.begin() + std::min<size_t>(3, q.times.size())));
   }
 
@@ -235,10 +248,12 @@ int main(int argc, char** argv) {
     row.path = "one at a time";
     row.workers = 1;
     row.exact = exacts.front();
+    row.image = images.front();
     const auto t0 = Clock::now();
     for (const BatchSequence& q : batch) {
       const auto ts = Clock::now();
-      Interpolator I(*q.setup, q.key_times, q.keyframes, q.options, make_core(*q.setup));
+      Interpolator I(*q.setup, q.key_times, q.keyframes, q.options, factories.make_core(*q.setup),
+                     boundary_of(*q.setup, images.front() == "host"));
       row.set_up_s += s_since(ts);
       ++row.cores;
       ++row.interpolators;
@@ -251,55 +266,59 @@ int main(int argc, char** argv) {
     rows.push_back(row);
   }
   const bool on_gpu = choice.used == runtime::Backend::Cuda;
-  for (const std::string& exact : exacts) {
-    for (BatchSequence& q : batch) q.options.exact_samples = parse_exact_samples(exact);
-    std::vector<BatchSequenceResult> first;  // this setting's first batch row
-    for (const std::string& wait : on_gpu ? waits : std::vector<std::string>{"-"})
-      for (int W : worker_counts) {
-        if (on_gpu)
-          if (const std::string why = runtime::set_cuda_wait(wait); !why.empty()) {
-            std::fprintf(stderr, "bench_batch: --cuda-wait %s: %s\n", wait.c_str(), why.c_str());
-            return 1;
+  for (const std::string& exact : exacts)
+    for (const std::string& image : images) {
+      for (BatchSequence& q : batch) q.options.exact_samples = parse_exact_samples(exact);
+      std::vector<BatchSequenceResult> first;  // this setting's first batch row
+      for (const std::string& wait : on_gpu ? waits : std::vector<std::string>{"-"})
+        for (int W : worker_counts) {
+          if (on_gpu)
+            if (const std::string why = runtime::set_cuda_wait(wait); !why.empty()) {
+              std::fprintf(stderr, "bench_batch: --cuda-wait %s: %s\n", wait.c_str(), why.c_str());
+              return 1;
+            }
+          BatchOptions o;
+          o.workers = W;
+          o.threads_per_worker = threads_per_worker;
+          o.make_core = factories.make_core;
+          o.make_boundary = image == "host" ? nullptr : factories.make_boundary;
+          const BatchResult r = solve_batch(batch, o, [&](const FrameResult&, int, int, size_t done, size_t all) {
+            if (done % 100 == 0 || done == all) std::fprintf(stderr, "\r[batch W = %d, wait %s, exact %s, image %s] %zu/%zu frames   ", W, wait.c_str(), exact.c_str(),
+                                                     image.c_str(), done, all);
+            return true;
+          });
+          std::fprintf(stderr, "\n");
+          Row row;
+          row.path = "batch";
+          row.wait = wait;
+          row.exact = exact;
+          row.image = image;
+          row.workers = r.stats.workers;
+          row.seconds = r.stats.seconds;
+          row.set_up_s = r.stats.set_up_s;
+          row.cores = r.stats.cores_made;
+          row.interpolators = r.stats.interpolators_built;
+          row.runs = r.stats.runs;
+          for (const BatchSequenceResult& s : r.sequences) {
+            count(row, s.frames);
+            if (!s.error.empty()) {
+              ++row.failed;
+              std::fprintf(stderr, "bench_batch: W = %d: %s\n", W, s.error.c_str());
+            }
           }
-        BatchOptions o;
-        o.workers = W;
-        o.threads_per_worker = threads_per_worker;
-        o.make_core = make_core;
-        const BatchResult r = solve_batch(batch, o, [&](const FrameResult&, int, int, size_t done, size_t all) {
-          if (done % 100 == 0 || done == all) std::fprintf(stderr, "\r[batch W = %d, wait %s, exact %s] %zu/%zu frames   ", W, wait.c_str(), exact.c_str(), done, all);
-          return true;
-        });
-        std::fprintf(stderr, "\n");
-        Row row;
-        row.path = "batch";
-        row.wait = wait;
-        row.exact = exact;
-        row.workers = r.stats.workers;
-        row.seconds = r.stats.seconds;
-        row.set_up_s = r.stats.set_up_s;
-        row.cores = r.stats.cores_made;
-        row.interpolators = r.stats.interpolators_built;
-        row.runs = r.stats.runs;
-        for (const BatchSequenceResult& s : r.sequences) {
-          count(row, s.frames);
-          if (!s.error.empty()) {
-            ++row.failed;
-            std::fprintf(stderr, "bench_batch: W = %d: %s\n", W, s.error.c_str());
+          if (first.empty()) {
+            first = r.sequences;
+            row.same = "(first)";
+          } else {
+            row.same = same_frames(first, r.sequences) ? "yes" : "NO";
           }
+          rows.push_back(row);
         }
-        if (first.empty()) {
-          first = r.sequences;
-          row.same = "(first)";
-        } else {
-          row.same = same_frames(first, r.sequences) ? "yes" : "NO";
-        }
-        rows.push_back(row);
-      }
-  }
+    }
 
   const double base = skip_single ? 0 : static_cast<double>(rows.front().frames) / rows.front().seconds;
-  std::printf("| path | exact systems | CUDA wait | W | frames | s | frames/s | speed-up | set-up s (summed) | cores made | interpolators | runs | certified | converged | same frames as first batch row |\n");
-  std::printf("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
+  std::printf("| path | exact systems | image | CUDA wait | W | frames | s | frames/s | speed-up | set-up s (summed) | cores made | interpolators | runs | certified | converged | same frames as first batch row |\n");
+  std::printf("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
   bool all_certified = true;
   for (const Row& r : rows) {
     const double fps = static_cast<double>(r.frames) / std::max(r.seconds, 1e-12);
@@ -307,8 +326,8 @@ int main(int argc, char** argv) {
     all_certified = all_certified && every;
     char speed[32] = "";
     if (base > 0) std::snprintf(speed, sizeof speed, "%.2fx", fps / base);
-    std::printf("| %s | %s | %s | %d | %zu | %.2f | %.0f | %s | %.2f | %d | %d | %d | %zu%s | %zu | %s |\n", r.path.c_str(), r.exact.c_str(),
-                r.wait.c_str(), r.workers,
+    std::printf("| %s | %s | %s | %s | %d | %zu | %.2f | %.0f | %s | %.2f | %d | %d | %d | %zu%s | %zu | %s |\n", r.path.c_str(),
+                r.exact.c_str(), r.image.c_str(), r.wait.c_str(), r.workers,
                 r.frames, r.seconds, fps, speed, r.set_up_s, r.cores, r.interpolators, r.runs, r.certified, every ? "" : " (NOT ALL CERTIFIED)", r.converged,
                 r.same.empty() ? "-" : r.same.c_str());
   }
@@ -317,14 +336,14 @@ int main(int argc, char** argv) {
   std::printf("\nWhere a solved frame's time goes (mean ms per solved frame, each part timed apart on the worker's thread; "
               "crossings ran on a thread of their own, wait is what the worker waited for them; solve = E+grad + Hessian + "
               "factor + line search + certificate):\n\n");
-  std::printf("| path | exact systems | CUDA wait | W | solved frames | it/frame | frame | targets | solve | E+grad | Hessian | factor | "
+  std::printf("| path | exact systems | image | CUDA wait | W | solved frames | it/frame | frame | targets | solve | E+grad | Hessian | factor | "
               "line search | certificate | pose | image | crossings | wait | distortion |\n");
-  std::printf("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
+  std::printf("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
   for (const Row& r : rows) {
     const PartSums& p = r.parts;
     const double k = 1.0 / static_cast<double>(std::max<size_t>(p.solved, 1));
-    std::printf("| %s | %s | %s | %d | %zu | %.2f | %.3f | %.3f | %.3f | %.3f | %.3f | %.3f | %.3f | %.3f | %.3f | %.3f | %.3f | %.3f | %.3f |\n",
-                r.path.c_str(), r.exact.c_str(), r.wait.c_str(), r.workers, p.solved, p.iterations * k, p.ms * k, p.targets * k,
+    std::printf("| %s | %s | %s | %s | %d | %zu | %.2f | %.3f | %.3f | %.3f | %.3f | %.3f | %.3f | %.3f | %.3f | %.3f | %.3f | %.3f | %.3f | %.3f |\n",
+                r.path.c_str(), r.exact.c_str(), r.image.c_str(), r.wait.c_str(), r.workers, p.solved, p.iterations * k, p.ms * k, p.targets * k,
                 p.solve * k, p.t.energy_gradient * k, p.t.hessian * k, p.t.solve * k, p.t.line_search * k, p.t.certificate * k,
                 p.pose * k, p.image * k, p.crossings * k, p.crossings_wait * k, p.distortion * k);
   }

@@ -211,7 +211,7 @@ void bake_many(const BakeOpts& o) {
   // One OpenMP thread each: W workers use W cores, and the frames (whose CPU energy sums
   // follow the OpenMP thread count) are the same for any --jobs.
   bo.threads_per_worker = 1;
-  bo.make_core = [used = choice.used, cuda](const ShapeSetup& setup) { return runtime::make_newton_core(setup, used, cuda, false).core; };
+  runtime::set_batch_backend(bo, choice.used, cuda);
   size_t total = 0;
   for (const BatchSequence& q : batch) total += q.times.size();
   std::printf("baking %zu scene(s), %zu frames: %d worker(s) x %d OpenMP thread(s), Newton core: %s\n", batch.size(), total,

@@ -2,6 +2,7 @@
 // pool of workers gives every sequence's frames bit-identical to Interpolator::sequence;
 // a sequence that fails is named while the others finish.
 #include <catch2/catch.hpp>
+#include <atomic>
 #include <map>
 
 #ifdef _OPENMP
@@ -145,6 +146,42 @@ TEST_CASE("a sequence that fails is named while the others finish", "[batch]") {
   CHECK_THROWS_WITH(solve_batch(sequences, none), Contains("at least 1 worker"));
 }
 
+TEST_CASE("a batch's boundary evaluators: one per worker and shape, lent to its interpolators; a wrong one is named", "[batch]") {
+  std::vector<BatchSequence> sequences;
+  sequences.push_back(sequence_of("annulus", {}, sequence_times({0, 2}, 6)));
+  sequences.push_back(sequence_of("two_holes", {}, sequence_times({0, 2}, 5)));
+  sequences.push_back(sequence_of("annulus", {}, frame_times({0, 1, 2}, 3)));  // the first one's shape again
+  BatchOptions plain;
+  plain.workers = 1;
+  const BatchResult reference = solve_batch(sequences, plain);
+  REQUIRE(reference.failed() == 0);
+  // The setup's own CPU evaluator and one made anew at its breakpoints give the same image:
+  // the frames are those of the batch without a factory, bit for bit.
+  std::atomic<int> made{0};
+  BatchOptions lent = plain;
+  lent.make_boundary = [&](const ShapeSetup& setup) {
+    ++made;
+    return make_cpu_mesh_evaluator(setup.cage, setup.overlap.breakpoints().points);
+  };
+  const BatchResult r = solve_batch(sequences, lent);
+  REQUIRE(r.failed() == 0);
+  CHECK(made.load() == r.stats.cores_made);  // with each core, not with each Interpolator
+  CHECK(r.stats.interpolators_built > made.load());
+  for (size_t s = 0; s < sequences.size(); ++s) {
+    REQUIRE(r.sequences[s].frames.size() == reference.sequences[s].frames.size());
+    for (size_t i = 0; i < r.sequences[s].frames.size(); ++i) require_same(r.sequences[s].frames[i], reference.sequences[s].frames[i]);
+  }
+  // An evaluator made for other points fails its sequences with the reason; none crashes.
+  BatchOptions wrong = plain;
+  wrong.make_boundary = [](const ShapeSetup& setup) {
+    const std::vector<cd> few(setup.overlap.breakpoints().points.begin(), setup.overlap.breakpoints().points.begin() + 3);
+    return make_cpu_mesh_evaluator(setup.cage, few);
+  };
+  const BatchResult bad = solve_batch(sequences, wrong);
+  CHECK(bad.failed() == 3);
+  CHECK_THAT(bad.sequences[0].error, Contains("annulus") && Contains("boundary evaluator is made for 3"));
+}
+
 TEST_CASE("a batch cancelled by its progress callback reports its unfinished sequences", "[batch]") {
   std::vector<BatchSequence> sequences;
   for (int k = 0; k < 3; ++k) sequences.push_back(sequence_of("two_holes", {}, sequence_times({0, 2}, 6)));
@@ -166,9 +203,11 @@ TEST_CASE("a batch on CUDA cores gives the frames of Interpolator::sequence on a
     WARN("no CUDA core here: " << cuda.detail);
     return;
   }
-  const BatchCoreFactory make_core = [cuda](const ShapeSetup& setup) {
-    return runtime::make_newton_core(setup, runtime::Backend::Cuda, cuda).core;
-  };
+  // The batch's factories as hsi bake and the C API set them (the core, the image on the
+  // GPU), against one Interpolator per sequence made as hsi interpolate makes it.
+  BatchOptions o;
+  runtime::set_batch_backend(o, runtime::Backend::Cuda, cuda);
+  REQUIRE(o.make_boundary);
   std::vector<BatchSequence> sequences;
   sequences.push_back(sequence_of("annulus", {KeyTiming::Linear, KeyTiming::Hold, KeyTiming::Linear}, frame_times({0, 1, 2}, 4)));
   sequences.push_back(sequence_of("glyph_8", {KeyTiming::Smooth}, frame_times({0, 1, 2}, 5)));
@@ -177,15 +216,15 @@ TEST_CASE("a batch on CUDA cores gives the frames of Interpolator::sequence on a
   {
     const OneThread one;
     for (const BatchSequence& q : sequences) {
-      Interpolator I(*q.setup, q.key_times, q.keyframes, q.options, make_core(*q.setup));
+      runtime::NewtonCoreChoice made = runtime::make_newton_core(*q.setup, runtime::Backend::Cuda, cuda);
+      REQUIRE(made.boundary);
+      Interpolator I(*q.setup, q.key_times, q.keyframes, q.options, std::move(made.core), std::move(made.boundary));
       reference.push_back(I.sequence(q.times));
     }
   }
   for (int workers : {1, 4}) {
     INFO("workers = " << workers);
-    BatchOptions o;
     o.workers = workers;
-    o.make_core = make_core;
     const BatchResult r = solve_batch(sequences, o);
     for (const auto& q : r.sequences) CHECK(q.error == "");
     REQUIRE(r.failed() == 0);

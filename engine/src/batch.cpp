@@ -215,6 +215,7 @@ BatchResult solve_batch(const std::vector<BatchSequence>& sequences, const Batch
     if (options.threads_per_worker > 0) omp_set_num_threads(options.threads_per_worker);  // this thread's parallel regions only
 #endif
     std::map<const ShapeSetup*, std::unique_ptr<NewtonCore>> cores;
+    std::map<const ShapeSetup*, std::unique_ptr<MeshEvaluator>> boundaries;  // made with the cores (null: the setup's)
     std::unique_ptr<Interpolator> interp;
     int interp_sequence = -1, sequence = -1, group = -1;
     int cores_made = 0, built = 0;
@@ -232,8 +233,12 @@ BatchResult solve_batch(const std::vector<BatchSequence>& sequences, const Batch
             core = options.make_core ? options.make_core(*q.setup) : make_cpu_newton_core(q.setup->D_G, q.setup->H);
             if (!core) throw InputError("the core factory made no core");
             ++cores_made;
+            if (options.make_boundary) boundaries[q.setup] = options.make_boundary(*q.setup);
           }
-          interp = std::make_unique<Interpolator>(*q.setup, q.key_times, q.keyframes, q.options, borrow_core(*core));
+          const auto lent = boundaries.find(q.setup);
+          MeshEvaluator* const boundary = lent == boundaries.end() ? nullptr : lent->second.get();
+          interp = std::make_unique<Interpolator>(*q.setup, q.key_times, q.keyframes, q.options, borrow_core(*core),
+                                                  boundary ? borrow_evaluator(*boundary) : nullptr);
           interp_sequence = run.sequence;
           ++built;
           set_up_s += seconds_since(ts);

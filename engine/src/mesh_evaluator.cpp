@@ -102,6 +102,22 @@ std::unique_ptr<MeshEvaluator> make_cpu_mesh_evaluator(const Cage& cage, std::sp
   return std::make_unique<CpuMeshEvaluator>(cage, points, options);
 }
 
+namespace {
+class BorrowedEvaluator final : public MeshEvaluator {
+ public:
+  explicit BorrowedEvaluator(MeshEvaluator& e) : e_(e) {}
+  const char* name() const override { return e_.name(); }
+  std::size_t size() const override { return e_.size(); }
+  bool derivatives() const override { return e_.derivatives(); }
+  void evaluate(const HarmonicMap& map, MapValues& out) override { e_.evaluate(map, out); }
+
+ private:
+  MeshEvaluator& e_;
+};
+}  // namespace
+
+std::unique_ptr<MeshEvaluator> borrow_evaluator(MeshEvaluator& evaluator) { return std::make_unique<BorrowedEvaluator>(evaluator); }
+
 double mesh_evaluator_bytes(const Cage& cage, std::size_t points, const MeshEvaluatorOptions& options) {
   return static_cast<double>(points) * basis_size(cage) * sizeof(cd) * (options.derivatives ? 2.0 : 1.0);
 }

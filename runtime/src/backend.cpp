@@ -1,6 +1,7 @@
 // The backend factory (see backend.h). The only place that knows whether this build
 // has CUDA: HSI_RUNTIME_CUDA is set by runtime/CMakeLists.txt when cuda/ is built.
 #include "hsi/runtime/backend.h"
+#include "hsi/batch.h"
 
 #include <algorithm>
 
@@ -164,6 +165,15 @@ NewtonCoreChoice make_newton_core(const ShapeSetup& setup, Backend requested, co
         return make_cpu_newton_core(setup.D_G, setup.H);
       });
   return r;
+}
+
+void set_batch_backend(BatchOptions& o, Backend used, const CudaStatus& cuda) {
+  o.make_core = [used, cuda](const ShapeSetup& setup) { return make_newton_core(setup, used, cuda, false).core; };
+  o.make_boundary = nullptr;
+  if (used == Backend::Cuda)
+    o.make_boundary = [cuda](const ShapeSetup& setup) {
+      return make_mesh_evaluator(setup.cage, setup.overlap.breakpoints().points, Backend::Cuda, cuda).evaluator;
+    };
 }
 
 MeshEvaluatorChoice make_mesh_evaluator(const Cage& cage, std::span<const cd> points, Backend requested,

@@ -648,7 +648,7 @@ hsi_status hsi_interpolators_sequence_batch(hsi_interpolator* const* interpolato
     bo.threads_per_worker = static_cast<int>(o.threads_per_worker);
     const runtime::Backend used = interpolators[0]->backend.used;
     const runtime::CudaStatus cuda = used == runtime::Backend::Cpu ? runtime::CudaStatus{} : runtime::cuda_status();
-    bo.make_core = [used, cuda](const ShapeSetup& setup) { return runtime::make_newton_core(setup, used, cuda, false).core; };
+    runtime::set_batch_backend(bo, used, cuda);
     const BatchResult r = solve_batch(batch, bo, [&](const FrameResult& f, int s, int i, size_t done, size_t total) {
       if (!progress) return true;
       const hsi_frame_report rep = to_report(f);

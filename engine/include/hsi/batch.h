@@ -33,6 +33,12 @@ struct BatchSequence {
 // A worker's Newton core for a setup (which outlives it). Called from the workers,
 // concurrently: the factory must be thread-safe (runtime::make_newton_core is).
 using BatchCoreFactory = std::function<std::unique_ptr<NewtonCore>(const ShapeSetup&)>;
+// A worker's evaluator of f at setup.overlap's breakpoints (the image every frame's
+// overlap check tests: the Interpolator's `boundary`), made with its core for the setup
+// and lent to each Interpolator it builds; null: the setup's own CPU evaluator. On CUDA
+// the image is then made on the GPU (issue #23: on the host with a worker's one thread it
+// was 0.94 of a batch frame's 2.1 ms, bench_batch on an H200). Concurrent calls, as above.
+using BatchBoundaryFactory = std::function<std::unique_ptr<MeshEvaluator>(const ShapeSetup&)>;
 
 struct BatchOptions {
   int workers = 1;  // W threads, each with its own cores and interpolators
@@ -42,6 +48,7 @@ struct BatchOptions {
   // reduction, so its frames depend on this count (not on W) in the last bits.
   int threads_per_worker = 1;
   BatchCoreFactory make_core;  // empty: the CPU core (make_cpu_newton_core)
+  BatchBoundaryFactory make_boundary;  // empty: every Interpolator uses the setup's CPU evaluator
 };
 
 // After each frame: the frame, its sequence's index, its index there, and how many

@@ -42,6 +42,11 @@ class MeshEvaluator {
 std::unique_ptr<MeshEvaluator> make_cpu_mesh_evaluator(const Cage& cage, std::span<const cd> points,
                                                        const MeshEvaluatorOptions& options = {});
 
+// An evaluator that forwards every call to `evaluator`, which must outlive it: lends one
+// evaluator to owners that each want their own (a batch worker's Interpolators, one after
+// another), so that its rows are evaluated once.
+std::unique_ptr<MeshEvaluator> borrow_evaluator(MeshEvaluator& evaluator);
+
 // Bytes of cached basis rows an evaluator holds for this many points (per backend copy).
 double mesh_evaluator_bytes(const Cage& cage, std::size_t points, const MeshEvaluatorOptions& options = {});
 

@@ -17,6 +17,10 @@
 #include "hsi/newton.h"
 #include "hsi/shape_setup.h"
 
+namespace hsi {
+struct BatchOptions;  // hsi/batch.h
+}
+
 namespace hsi::runtime {
 
 enum class Backend { Auto, Cpu, Cuda };
@@ -84,6 +88,12 @@ NewtonCoreChoice make_newton_core(const ShapeSetup& setup, Backend requested);
 // batch's core factory, authoring), whose rows at the breakpoints cost ~0.1 s of host
 // time per core made.
 NewtonCoreChoice make_newton_core(const ShapeSetup& setup, Backend requested, const CudaStatus& cuda, bool with_boundary = true);
+
+// A batch's factories on the backend `used` (BatchOptions::make_core, make_boundary), as
+// hsi bake, the C API's batch and bench_batch set them: each worker's Newton core alone,
+// and on CUDA f at the setup's overlap breakpoints on the GPU, one evaluator per worker
+// and shape (on the CPU none: every Interpolator uses the setup's own evaluator).
+void set_batch_backend(BatchOptions& options, Backend used, const CudaStatus& cuda);
 
 // f at a fixed set of points (a mesh's vertices) from cached basis rows
 // (hsi/mesh_evaluator.h), on the backend a request gives, decided as for the Newton
