@@ -145,7 +145,7 @@ int main(int argc, char** argv) {
                  "one-at-a-time path runs the first)")
       ->delimiter(',')
       ->capture_default_str()
-      ->check(CLI::IsMember({"subset", "subset-then-all", "all", "auto"}));
+      ->check(CLI::IsMember(exact_samples_names()));
   app.add_option("--image", images,
                  "Where each frame's image of the boundary (the overlap check's points) is made, comma-separated: every W "
                  "runs with each (backend: on the core's backend, as hsi bake and the C API; host: the setup's CPU "

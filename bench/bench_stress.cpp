@@ -245,7 +245,7 @@ int main(int argc, char** argv) {
                  "subset (H), subset-then-all (H, then all of G where H's is not positive definite), all (G), auto (the core's "
                  "choice: subset on the CPU, all on CUDA)")
       ->capture_default_str()
-      ->check(CLI::IsMember({"subset", "subset-then-all", "all", "auto"}));
+      ->check(CLI::IsMember(exact_samples_names()));
   app.add_option("--projected-decrement-stop", projected_decrement_stop,
                  "Converged also when a projected system's decrement is below this fraction of the tolerance "
                  "(InterpolationOptions::projected_decrement_stop; 0: never)")

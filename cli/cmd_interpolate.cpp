@@ -58,7 +58,7 @@ void register_interpolate(CLI::App& app) {
                   "subset-then-all (H, then all of G where H's is not positive definite), all (G: fewer iterations, a "
                   "dearer Hessian on the CPU) or auto (the core's choice: subset on the CPU, all on CUDA)")
       ->capture_default_str()
-      ->check(CLI::IsMember({"subset", "subset-then-all", "all", "auto"}));
+      ->check(CLI::IsMember(exact_samples_names()));
   cmd->add_option("--timing", o->timing,
                   "How every keyframe interval is travelled: linear (the paper's), smooth (C1 through the keyframes), ease "
                   "(in and out) or hold (default: each keyframe's \"timing\" in the scene, else linear)")

@@ -1029,6 +1029,9 @@ TEST_CASE("newton_run: exact_samples builds the exact system over all of G (All)
   CHECK(iterations[2] < iterations[0]);
   CHECK(parse_exact_samples("subset-then-all") == ExactSamples::SubsetThenAll);
   CHECK_THROWS_AS(parse_exact_samples("G"), InputError);
+  // The option checks' list is every value by its name, each parsed back to itself.
+  REQUIRE(exact_samples_names().size() == 4);
+  for (const std::string& name : exact_samples_names()) CHECK(to_string(parse_exact_samples(name)) == name);
 }
 
 TEST_CASE("the exact system over all of G ends PartProj's frames where the subset's is indefinite (links/bend)",

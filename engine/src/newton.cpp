@@ -791,12 +791,22 @@ const char* to_string(ExactSamples e) {
   return "?";
 }
 
+const std::vector<std::string>& exact_samples_names() {
+  static const std::vector<std::string> names = [] {
+    std::vector<std::string> v;
+    for (ExactSamples e : {ExactSamples::Subset, ExactSamples::SubsetThenAll, ExactSamples::All, ExactSamples::Auto})
+      v.emplace_back(to_string(e));
+    return v;
+  }();
+  return names;
+}
+
 ExactSamples parse_exact_samples(const std::string& name) {
-  if (name == "subset") return ExactSamples::Subset;
-  if (name == "subset-then-all") return ExactSamples::SubsetThenAll;
-  if (name == "all") return ExactSamples::All;
-  if (name == "auto") return ExactSamples::Auto;
-  throw InputError("unknown exact-Hessian samples '" + name + "' (use subset, subset-then-all, all or auto)");
+  for (ExactSamples e : {ExactSamples::Subset, ExactSamples::SubsetThenAll, ExactSamples::All, ExactSamples::Auto})
+    if (name == to_string(e)) return e;
+  std::string valid;
+  for (const std::string& n : exact_samples_names()) valid += (valid.empty() ? "" : ", ") + n;
+  throw InputError("unknown exact-Hessian samples '" + name + "' (use " + valid + ")");
 }
 
 std::uint64_t NewtonCore::next_target_token() {

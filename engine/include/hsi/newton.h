@@ -49,7 +49,10 @@ enum class ExactSamples {
   Auto             // the core's own choice (NewtonCore::preferred_exact_samples); newton_run alone: Subset
 };
 const char* to_string(ExactSamples e);
-ExactSamples parse_exact_samples(const std::string& name);  // "subset" | "subset-then-all" | "all" | "auto"
+ExactSamples parse_exact_samples(const std::string& name);  // one of exact_samples_names()
+// "subset", "subset-then-all", "all", "auto": every ExactSamples by its to_string name, in
+// declaration order (for an option's check, e.g. CLI::IsMember(exact_samples_names())).
+const std::vector<std::string>& exact_samples_names();
 
 // Per-iteration sample work. Coefficients are the active real vector
 // v = (Re φ_a, Im φ_a, Re ψ_a, Im ψ_a) ∈ R^{4n} of MapSpace.
