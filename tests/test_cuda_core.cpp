@@ -737,6 +737,28 @@ TEST_CASE("the CUDA mesh evaluator equals the direct evaluation on every asset",
       HarmonicMap wrong = identity_map(cage);
       wrong.psi.conservativeResize(wrong.psi.size() + 1);
       CHECK_THROWS_AS(e.evaluate(wrong, got), InputError);
+
+      // Made from the CPU evaluator's rows (uploaded, not evaluated again): the same values
+      // bit for bit as the one that evaluated them.
+      const auto cpu = make_cpu_mesh_evaluator(cage, pts, {.derivatives = derivatives});
+      hsi::cuda::MeshEvaluator copied(*cpu, {.derivatives = derivatives});
+      CHECK(copied.size() == pts.size());
+      const HarmonicMap map = affine_map(cage, cd(0.7, -0.2), cd(0.1, 0.05), cd(2, -1));
+      MapValues a, b;
+      e.evaluate(map, a);
+      copied.evaluate(map, b);
+      CHECK(a.f == b.f);
+      if (derivatives) {
+        CHECK(a.f_z == b.f_z);
+        CHECK(a.fzbar_conj == b.fzbar_conj);
+      }
+      CHECK_THROWS_AS(copied.evaluate(wrong, got), InputError);
     }
+    // Derivatives asked of rows made without them, and a source that keeps no host rows.
+    const auto plain = make_cpu_mesh_evaluator(cage, pts);
+    CHECK_THROWS_WITH(hsi::cuda::MeshEvaluator(*plain, {.derivatives = true}), Catch::Contains("derivatives"));
+    hsi::cuda::MeshEvaluator on_device(cage, pts);
+    const hsi::MeshEvaluator& as_source = on_device;  // (not the deleted copy)
+    CHECK_THROWS_WITH(hsi::cuda::MeshEvaluator(as_source), Catch::Contains("keeps no rows on the host"));
   }
 }

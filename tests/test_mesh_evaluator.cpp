@@ -91,6 +91,32 @@ TEST_CASE("the cached evaluator without derivatives, at no point, and a map of a
   CHECK_THROWS_WITH(e->evaluate(wrong), Catch::Contains("the map has") && Catch::Contains("the cage needs"));
 }
 
+TEST_CASE("the CPU evaluator gives back its cached rows, in any range, and a borrowed one forwards them", "[mesh_eval]") {
+  const Shape shape = test::annulus();
+  const Cage cage = build_cage(shape);
+  const std::vector<cd> pts = test::interior_points(shape, 3 * 128 + 45);  // blocks of 128 points, a partial last
+  const BasisRows want = evaluate_basis(cage, pts, kBasisC | kBasisD);
+  const auto e = make_cpu_mesh_evaluator(cage, pts, {.derivatives = true});
+  const auto lent = borrow_evaluator(*e);
+  MatrixXcd C, D;
+  // Ranges within a block, across blocks, the last partial block, everything, none.
+  for (auto [p0, n] : {std::pair<size_t, size_t>{5, 40}, {100, 200}, {384, 45}, {0, pts.size()}, {128, 0}}) {
+    INFO("rows " << p0 << " + " << n);
+    REQUIRE(e->rows(p0, n, C, &D));
+    CHECK(C.rows() == static_cast<Eigen::Index>(n));
+    CHECK(C.cols() == basis_size(cage));
+    CHECK(C == want.C.middleRows(static_cast<Eigen::Index>(p0), static_cast<Eigen::Index>(n)));
+    CHECK(D == want.D.middleRows(static_cast<Eigen::Index>(p0), static_cast<Eigen::Index>(n)));
+    MatrixXcd C2;
+    REQUIRE(lent->rows(p0, n, C2, nullptr));
+    CHECK(C2 == C);
+  }
+  CHECK_THROWS_WITH(e->rows(400, 30, C, nullptr), Catch::Contains("asked of 429 points"));
+  const auto plain = make_cpu_mesh_evaluator(cage, pts);
+  CHECK(plain->rows(0, 10, C, nullptr));
+  CHECK_THROWS_WITH(plain->rows(0, 10, C, &D), Catch::Contains("without derivatives"));
+}
+
 TEST_CASE("the mesh evaluator factory: cpu is the reference, auto says why it fell back", "[mesh_eval][runtime]") {
   const Shape shape = test::annulus();
   const Cage cage = build_cage(shape);

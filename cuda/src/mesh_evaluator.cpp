@@ -5,6 +5,7 @@
 #include "hsi/cuda/mesh_evaluator.h"
 
 #include <algorithm>
+#include <functional>
 #include <string>
 
 #include "device.h"
@@ -26,9 +27,12 @@ struct MeshEvaluator::Impl {
   Upload<double2> coef_up;
   PinnedArray<double2> values_down;
 
-  Impl(const Cage& cage, std::span<const cd> points, const MeshEvaluatorOptions& o)
-      : P(static_cast<long long>(points.size())),
-        M(basis_size(cage)),
+  // fill(p0, np, C, D): the rows of points [p0, p0 + np) into the host blocks (D: null
+  // without derivatives).
+  using Fill = std::function<void(long long, long long, MatrixXcd&, MatrixXcd*)>;
+  Impl(long long points, int columns, const MeshEvaluatorOptions& o, const Fill& fill)
+      : P(points),
+        M(columns),
         derivatives(o.derivatives),
         C(sz(P) * sz(M)),
         D(o.derivatives ? sz(P) * sz(M) : 0),
@@ -40,17 +44,17 @@ struct MeshEvaluator::Impl {
     // The rows a chunk of points at a time (bounded host memory), each chunk's np × M
     // block copied into the P × M device matrix at its rows.
     constexpr long long kChunk = 16384;
-    const unsigned parts = kBasisC | (derivatives ? kBasisD : 0u);
+    MatrixXcd rc, rd;
     for (long long p0 = 0; p0 < P; p0 += kChunk) {
       const long long np = std::min(kChunk, P - p0);
-      const BasisRows rows = evaluate_basis(cage, points.subspan(sz(p0), sz(np)), parts);
+      fill(p0, np, rc, derivatives ? &rd : nullptr);
       auto put = [&](const MatrixXcd& block, DeviceArray<double2>& dst) {
         HSI_CUDA_CHECK(cudaMemcpy2DAsync(dst.get() + p0, sz(P) * sizeof(double2), block.data(), sz(np) * sizeof(double2),
                                          sz(np) * sizeof(double2), sz(M), cudaMemcpyHostToDevice, stream));
       };
-      put(rows.C, C);
-      if (derivatives) put(rows.D, D);
-      // The host blocks are pageable and go at the end of this iteration.
+      put(rc, C);
+      if (derivatives) put(rd, D);
+      // The host blocks are pageable and are overwritten by the next chunk.
       HSI_CUDA_CHECK(cudaStreamSynchronize(stream));
     }
   }
@@ -69,7 +73,25 @@ struct MeshEvaluator::Impl {
 
 MeshEvaluator::MeshEvaluator(const Cage& cage, std::span<const cd> points, const MeshEvaluatorOptions& options) {
   if (cage.vertex_count() < 1) throw InputError("mesh evaluator: the cage has no vertex");
-  impl_ = std::make_unique<Impl>(cage, points, options);
+  const unsigned parts = kBasisC | (options.derivatives ? kBasisD : 0u);
+  impl_ = std::make_unique<Impl>(static_cast<long long>(points.size()), basis_size(cage), options,
+                                 [&](long long p0, long long np, MatrixXcd& C, MatrixXcd* D) {
+                                   BasisRows rows = evaluate_basis(cage, points.subspan(sz(p0), sz(np)), parts);
+                                   C = std::move(rows.C);
+                                   if (D) *D = std::move(rows.D);
+                                 });
+}
+
+MeshEvaluator::MeshEvaluator(const hsi::MeshEvaluator& source, const MeshEvaluatorOptions& options) {
+  if (options.derivatives && !source.derivatives())
+    throw InputError("mesh evaluator: derivatives asked of rows made without them");
+  MatrixXcd probe;  // no rows: 0 × (m + N), the columns
+  if (!source.rows(0, 0, probe, nullptr))
+    throw InputError(std::string("mesh evaluator: the ") + source.name() + " evaluator keeps no rows on the host to copy");
+  const long long P = static_cast<long long>(source.size());
+  impl_ = std::make_unique<Impl>(P, static_cast<int>(probe.cols()), options, [&](long long p0, long long np, MatrixXcd& C, MatrixXcd* D) {
+    source.rows(sz(p0), sz(np), C, D);
+  });
 }
 
 MeshEvaluator::~MeshEvaluator() {

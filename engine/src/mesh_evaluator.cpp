@@ -88,6 +88,26 @@ class CpuMeshEvaluator final : public MeshEvaluator {
     }
   }
 
+  bool rows(std::size_t p0, std::size_t count, MatrixXcd& C, MatrixXcd* D) const override {
+    if (p0 > static_cast<std::size_t>(points_) || count > static_cast<std::size_t>(points_) - p0)
+      throw InputError("mesh evaluator: rows " + std::to_string(p0) + " to " + std::to_string(p0 + count) + " asked of " +
+                       std::to_string(points_) + " points");
+    if (D && !derivatives_) throw InputError("mesh evaluator: the rows D asked of an evaluator made without derivatives");
+    const Eigen::Index first = static_cast<Eigen::Index>(p0), n = static_cast<Eigen::Index>(count), M = columns_;
+    C.resize(n, M);
+    if (D) D->resize(n, M);
+    for (Eigen::Index q = 0; q < n;) {  // block by block: the rows [first + q, …) within block b
+      const Eigen::Index p = first + q, b = p / kBlock, in = p - b * kBlock;
+      const Eigen::MatrixXd& AB = AB_[static_cast<size_t>(b)];
+      const Eigen::Index take = std::min(AB.rows() - in, n - q);
+      C.middleRows(q, take).real() = AB.block(in, 0, take, M);
+      C.middleRows(q, take).imag() = AB.block(in, M, take, M);
+      if (D) D->middleRows(q, take) = D_[static_cast<size_t>(b)].middleRows(in, take);
+      q += take;
+    }
+    return true;
+  }
+
  private:
   Eigen::Index points_ = 0, columns_ = 0;
   bool derivatives_ = false;
@@ -110,6 +130,7 @@ class BorrowedEvaluator final : public MeshEvaluator {
   std::size_t size() const override { return e_.size(); }
   bool derivatives() const override { return e_.derivatives(); }
   void evaluate(const HarmonicMap& map, MapValues& out) override { e_.evaluate(map, out); }
+  bool rows(std::size_t p0, std::size_t count, MatrixXcd& C, MatrixXcd* D) const override { return e_.rows(p0, count, C, D); }
 
  private:
   MeshEvaluator& e_;

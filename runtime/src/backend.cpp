@@ -149,6 +149,17 @@ std::unique_ptr<MeshEvaluator> cuda_mesh_evaluator(const Cage& cage, std::span<c
 #endif
 }
 
+// The CUDA image of the boundary for the overlap check: the setup's CPU evaluator's rows at
+// the breakpoints uploaded, not evaluated again.
+std::unique_ptr<MeshEvaluator> cuda_boundary_evaluator(const ShapeSetup& setup) {
+#if HSI_RUNTIME_CUDA
+  return std::make_unique<hsi::cuda::MeshEvaluator>(setup.overlap.evaluator());
+#else
+  (void)setup;
+  throw BackendUnavailable(std::string("--backend cuda: ") + built::kNoCuda);
+#endif
+}
+
 }  // namespace
 
 NewtonCoreChoice make_newton_core(const ShapeSetup& setup, Backend requested, const CudaStatus& cuda, bool with_boundary) {
@@ -157,7 +168,7 @@ NewtonCoreChoice make_newton_core(const ShapeSetup& setup, Backend requested, co
       requested, cuda, "core", r.choice,
       [&] {
         std::unique_ptr<NewtonCore> core = cuda_core(setup);
-        if (with_boundary) r.boundary = cuda_mesh_evaluator(setup.cage, setup.overlap.breakpoints().points, {});
+        if (with_boundary) r.boundary = cuda_boundary_evaluator(setup);
         return core;
       },
       [&] {
@@ -171,9 +182,7 @@ void set_batch_backend(BatchOptions& o, Backend used, const CudaStatus& cuda) {
   o.make_core = [used, cuda](const ShapeSetup& setup) { return make_newton_core(setup, used, cuda, false).core; };
   o.make_boundary = nullptr;
   if (used == Backend::Cuda)
-    o.make_boundary = [cuda](const ShapeSetup& setup) {
-      return make_mesh_evaluator(setup.cage, setup.overlap.breakpoints().points, Backend::Cuda, cuda).evaluator;
-    };
+    o.make_boundary = [](const ShapeSetup& setup) { return cuda_boundary_evaluator(setup); };
 }
 
 MeshEvaluatorChoice make_mesh_evaluator(const Cage& cage, std::span<const cd> points, Backend requested,

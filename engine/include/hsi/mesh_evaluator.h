@@ -33,6 +33,13 @@ class MeshEvaluator {
     evaluate(map, v);
     return v;
   }
+  // The cached rows of the points [p0, p0 + count) as evaluate_basis gives them: C into
+  // `C`, resized to count × (m + N) (count 0 gives the columns), and, where `D` is not null, D into it (the evaluator must keep
+  // them: derivatives()). For an evaluator of another backend made from rows already
+  // evaluated (hsi/cuda/mesh_evaluator.h) instead of evaluating the basis again. False,
+  // nothing written, where this evaluator does not keep them on the host; InputError for
+  // a range past size() or D asked of an evaluator without derivatives.
+  virtual bool rows(std::size_t /*p0*/, std::size_t /*count*/, MatrixXcd& /*C*/, MatrixXcd* /*D*/) const { return false; }
 };
 
 // The rows at `points` (none may lie on the cage or at a hole point) are evaluated

@@ -110,6 +110,9 @@ class OverlapChecker {
   // and bench_interpolation compare check_points against.
   OverlapResult check_points_reference(std::span<const cd> image) const;
   const CertificateSegments& breakpoints() const { return seg_; }
+  // The CPU evaluator of f at the breakpoints (its rows, MeshEvaluator::rows, make another
+  // backend's evaluator of the image without evaluating the basis again).
+  const MeshEvaluator& evaluator() const { return *f_; }
 
  private:
   CertificateSegments seg_;

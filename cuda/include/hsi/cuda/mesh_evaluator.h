@@ -17,6 +17,12 @@ class MeshEvaluator final : public hsi::MeshEvaluator {
   // Throws hsi::cuda::Error if the device cannot be used or cannot hold the rows
   // (mesh_evaluator_bytes), InputError as make_cpu_mesh_evaluator.
   MeshEvaluator(const Cage& cage, std::span<const cd> points, const MeshEvaluatorOptions& options = {});
+  // The same evaluator from the rows `source` keeps on the host (hsi::MeshEvaluator::rows:
+  // the CPU evaluator's), uploaded instead of evaluated again (issue #23: a batch worker's
+  // image of the boundary evaluated its ~10k breakpoints' rows on its one thread, 0.3 s a
+  // worker). With options.derivatives the source must have them. InputError where the
+  // source keeps no rows on the host.
+  MeshEvaluator(const hsi::MeshEvaluator& source, const MeshEvaluatorOptions& options = {});
   ~MeshEvaluator() override;
   MeshEvaluator(const MeshEvaluator&) = delete;
   MeshEvaluator& operator=(const MeshEvaluator&) = delete;

@@ -85,14 +85,15 @@ struct NewtonCoreChoice {
 NewtonCoreChoice make_newton_core(const ShapeSetup& setup, Backend requested);
 // The same, the CUDA status already known (a front-end that makes many cores asks once).
 // with_boundary = false: no `boundary` evaluator (for callers that take the core alone: a
-// batch's core factory, authoring), whose rows at the breakpoints cost ~0.1 s of host
-// time per core made.
+// batch's core factory, authoring). The CUDA boundary evaluator is made from the rows the
+// setup's overlap checker keeps on the host (OverlapChecker::evaluator), uploaded.
 NewtonCoreChoice make_newton_core(const ShapeSetup& setup, Backend requested, const CudaStatus& cuda, bool with_boundary = true);
 
 // A batch's factories on the backend `used` (BatchOptions::make_core, make_boundary), as
 // hsi bake, the C API's batch and bench_batch set them: each worker's Newton core alone,
 // and on CUDA f at the setup's overlap breakpoints on the GPU, one evaluator per worker
-// and shape (on the CPU none: every Interpolator uses the setup's own evaluator).
+// and shape, its rows uploaded from the setup's CPU evaluator (on the CPU none: every
+// Interpolator uses the setup's own evaluator).
 void set_batch_backend(BatchOptions& options, Backend used, const CudaStatus& cuda);
 
 // f at a fixed set of points (a mesh's vertices) from cached basis rows
