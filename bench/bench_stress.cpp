@@ -220,7 +220,8 @@ int main(int argc, char** argv) {
   std::string frames_opt = "60,100,500", projections_opt = "delete,fullproj,partproj", backend = "cpu", json_file, export_dir;
   std::string cache_file;
   int limit = 0, samples = 0, max_iterations = 100, jobs = 1, threads = 0;
-  bool paper_newton = false, author_only = false, trace = false, reverse_loops = false, no_chord = false, no_checked_stop = false;
+  bool paper_newton = false, author_only = false, trace = false, reverse_loops = false, no_chord = false, no_checked_stop = false,
+       no_carry = false;
   double hessian_ratio = 0;
   std::string exact_samples = to_string(InterpolationOptions{}.exact_samples);
   double time_limit = 0, projected_decrement_stop = InterpolationOptions{}.projected_decrement_stop;
@@ -254,6 +255,9 @@ int main(int argc, char** argv) {
   app.add_flag("--no-checked-decrement-stop", no_checked_stop,
                "Without the checked decrement stop (InterpolationOptions::checked_decrement_stop off): a projected "
                "decrement below the tolerance, scaled by the previous full step's model error, does not end a frame");
+  app.add_flag("--no-carry-all-samples", no_carry,
+               "A frame's move of its Hessians to all of G is not carried to the next frames "
+               "(InterpolationOptions::carry_all_samples off; by default on the CUDA core)");
   app.add_flag("--no-chord", no_chord,
                "Sequences without chord steps (InterpolationOptions::chord_steps off): every frame's Newton systems built "
                "and factored at its own points, as before the chord steps");
@@ -365,12 +369,13 @@ int main(int argc, char** argv) {
   std::printf("Machine: %s, %d logical cores; backend %s; %d workers x %d OpenMP threads\n", machine.cpu.c_str(), machine.cores,
               backend.c_str(), jobs, omp_threads);
   std::printf("Corpus: %s (seed %d): %d of %zu sequences on %zu shapes; |G| %s; frames per interval %s; projections %s; "
-              "iteration cap %d; exact systems over %s; projected-decrement stop %g%s%s%s%s\n\n",
+              "iteration cap %d; exact systems over %s; projected-decrement stop %g%s%s%s%s%s\n\n",
               corpus_file.c_str(), corpus.seed, total_sequences, corpus.sequences.size(), plan.size(),
               samples > 0 ? std::to_string(samples).c_str() : "per sequence", frames_opt.c_str(), projections_opt.c_str(),
               max_iterations, exact_samples.c_str(), projected_decrement_stop, paper_newton ? "; the paper's plain Newton (--paper-newton)" : "",
               no_chord && !paper_newton ? "; no chord steps (--no-chord)" : "",
               no_checked_stop && !paper_newton ? "; no checked decrement stop (--no-checked-decrement-stop)" : "",
+              no_carry && !paper_newton ? "; no carry of all samples (--no-carry-all-samples)" : "",
               reverse_loops ? "; every shape's loops reversed (--reverse-loops)" : "");
   std::printf("Per run: F frames per keyframe interval, F x (keyframes - 1) + 1 frames in all, warm-started; the\n"
               "keyframes themselves are not counted. at cap: iterations >= cap or not converged. it: Newton\n"
@@ -606,6 +611,7 @@ int main(int argc, char** argv) {
       o.exact_samples = parse_exact_samples(exact_samples);
       o.projected_decrement_stop = projected_decrement_stop;
       o.checked_decrement_stop = !no_checked_stop && !paper_newton;
+      if (no_carry || paper_newton) o.carry_all_samples = AllSamplesCarry::Off;
       o.projection = run.p;
       o.max_iterations = max_iterations;
       runtime::NewtonCoreChoice core = runtime::make_newton_core(setup, runtime::parse_backend(backend), cuda);
@@ -654,7 +660,7 @@ int main(int argc, char** argv) {
   out["options"] = {{"corpus", corpus_file},     {"seed", corpus.seed},         {"samples", samples},
                     {"frames", frame_counts},    {"projections", split(projections_opt)}, {"max_iterations", max_iterations},
                     {"limit", limit},            {"paper_newton", paper_newton}, {"time_limit", time_limit},
-                    {"hessian_ratio", hessian_ratio}, {"chord_steps", !no_chord && !paper_newton}, {"checked_decrement_stop", !no_checked_stop && !paper_newton}, {"exact_samples", exact_samples},
+                    {"hessian_ratio", hessian_ratio}, {"chord_steps", !no_chord && !paper_newton}, {"checked_decrement_stop", !no_checked_stop && !paper_newton}, {"carry_all_samples", no_carry || paper_newton ? "off" : "auto"}, {"exact_samples", exact_samples},
                     {"projected_decrement_stop", projected_decrement_stop}, {"reverse_loops", reverse_loops}};
   json runs_json = json::array(), shapes_json = json::array();
   std::map<RunKey, Stats> total;

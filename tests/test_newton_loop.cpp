@@ -567,6 +567,55 @@ TEST_CASE("newton_run: a subset Hessian whose steps Armijo keeps cutting is repl
   CHECK(2 * iterations[0] <= iterations[1]);  // without it: a crawl of cut-down steps
 }
 
+TEST_CASE("newton_run: carry_all_samples starts the next solve of a sequence over all samples once one escalated",
+          "[newton][loop]") {
+  // The subset's model 20x too soft (as above): the first solve escalates to all of G.
+  // With the carry on, the next solve from another start (the next frame) builds every
+  // Hessian over G from its first iteration and takes fewer iterations; off (or Auto in
+  // newton_run alone, or without a slot) it starts on the subset again.
+  const auto run = [](AllSamplesCarry carry, KeptSystem* slot, const Eigen::Vector2d& x0) {
+    FakeStepper f;
+    f.subset_softness = 20;
+    f.subset_exact_too = true;
+    f.energy = [&f](const Eigen::Vector2d& x) { return 2 + 0.5 * (x - f.a).dot(f.A * (x - f.a)) + 0.1 * std::pow((x - f.a).norm(), 3); };
+    NewtonOptions o;
+    o.kept_system = slot;
+    o.carry_all_samples = carry;
+    NewtonResult r = newton_run(f, true, true, x0, o);
+    bool first_on_all = !f.choices.empty() && f.choices.front().all_samples;
+    return std::pair{r, first_on_all};
+  };
+  int next_iterations[2] = {0, 0};  // the second solve's, carried and not
+  for (AllSamplesCarry carry : {AllSamplesCarry::On, AllSamplesCarry::Off, AllSamplesCarry::Auto}) {
+    INFO("carry " << static_cast<int>(carry));
+    KeptSystem slot;
+    const auto [first, first_all] = run(carry, &slot, Eigen::Vector2d(0, 0));
+    CHECK(first.converged);
+    CHECK_FALSE(first_all);  // a sequence's first solve starts on the subset
+    REQUIRE(first.log.size() >= 2);
+    CHECK(first.log[1].all_samples);  // escalated
+    CHECK(slot.all_samples == (carry == AllSamplesCarry::On));
+    // The next frame with no system kept (its exact system indefinite at the last frame's
+    // end, comb/hole_turn with PartProj): only the carried flag.
+    KeptSystem flag_only;
+    flag_only.all_samples = slot.all_samples;
+    const auto [next, next_all] = run(carry, &flag_only, Eigen::Vector2d(0.2, -0.1));
+    CHECK(next.converged);
+    CHECK(next_all == (carry == AllSamplesCarry::On));
+    REQUIRE(!next.log.empty());
+    CHECK(next.log.front().all_samples == (carry == AllSamplesCarry::On));
+    next_iterations[carry == AllSamplesCarry::On ? 0 : 1] = next.iterations;
+    int cut = 0;
+    for (const NewtonIteration& l : next.log) cut += !l.chord && !l.all_samples && l.backtracks >= 2;
+    CHECK((carry == AllSamplesCarry::On ? cut == 0 : cut > 0));  // steps on the subset cut again without the carry
+  }
+  CHECK(next_iterations[0] < next_iterations[1]);
+  // No slot: nothing to carry in.
+  const auto [alone, alone_all] = run(AllSamplesCarry::On, nullptr, Eigen::Vector2d(0, 0));
+  CHECK_FALSE(alone_all);
+  CHECK(alone.converged);
+}
+
 TEST_CASE("newton_run: steps Armijo cuts once, iteration after iteration, move the Hessians to all samples too", "[newton][loop]") {
   // The subset's projected model 3x too soft along one axis (a full step overshoots to
   // twice the error and fails Armijo, half of it passes) and 10x too stiff along the

@@ -458,6 +458,7 @@ NewtonOptions frame_newton_options(const InterpolationOptions& o) {
   no.free_rotation = o.free_rotation;
   no.escalate_after_iterations = o.escalate_after_iterations;
   no.exact_samples = o.exact_samples;
+  no.carry_all_samples = o.carry_all_samples;
   return no;
 }
 

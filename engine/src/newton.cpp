@@ -418,6 +418,8 @@ NewtonResult newton_solve(NewtonCore& core, const MapSpace& space, const Certifi
   NewtonOptions o = opt;  // ExactSamples::Auto resolved by the core
   if (o.exact_samples == ExactSamples::Auto) o.exact_samples = core.preferred_exact_samples();
   if (o.exact_samples == ExactSamples::Auto) o.exact_samples = ExactSamples::Subset;
+  if (o.carry_all_samples == AllSamplesCarry::Auto)
+    o.carry_all_samples = o.exact_samples == ExactSamples::All ? AllSamplesCarry::On : AllSamplesCarry::Off;
   return newton_run(*stepper, o.certify && certifier, rotation_invariant, x0, o);
 }
 
@@ -482,10 +484,17 @@ NewtonResult newton_run(NewtonStepper& st, bool certify, bool rotation_invariant
   // on the accepted step is the final map's full certificate: res.certificate follows x.
   double dE_prev = -1;  // the previous step's decrease (none yet)
   int crawling = 0;     // accepted steps in a row at a linear rate ≥ stagnation_rate
-  bool all_samples = false;  // the subset H's model failed: Hessians over all of G from now on
+  KeptSystem* const kept = opt.kept_system;  // chord steps (NewtonOptions::kept_system)
+  // The subset H's model failed (in this solve, or in an earlier one of the sequence:
+  // NewtonOptions::carry_all_samples): Hessians over all of G from now on.
+  KeptSystem* const carry = kept && opt.carry_all_samples == AllSamplesCarry::On ? kept : nullptr;
+  bool all_samples = carry && carry->all_samples;
+  const auto escalate_to_all = [&] {
+    all_samples = true;
+    if (carry) carry->all_samples = true;
+  };
   int cut_iterations = 0;    // iterations whose step Armijo cut (NewtonOptions::escalate_after_cut_iterations)
   HessianProjection projection = opt.projection;  // NewtonOptions::escalate_projection once it failed too
-  KeptSystem* const kept = opt.kept_system;  // chord steps (NewtonOptions::kept_system)
 
   for (int it = 0; it < opt.max_iterations; ++it) {
     const auto t_it = Clock::now();
@@ -720,11 +729,11 @@ NewtonResult newton_run(NewtonStepper& st, bool certify, bool rotation_invariant
     const int cuts = log.chord ? 0 : log.backtracks - log.certificate_rejections;
     if (opt.escalate_after_cuts > 0 && cuts >= opt.escalate_after_cuts) {
       if (all_samples && !log.exact_hessian) projection = opt.escalate_projection;
-      all_samples = true;
+      escalate_to_all();
     }
     // Cut again and again, if only once each time: the subset's model too.
     cut_iterations += cuts > 0 ? 1 : 0;
-    if (opt.escalate_after_cut_iterations > 0 && cut_iterations >= opt.escalate_after_cut_iterations) all_samples = true;
+    if (opt.escalate_after_cut_iterations > 0 && cut_iterations >= opt.escalate_after_cut_iterations) escalate_to_all();
     // Still running: the projection may be too stiff (NewtonOptions::escalate_after_iterations).
     if (opt.escalate_after_iterations > 0 && res.iterations >= opt.escalate_after_iterations) projection = opt.escalate_projection;
 

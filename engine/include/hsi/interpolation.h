@@ -77,6 +77,11 @@ struct InterpolationOptions {
   // mostly builds and factors no system at all (issue #23). false: every frame's systems
   // built at its own points, as frame() does.
   bool chord_steps = true;
+  // NewtonOptions::carry_all_samples, carried in the chord steps' slot (so off with
+  // chord_steps off: frames then independent of each other's solves): once a frame's
+  // solve moved its Hessians to all of G, the later frames of the sequence start there.
+  // Auto: on the cores whose exact systems sum over G (the CUDA core).
+  AllSamplesCarry carry_all_samples = AllSamplesCarry::Auto;
 };
 
 // Pose of a map: the centroid of the boundary's image (by arc length) and the

@@ -137,7 +137,20 @@ struct KeptSystem {
   std::shared_ptr<void> data;     // the owner's own form (the host stepper's factor)
   int order = 0;                  // the system's order, and what it was made as:
   bool free_rotation = false, modulo_rotation = false;
+  // Carried beside the system (NewtonOptions::carry_all_samples): a solve of this
+  // sequence found the subset H's model wrong and built its Hessians over all of G; the
+  // solves after it start there. Set by newton_run, independent of the system above.
+  bool all_samples = false;
   bool empty() const { return owner == nullptr; }
+};
+
+// Whether a sequence's solves carry a move of the Hessians to all of G to the next solve
+// (NewtonOptions::carry_all_samples, KeptSystem::all_samples).
+enum class AllSamplesCarry : std::uint8_t {
+  Off,
+  On,
+  Auto  // On where the exact systems sum over all of G (ExactSamples::All, resolved: the
+        // core's Hessians over G are cheap, the GPU's), Off otherwise; newton_run alone: Off
 };
 
 // What a stepper reports about the system it solved: (H + ridge I) d = −g.
@@ -405,6 +418,17 @@ struct NewtonOptions {
   // on the kept system, Deuflhard's simplified Newton, can replace the exact system.)
   // null: no chord step.
   KeptSystem* kept_system = nullptr;
+  // With a slot above: a solve whose Hessians moved to all of G (escalate_after_cuts,
+  // escalate_after_cut_iterations) marks the slot (KeptSystem::all_samples), and a solve
+  // that finds it marked builds its Hessians over all of G from its first iteration. The
+  // next frame of a sequence is a map next to this one, where the subset's model is as
+  // wrong (bench_stress --trace, issue #20: comb/hole_turn, |G| 2,000, PartProj, 100
+  // frames per interval: every fifth frame's steps on H were cut to 1/2 three times, then
+  // one step over G ended the frame; 1.79 iterations per frame against Delete's 1.04, and
+  // with H = G 1.00, every frame at or below the energy it reached before). On the CPU
+  // core a Hessian over G costs |G|/|H| times one over H, so Auto carries only where the
+  // exact systems are over G already (the CUDA core).
+  AllSamplesCarry carry_all_samples = AllSamplesCarry::Off;
 };
 
 struct NewtonIteration {
