@@ -791,8 +791,27 @@ int main(int argc, char** argv) {
   // Targets (issue #20).
   long cap = 0;
   for (const auto& [k, s] : total) cap += s.at_cap;
+  // PartProj against Delete per shape over the sequences both ran (the same as all of the
+  // shape's runs unless --time-limit left some out: then a shape's two means would cover
+  // different sequences).
+  std::map<std::string, std::map<RunKey, Stats>> paired;
+  {
+    std::map<std::pair<size_t, int>, std::pair<const Run*, const Run*>> by_item;  // (item, F): PartProj's run, Delete's
+    for (const Run& r : runs)
+      if (r.ran) {
+        auto& slot = by_item[{r.item, r.F}];
+        if (r.p == HessianProjection::PartProj) slot.first = &r;
+        if (r.p == HessianProjection::Delete) slot.second = &r;
+      }
+    for (const auto& [key, pd] : by_item)
+      if (pd.first && pd.second) {
+        auto& m = paired[plan[items[key.first].shape].first->name];
+        m[{key.second, HessianProjection::PartProj}].add(pd.first->s);
+        m[{key.second, HessianProjection::Delete}].add(pd.second->s);
+      }
+  }
   std::vector<std::string> worse;  // shapes where PartProj's mean exceeds Delete's at some frame count
-  for (const auto& [shape, m] : by_shape)
+  for (const auto& [shape, m] : paired)
     for (int F : frame_counts) {
       const auto pp = m.find({F, HessianProjection::PartProj}), de = m.find({F, HessianProjection::Delete});
       if (pp != m.end() && de != m.end() && pp->second.frames() && de->second.frames() && pp->second.mean() > de->second.mean())
