@@ -33,7 +33,7 @@ void register_interpolate(CLI::App& app) {
     std::string exact_samples = to_string(InterpolationOptions{}.exact_samples);
     std::string backend = "auto";
     std::string timing;  // empty: the scene's keyframe timings
-    bool projected_only = false, gauged_rotation = false, no_chord = false;
+    bool projected_only = false, gauged_rotation = false, no_chord = false, no_carry = false;
     bool allow_unconverged = false;
   };
   auto o = std::make_shared<Opts>();
@@ -70,6 +70,9 @@ void register_interpolate(CLI::App& app) {
   cmd->add_flag("--no-chord", o->no_chord,
                 "Build every frame's Newton systems at its own points: no chord step solved with the previous frame's last "
                 "exact system (slower; the same frames within the tolerance)");
+  cmd->add_flag("--no-carry-all-samples", o->no_carry,
+                "Start every frame's Hessians on the subset H, even after an earlier frame's solve moved them to all of G "
+                "(by default a sequence carries that move on the CUDA core)");
   cmd->add_option("--backend", o->backend, runtime::kBackendHelp)
       ->capture_default_str()
       ->check(CLI::IsMember(runtime::backend_names()));
@@ -110,6 +113,7 @@ void register_interpolate(CLI::App& app) {
     if (o->projected_only) io.escalate_after_iterations = 0;  // the chosen projection throughout
     io.free_rotation = !o->gauged_rotation;
     io.chord_steps = !o->no_chord;
+    if (o->no_carry) io.carry_all_samples = AllSamplesCarry::Off;
     io.exact_samples = parse_exact_samples(o->exact_samples);
     io.timing = o->timing.empty() ? scene_timings(scene) : std::vector<KeyTiming>{*parse_key_timing(o->timing)};
     std::printf("Newton core: %s\n", runtime::describe(core.choice).c_str());
