@@ -800,18 +800,21 @@ const char* to_string(ExactSamples e) {
   return "?";
 }
 
+namespace {
+constexpr std::array kExactSamples{ExactSamples::Subset, ExactSamples::SubsetThenAll, ExactSamples::All, ExactSamples::Auto};
+}  // namespace
+
 const std::vector<std::string>& exact_samples_names() {
   static const std::vector<std::string> names = [] {
     std::vector<std::string> v;
-    for (ExactSamples e : {ExactSamples::Subset, ExactSamples::SubsetThenAll, ExactSamples::All, ExactSamples::Auto})
-      v.emplace_back(to_string(e));
+    for (ExactSamples e : kExactSamples) v.emplace_back(to_string(e));
     return v;
   }();
   return names;
 }
 
 ExactSamples parse_exact_samples(const std::string& name) {
-  for (ExactSamples e : {ExactSamples::Subset, ExactSamples::SubsetThenAll, ExactSamples::All, ExactSamples::Auto})
+  for (ExactSamples e : kExactSamples)
     if (name == to_string(e)) return e;
   std::string valid;
   for (const std::string& n : exact_samples_names()) valid += (valid.empty() ? "" : ", ") + n;
