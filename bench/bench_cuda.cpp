@@ -171,7 +171,7 @@ SequenceStats run_sequence(const Loaded& L, MakeCore&& make_core, int frames, bo
   auto t0 = Clock::now();
   std::unique_ptr<NewtonCore> core = make_core();
   std::unique_ptr<MeshEvaluator> boundary;
-  if (gpu_boundary) boundary = std::make_unique<hc::MeshEvaluator>(L.setup->cage, L.setup->overlap.breakpoints().points);
+  if (gpu_boundary) boundary = std::make_unique<hc::MeshEvaluator>(L.setup->overlap.evaluator());  // the setup's rows, uploaded
   s.setup_ms = ms_since(t0);
   t0 = Clock::now();
   InterpolationOptions o;
