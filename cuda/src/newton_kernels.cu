@@ -348,15 +348,38 @@ __global__ void __launch_bounds__(kTallRows* kTallSlices)
   }
 }
 
-// C = Aᴴ · B for a tall A (rows × k) and B (rows × 2): one block per column of A, each
-// thread a fixed stride of rows, then a fixed tree (deterministic).
-__global__ void __launch_bounds__(kBlock)
+// C = Aᴴ · B for a tall A (rows × k) and B (rows × 2): one block of kAdjointThreads per
+// column of A, each thread a fixed stride of rows, kAdjointUnroll rows' loads issued
+// before they are summed (in row order), then a fixed tree: deterministic. With 256
+// threads and one load in flight per thread the loop waited on memory every row: 22 µs
+// for bar_holes' |G| = 10,000 × 76 on an H200 by Nsight Compute (bench/results/
+// ncu_hsi_interpolate_bar_holes_h200.txt), against ~3 µs to read A once.
+constexpr int kAdjointThreads = 1024, kAdjointUnroll = 4;
+__global__ void __launch_bounds__(kAdjointThreads)
     tall_adjoint_times_two_kernel(int rows, int k, const double2* __restrict__ A, const double2* __restrict__ B, double2* __restrict__ C) {
-  __shared__ double s[4][kBlock / 32];
+  __shared__ double s[4][kAdjointThreads / 32];
   const int j = static_cast<int>(blockIdx.x);
   const double2* a_col = A + static_cast<size_t>(j) * static_cast<size_t>(rows);
   double v[4] = {0, 0, 0, 0};  // Re, Im of conj(a)·b0, conj(a)·b1
-  for (int i = static_cast<int>(threadIdx.x); i < rows; i += static_cast<int>(blockDim.x)) {
+  const int stride = static_cast<int>(blockDim.x);
+  int i = static_cast<int>(threadIdx.x);
+  for (; i + (kAdjointUnroll - 1) * stride < rows; i += kAdjointUnroll * stride) {
+    double2 a[kAdjointUnroll], b0[kAdjointUnroll], b1[kAdjointUnroll];
+#pragma unroll
+    for (int u = 0; u < kAdjointUnroll; ++u) {
+      a[u] = a_col[i + u * stride];
+      b0[u] = B[i + u * stride];
+      b1[u] = B[rows + i + u * stride];
+    }
+#pragma unroll
+    for (int u = 0; u < kAdjointUnroll; ++u) {
+      v[0] += a[u].x * b0[u].x + a[u].y * b0[u].y;
+      v[1] += a[u].x * b0[u].y - a[u].y * b0[u].x;
+      v[2] += a[u].x * b1[u].x + a[u].y * b1[u].y;
+      v[3] += a[u].x * b1[u].y - a[u].y * b1[u].x;
+    }
+  }
+  for (; i < rows; i += stride) {
     const double2 a = a_col[i], b0 = B[i], b1 = B[rows + i];
     v[0] += a.x * b0.x + a.y * b0.y;
     v[1] += a.x * b0.y - a.y * b0.x;
@@ -369,12 +392,17 @@ __global__ void __launch_bounds__(kBlock)
     if (lane == 0) s[q][warp] = v[q];
   }
   __syncthreads();
-  if (threadIdx.x == 0) {
-    double t[4] = {0, 0, 0, 0};
-    for (int w = 0; w < static_cast<int>(blockDim.x) / 32; ++w)
-      for (int q = 0; q < 4; ++q) t[q] += s[q][w];
-    C[j] = make_double2(t[0], t[1]);
-    C[k + j] = make_double2(t[2], t[3]);
+  if (threadIdx.x < 32) {  // the warps' sums, by one warp in a fixed tree
+    const int warps = static_cast<int>(blockDim.x) / 32;
+    for (int q = 0; q < 4; ++q) {
+      double t = lane < warps ? s[q][lane] : 0.0;
+      for (int o = 16; o > 0; o >>= 1) t += __shfl_down_sync(0xffffffffu, t, o);
+      if (lane == 0) v[q] = t;
+    }
+    if (lane == 0) {
+      C[j] = make_double2(v[0], v[1]);
+      C[k + j] = make_double2(v[2], v[3]);
+    }
   }
 }
 
@@ -555,7 +583,8 @@ cudaError_t tall_times_two(int rows, int k, const double2* A, const double2* B, 
 }
 
 cudaError_t tall_adjoint_times_two(int rows, int k, const double2* A, const double2* B, double2* C, cudaStream_t stream) {
-  tall_adjoint_times_two_kernel<<<static_cast<unsigned>(k), kBlock, 0, stream>>>(rows, k, A, B, C);
+  if (k <= 0) return cudaSuccess;
+  tall_adjoint_times_two_kernel<<<static_cast<unsigned>(k), kAdjointThreads, 0, stream>>>(rows, k, A, B, C);
   return cudaGetLastError();
 }
 
