@@ -423,7 +423,7 @@ class CountingCore final : public ForwardingCore {
 }  // namespace
 
 TEST_CASE("a sequence with chord steps builds fewer Hessians, takes no more iterations and gives the frames of one without",
-          "[interpolation][chord]") {
+          "[interpolation][chord][long]") {
   TwistScene& S = twist_scene();
   auto run = [&](bool chord, int& hessians) {
     InterpolationOptions o;

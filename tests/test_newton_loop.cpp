@@ -431,7 +431,7 @@ Scene grid_scene(int k) {
 }
 }  // namespace
 
-TEST_CASE("the grid of holes of issue #20 converges in a few iterations per frame, as the paper reports", "[newton][interpolation][stall]") {
+TEST_CASE("the grid of holes of issue #20 converges in a few iterations per frame, as the paper reports", "[newton][interpolation][stall][long]") {
   Scene sc = grid_scene(2);
   sc.samples = 4000;
   const auto setup = scene_setup(sc);
@@ -516,7 +516,7 @@ CorpusRun corpus_run(const std::string& id) {
 }  // namespace
 
 TEST_CASE("the exact system modulo the rotation converges in fewer iterations than the gauged one (annulus/hinge_posed)",
-          "[newton][interpolation][stress]") {
+          "[newton][interpolation][stress][long]") {
   const CorpusRun run = corpus_run("annulus/hinge_posed");
   const auto& setup = run.setup;
   const stress::Authored& a = run.authored;
@@ -1084,7 +1084,7 @@ TEST_CASE("newton_run: exact_samples builds the exact system over all of G (All)
 }
 
 TEST_CASE("the exact system over all of G ends PartProj's frames where the subset's is indefinite (links/bend)",
-          "[newton][interpolation][stress]") {
+          "[newton][interpolation][stress][long]") {
   // links/bend at |G| 2,000 (bench_stress --trace): at every PartProj solution the exact
   // system over H has an eigenvalue of about -2e-7 against a largest of 16 and the loop
   // finishes on the projection; over G it is definite and Newton ends in fewer steps.

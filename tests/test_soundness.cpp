@@ -12,7 +12,7 @@
 
 using namespace hsi;
 
-TEST_CASE("soundness: never certifies a folded map, on every bundled shape", "[certificate][soundness]") {
+TEST_CASE("soundness: never certifies a folded map, on every bundled shape", "[certificate][soundness][long]") {
   std::vector<std::filesystem::path> scenes;
   for (const auto& e : std::filesystem::directory_iterator(HSI_ASSETS_DIR))
     if (e.path().extension() == ".json") scenes.push_back(e.path());

@@ -62,18 +62,18 @@ void run_slice(const std::string& id) {
 }  // namespace
 
 // Pass today.
-TEST_CASE("stress slice: grid_2/issue (the issue's 2 x 2 grid of holes, right side turned 0.6 rad)", "[stress]") {
+TEST_CASE("stress slice: grid_2/issue (the issue's 2 x 2 grid of holes, right side turned 0.6 rad)", "[stress][long]") {
   run_slice("grid_2/issue");
 }
-TEST_CASE("stress slice: letter_b/hinge (thin B, the top turned)", "[stress]") { run_slice("letter_b/hinge"); }
-TEST_CASE("stress slice: chain/hinge (four thin rings, the end turned)", "[stress]") { run_slice("chain/hinge"); }
+TEST_CASE("stress slice: letter_b/hinge (thin B, the top turned)", "[stress][long]") { run_slice("letter_b/hinge"); }
+TEST_CASE("stress slice: chain/hinge (four thin rings, the end turned)", "[stress][long]") { run_slice("chain/hinge"); }
 
 // These stalled at the iteration cap before the Newton fix of issue #20.
-TEST_CASE("stress slice: annulus/hinge (a part turned past 100 deg)", "[stress]") { run_slice("annulus/hinge"); }
-TEST_CASE("stress slice: glyph_B/scale (posed first keyframe, scale 0.6 to 1.6 with a large turn)", "[stress]") {
+TEST_CASE("stress slice: annulus/hinge (a part turned past 100 deg)", "[stress][long]") { run_slice("annulus/hinge"); }
+TEST_CASE("stress slice: glyph_B/scale (posed first keyframe, scale 0.6 to 1.6 with a large turn)", "[stress][long]") {
   run_slice("glyph_B/scale");
 }
-TEST_CASE("stress slice: fork/scale (thin tines, posed first keyframe, scale change with a large turn)", "[stress]") {
+TEST_CASE("stress slice: fork/scale (thin tines, posed first keyframe, scale change with a large turn)", "[stress][long]") {
   run_slice("fork/scale");
 }
 
@@ -140,10 +140,10 @@ void check_orientation(const std::string& id) {
 
 }  // namespace
 
-TEST_CASE("stress slice, loops reversed: annulus/hinge is the same map", "[stress][orientation]") {
+TEST_CASE("stress slice, loops reversed: annulus/hinge is the same map", "[stress][orientation][long]") {
   check_orientation("annulus/hinge");
 }
-TEST_CASE("stress slice, loops reversed: grid_2/issue is the same map", "[stress][orientation]") {
+TEST_CASE("stress slice, loops reversed: grid_2/issue is the same map", "[stress][orientation][long]") {
   check_orientation("grid_2/issue");
 }
 

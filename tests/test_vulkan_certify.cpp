@@ -142,7 +142,7 @@ HarmonicMap blend(const HarmonicMap& a, const HarmonicMap& b, double t) {
 
 }  // namespace
 
-TEST_CASE("dense certificate agrees with the CPU on every bundled scene's keyframes", "[vulkan][certify]") {
+TEST_CASE("dense certificate agrees with the CPU on every bundled scene's keyframes", "[vulkan][certify][long]") {
   with_vulkan([](compute::Context& ctx) {
     Agreement agree;
     for (const auto& path : test::asset_scenes()) {
