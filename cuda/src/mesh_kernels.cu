@@ -45,8 +45,9 @@ __global__ void __launch_bounds__(kPoints* kSlices) mesh_values_kernel(long long
   part[2][ty][tx] = fz;
   part[3][ty][tx] = fzb;
   __syncthreads();
-  if (ty >= 4 || !inside || (ty >= 1 && !D)) return;
-  // Thread (x, q) adds sum q over the slices: q = 0, 1 the value's Cφ and Cψ, 2, 3 f_z and f_z̄.
+  // Thread (x, 0) adds both halves of the value, Cφ and Cψ; threads (x, 2), (x, 3) add f_z and
+  // f_z̄. The others have nothing left to do.
+  if (ty == 1 || ty >= 4 || !inside || (ty >= 2 && !D)) return;
   double2 t = make_double2(0, 0);
   for (int y = 0; y < kSlices; ++y) {
     t.x += part[ty][y][tx].x;
