@@ -260,8 +260,10 @@ int main(int argc, char** argv) {
               "kernel (a cluster of 8 blocks) up to m = %d, ceil(m/32) launches above; the caller prefers cuSOLVER "
               "above m = %d (kCholeskyPreferredMaxOrder). Xpotrf/Xpotrs: cuSOLVER's 64-bit API (default params); "
               "batched: cusolverDnDpotrfBatched/DpotrsBatched at batch 1 (timed, not wired); our factor_solve: "
-              "cholesky_factor_solve, factor with the forward substitution fused, then back substitution (A and b restored).\n\n",
-              reps, hk::kCholeskyClusterMaxOrder, hk::kCholeskyPreferredMaxOrder);
+              "cholesky_factor_solve, factor with the forward substitution fused, then back substitution (A and b restored). "
+              "Our solve: cholesky_solve, one kernel, a cluster of 8 blocks holding L up to m = %d (what the CUDA core "
+              "uses after potrf and with a kept factor), one block above.\n\n",
+              reps, hk::kCholeskyClusterMaxOrder, hk::kCholeskyPreferredMaxOrder, hk::kCholeskySolveClusterMaxOrder);
   std::printf("| scene | m | potrf µs | our factor µs | potrf / ours | potrs µs | our solve µs | potrs / ours | "
               "cuSOLVER graph µs | our graph µs | cuSOLVER / ours (graph) | max rel diff | info (cuSOLVER, ours) | "
               "Xpotrf µs | Xpotrs µs | potrfBatched µs | potrsBatched µs | our factor_solve µs |\n"

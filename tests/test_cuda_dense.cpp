@@ -337,3 +337,48 @@ TEST_CASE("dense Cholesky: the calls captured into a CUDA graph give the same re
     }
   }
 }
+
+TEST_CASE("dense Cholesky: the solve with a given factor (cuSOLVER's potrf) agrees with Eigen's at every order the cluster takes",
+          "[cuda][dense]") {
+  HSI_REQUIRE_GPU();
+  hc::Stream stream;
+  int device = 0, major = 0;
+  HSI_CUDA_CHECK(cudaGetDevice(&device));
+  HSI_CUDA_CHECK(cudaDeviceGetAttribute(&major, cudaDevAttrComputeCapabilityMajor, device));
+  // The CUDA core solves with factors it did not make (potrf's, the kept one): L from
+  // Eigen here, the strictly upper triangle NaN (never read), at the orders around each
+  // tile and around the cluster's limit, where the one-block kernel takes over.
+  std::vector<int> orders = {1, 2, 31, 32, 33, 95, 96, 97, 124, 166, 174, 208, 216, 250, 255, 256, 257, 292, 293, 300, 416,
+                             480, 511, 512, 513, 600};
+  for (const int m : orders) {
+    INFO("m = " << m);
+    if (major >= 9 && m <= hk::kCholeskySolveClusterMaxOrder) CHECK(hk::cholesky_solve_in_cluster(m));
+    if (m > hk::kCholeskySolveClusterMaxOrder) CHECK_FALSE(hk::cholesky_solve_in_cluster(m));
+    for (const bool ill : {false, true}) {
+      INFO((ill ? "cond 1e8" : "well conditioned"));
+      const Eigen::MatrixXd A = ill ? ill_conditioned(m, 1e8, 300u + static_cast<unsigned>(m)) : well_conditioned(m, 301u + static_cast<unsigned>(m));
+      const Eigen::LLT<Eigen::MatrixXd> llt(A);
+      REQUIRE(llt.info() == Eigen::Success);
+      const Eigen::MatrixXd L = llt.matrixL();
+      const Eigen::VectorXd b = random_vector(m, 302u + static_cast<unsigned>(m));
+      const Eigen::VectorXd want = llt.solve(b);
+      const int lda = m + (m % 3 == 0 ? 5 : 0);  // a padded leading dimension at some orders
+      DeviceSystem sys(L, lda, b);
+      HSI_CUDA_CHECK(hk::cholesky_solve(m, sys.A.get(), lda, sys.b.get(), stream));
+      HSI_CUDA_CHECK(cudaStreamSynchronize(stream));
+      CHECK(sys.outside_lower_untouched());
+      const Eigen::VectorXd x = sys.solution();
+      CHECK(x.allFinite());
+      CHECK(residual(A, x, b) < 1e-12);
+      // Two backward-stable triangular solves with the same L differ by ~cond(A) ε.
+      CHECK((x - want).cwiseAbs().maxCoeff() <= (ill ? 1e-6 : 1e-12) * want.cwiseAbs().maxCoeff());
+      // The same bits on a second run: every sum in a fixed order, whatever the timing
+      // between the cluster's warps.
+      sys.upload(b);
+      HSI_CUDA_CHECK(hk::cholesky_solve(m, sys.A.get(), lda, sys.b.get(), stream));
+      HSI_CUDA_CHECK(cudaStreamSynchronize(stream));
+      const Eigen::VectorXd again = sys.solution();
+      CHECK(std::memcmp(again.data(), x.data(), static_cast<size_t>(m) * sizeof(double)) == 0);
+    }
+  }
+}

@@ -8,7 +8,9 @@
 // (b) applies panel c − 1 to the trailing tiles (i, j), j ≥ c + 1; (c) stores L_c−1,c−1,
 // which launch c − 1 could not (its blocks were reading A_c−1,c−1). No block reads what
 // another block of the same launch writes, so launches are the only synchronisation.
-// Solve: one block; warp w owns the tile rows ≡ w (mod 8) and substitutes them in
+// Solve, m ≤ kCholeskySolveClusterMaxOrder: one kernel, a cluster of 8 blocks holding L in
+// shared memory (solve_cluster below). Solve, larger m (and the back substitution after
+// the fused factor): one block; warp w owns the tile rows ≡ w (mod 8) and substitutes them in
 // order, waiting on a per-tile ready flag in shared memory for the tiles it needs
 // (forward L y = b from the top, then back Lᵀ x = y from the bottom); the diagonal
 // tiles are applied as explicit inverses, made by each owner before it waits.
@@ -516,6 +518,173 @@ __global__ void __launch_bounds__(kSolveThreads)
   for (int e = static_cast<int>(threadIdx.x); e < m; e += kSolveThreads) b[e] = y[e];
 }
 
+
+// ---- The solve for m ≤ kCholeskySolveClusterMaxOrder: one cluster of 8 blocks that
+// holds L in shared memory. The one-block solve above reads L from global memory with
+// one block's few loads in flight (~58 µs at m = 292 on an H100, no faster than
+// cuSOLVER's potrs); here 8 blocks load it at once. Block r owns the tile rows i ≡ r
+// (mod 8): L_i0 … L_ii, each tile 32 × 32 column-major with column stride 33, the
+// diagonal tile replaced by its inverse once loaded. Warp q of a block substitutes its
+// q-th own tile row, so every tile row has a warp of its own and the substitution is a
+// dataflow between warps:
+//  - forward, y_i = L_ii⁻¹ (b_i − Σ_{s<i} L_is y_s): the warp subtracts each y_s as soon
+//    as it is published (in order of s), then pushes y_i into every block's copy of y
+//    and raises that block's flag for i;
+//  - back, x_i = L_ii⁻ᵀ (y_i − Σ_{j>i} L_jiᵀ x_j): row j's warp, once it has x_j, makes
+//    each L_jiᵀ x_j (i = j − 1 first: the next row waits for it) and pushes it into a
+//    slot of row i's block; row i sums its slots in order of j once each has arrived.
+// Every sum runs in a fixed order, so the result does not depend on timing. A flag is
+// raised after the data it guards (a cluster-scope fence between), read before it
+// (a fence after); flags are cleared and the cluster synchronised before any push, and
+// again before any block exits (no block's shared memory may go while others write it).
+constexpr int kSolveClusterThreads = 256;  // all load L; warps 0..(own rows − 1) substitute
+constexpr int kSolveClusterMaxTiles = kCholeskySolveClusterMaxOrder / kT;
+constexpr int kTileStride = kT + 1;        // column stride of a tile in shared memory
+constexpr int kTileDoubles = kT * kTileStride;
+static_assert(kCholeskySolveClusterMaxOrder % kT == 0);
+static_assert(kSolveClusterMaxTiles <= kClusterBlocks * (kSolveClusterThreads / 32), "a warp per own tile row");
+
+// Tile rows block `rank` owns (i = rank, rank + 8, ... < T) and where its q-th one starts
+// (in tiles: row i has i + 1 of them).
+__host__ __device__ constexpr int solve_owned_rows(int T, int rank) {
+  return rank < T ? (T - 1 - rank) / kClusterBlocks + 1 : 0;
+}
+__host__ __device__ constexpr int solve_row_offset(int rank, int q) {
+  int offset = 0;
+  for (int p = 0; p < q; ++p) offset += rank + kClusterBlocks * p + 1;
+  return offset;
+}
+// Dynamic shared memory, the same layout in every block (a block writes into another's
+// at the same offsets, cluster.map_shared_rank): first what the others write, a copy of
+// y (32T doubles) and a slot of 32 per own row and source row (the back substitution's
+// L_jiᵀ x_j; rank 0 owns the most rows), then the flags (T for y, then one per slot;
+// an even count keeps the tiles 8-byte aligned), then the block's own tile rows.
+__host__ __device__ constexpr int solve_slot_rows(int T) { return solve_owned_rows(T, 0); }
+__host__ __device__ constexpr int solve_flag_count(int T) { return (T + solve_slot_rows(T) * T + 1) / 2 * 2; }
+__host__ __device__ constexpr size_t solve_header_doubles(int T) {
+  return static_cast<size_t>(kT) * T + static_cast<size_t>(solve_slot_rows(T)) * T * kT + static_cast<size_t>(solve_flag_count(T)) / 2;
+}
+__host__ __device__ constexpr size_t solve_cluster_bytes(int T, int rank) {
+  return sizeof(double) *
+         (solve_header_doubles(T) + static_cast<size_t>(solve_row_offset(rank, solve_owned_rows(T, rank))) * kTileDoubles);
+}
+// The most any block of the cluster asks for (every block gets the same amount).
+__host__ __device__ constexpr size_t solve_cluster_shared_bytes(int T) {
+  size_t most = 0;
+  for (int r = 0; r < kClusterBlocks; ++r) most = solve_cluster_bytes(T, r) > most ? solve_cluster_bytes(T, r) : most;
+  return most;
+}
+static_assert(solve_cluster_shared_bytes(kSolveClusterMaxTiles) <= 227 * 1024, "sm_90's shared memory per block (opt-in)");
+
+__device__ __forceinline__ void fence_cluster() { asm volatile("fence.acq_rel.cluster;" ::: "memory"); }
+// Waits for a flag another warp of the cluster raises. A flag that never comes is a bug
+// of this file; the kernel then traps (a launch error at the next synchronisation)
+// after 2^27 polls (about a second) instead of hanging the device.
+__device__ __forceinline__ void wait_flag(const int* flag) {
+  for (long long polls = 0; *static_cast<const volatile int*>(flag) == 0; ++polls)
+    if (polls > (1LL << 27)) __trap();
+  fence_cluster();  // what the flag guards is read after it
+}
+
+__global__ void __cluster_dims__(kClusterBlocks, 1, 1) __launch_bounds__(kSolveClusterThreads)
+    solve_cluster(int m, const double* __restrict__ L, int lda, double* b, int T) {
+  extern __shared__ double smem[];
+  const cg::cluster_group cluster = cg::this_cluster();
+  const int rank = static_cast<int>(cluster.block_rank());
+  const int tid = static_cast<int>(threadIdx.x), lane = tid & 31, warp = tid / 32;
+  const int own = solve_owned_rows(T, rank);
+  double* const ycopy = smem;
+  double* const slots = ycopy + kT * T;
+  int* const yflag = reinterpret_cast<int*>(slots + solve_slot_rows(T) * T * kT);
+  int* const sflag = yflag + T;
+  double* const tiles = smem + solve_header_doubles(T);
+
+  // Own tile rows of L: the lower triangle inside the matrix, 1 on the diagonal past m,
+  // 0 elsewhere (the strictly upper triangle is never read). Consecutive threads read
+  // consecutive rows of a column (coalesced).
+  for (int q = 0; q < own; ++q) {
+    const int i = rank + kClusterBlocks * q, width = kT * (i + 1);
+    double* const row = tiles + static_cast<size_t>(solve_row_offset(rank, q)) * kTileDoubles;
+#pragma unroll 4
+    for (int e = tid; e < kT * width; e += kSolveClusterThreads) {
+      const int r = e & (kT - 1), c = e / kT, gr = i * kT + r;
+      double v = gr == c ? 1.0 : 0.0;
+      if (gr < m && c < m && c <= gr) v = L[static_cast<size_t>(gr) + static_cast<size_t>(c) * static_cast<size_t>(lda)];
+      row[(c / kT) * kTileDoubles + r + (c & (kT - 1)) * kTileStride] = v;
+    }
+  }
+  for (int e = tid; e < solve_flag_count(T); e += kSolveClusterThreads) yflag[e] = 0;  // yflag, then sflag
+  __syncthreads();
+  // Each warp inverts its own row's diagonal tile in place (lane r: row r).
+  if (warp < own) {
+    double* const D = tiles + static_cast<size_t>(solve_row_offset(rank, warp) + rank + kClusterBlocks * warp) * kTileDoubles;
+    double t[kT], x[kT];
+#pragma unroll
+    for (int c = 0; c < kT; ++c) t[c] = c < lane ? D[lane + c * kTileStride] : 0.0;
+    const double inv_d = 1.0 / D[lane + lane * kTileStride];
+    invert_triangular_tile<true>(t, inv_d, x);
+#pragma unroll
+    for (int c = 0; c < kT; ++c) D[lane + c * kTileStride] = x[c];
+  }
+  cluster.sync();  // every flag cleared before anyone pushes
+
+  if (warp < own) {
+    const int q = warp, i = rank + kClusterBlocks * q, gr = i * kT + lane;
+    const double* const row = tiles + static_cast<size_t>(solve_row_offset(rank, q)) * kTileDoubles;
+    const double* const inv = row + static_cast<size_t>(i) * kTileDoubles;
+    double v[kT];
+
+    // Forward.
+    double acc = gr < m ? b[gr] : 0.0;
+    for (int s = 0; s < i; ++s) {
+      const double* const t = row + static_cast<size_t>(s) * kTileDoubles;
+#pragma unroll
+      for (int c = 0; c < kT; ++c) v[c] = t[lane + c * kTileStride];  // row `lane` of L_is
+      wait_flag(yflag + s);
+      const double* const ys = ycopy + s * kT;
+      double a0 = 0.0, a1 = 0.0, a2 = 0.0, a3 = 0.0;
+#pragma unroll
+      for (int c = 0; c < kT; c += 4) {  // broadcast reads of y_s
+        a0 += v[c] * ys[c];
+        a1 += v[c + 1] * ys[c + 1];
+        a2 += v[c + 2] * ys[c + 2];
+        a3 += v[c + 3] * ys[c + 3];
+      }
+      acc -= (a0 + a1) + (a2 + a3);
+    }
+#pragma unroll
+    for (int c = 0; c < kT; ++c) v[c] = inv[lane + c * kTileStride];  // row `lane` of L_ii⁻¹
+    const double y = row_times_warp_vector(v, acc);
+    for (int r = 0; r < kClusterBlocks; ++r) cluster.map_shared_rank(ycopy, r)[i * kT + lane] = y;
+    fence_cluster();
+    __syncwarp();
+    if (lane < kClusterBlocks) *static_cast<volatile int*>(cluster.map_shared_rank(yflag, lane) + i) = 1;
+
+    // Back.
+    acc = y;
+    for (int j = T - 1; j > i; --j) {
+      wait_flag(sflag + q * T + j);
+      acc -= slots[(q * T + j) * kT + lane];
+    }
+#pragma unroll
+    for (int c = 0; c < kT; ++c) v[c] = inv[c + lane * kTileStride];  // row `lane` of L_ii⁻ᵀ
+    const double x = row_times_warp_vector(v, acc);
+    if (gr < m) b[gr] = x;
+    for (int s = i - 1; s >= 0; --s) {  // L_isᵀ x_i to row s, the next row first
+      const double* const t = row + static_cast<size_t>(s) * kTileDoubles;
+#pragma unroll
+      for (int c = 0; c < kT; ++c) v[c] = t[c + lane * kTileStride];  // row `lane` of L_isᵀ
+      const double contribution = row_times_warp_vector(v, x);
+      const int owner = s % kClusterBlocks, qs = s / kClusterBlocks;
+      cluster.map_shared_rank(slots, owner)[(qs * T + i) * kT + lane] = contribution;
+      fence_cluster();
+      __syncwarp();
+      if (lane == 0) *static_cast<volatile int*>(cluster.map_shared_rank(sflag, owner) + qs * T + i) = 1;
+    }
+  }
+  cluster.sync();  // no block leaves while another may still write its shared memory
+}
+
 int tiles(int m) { return (m + kT - 1) / kT; }
 
 // Whether the current device can run one cluster of factor_cluster at the largest
@@ -537,6 +706,27 @@ bool cluster_factor_available() {
                         cudaSuccess &&
                     cudaOccupancyMaxActiveClusters(&clusters, factor_cluster, &config) == cudaSuccess && clusters >= 1;
     (void)cudaGetLastError();  // a refused query leaves no error behind
+    known[device] = ok ? 1 : 2;
+  }
+  return known[device] == 1;
+}
+
+// The same for solve_cluster at its largest shared memory.
+bool cluster_solve_available() {
+  static std::atomic<int> known[64] = {};
+  int device = 0;
+  if (cudaGetDevice(&device) != cudaSuccess || device < 0 || device >= 64) return false;
+  if (known[device] == 0) {
+    const size_t bytes = solve_cluster_shared_bytes(kSolveClusterMaxTiles);
+    int clusters = 0;
+    cudaLaunchConfig_t config = {};
+    config.gridDim = dim3(kClusterBlocks);
+    config.blockDim = dim3(kSolveClusterThreads);
+    config.dynamicSmemBytes = bytes;
+    const bool ok = cudaFuncSetAttribute(solve_cluster, cudaFuncAttributeMaxDynamicSharedMemorySize, static_cast<int>(bytes)) ==
+                        cudaSuccess &&
+                    cudaOccupancyMaxActiveClusters(&clusters, solve_cluster, &config) == cudaSuccess && clusters >= 1;
+    (void)cudaGetLastError();
     known[device] = ok ? 1 : 2;
   }
   return known[device] == 1;
@@ -572,9 +762,15 @@ cudaError_t cholesky_solve(int m, const double* L, int lda, double* b, cudaStrea
   static_assert(kCholeskySolveMaxOrder % kT == 0);
   static_assert((kCholeskySolveMaxOrder / kT) * (kT * sizeof(double) + 2 * sizeof(int)) <= 48 * 1024,
                 "the solve's shared memory must fit the default 48 KiB");
+  if (cholesky_solve_in_cluster(m)) {
+    solve_cluster<<<kClusterBlocks, kSolveClusterThreads, solve_cluster_shared_bytes(T), stream>>>(m, L, lda, b, T);
+    return cudaGetLastError();
+  }
   solve_kernel<<<1, kSolveThreads, solve_shared_bytes(T), stream>>>(m, L, lda, b, T, true);
   return cudaGetLastError();
 }
+
+bool cholesky_solve_in_cluster(int m) { return m > 0 && m <= kCholeskySolveClusterMaxOrder && cluster_solve_available(); }
 
 cudaError_t cholesky_factor_solve(int m, double* A, int lda, double* b, int* info, cudaStream_t stream) {
   if (m < 0 || lda < (m > 1 ? m : 1) || m > kCholeskySolveMaxOrder) return cudaErrorInvalidValue;

@@ -39,10 +39,21 @@ constexpr int kCholeskySolveMaxOrder = 5632;
 // cudaErrorInvalidValue for m < 0 or lda < max(1, m); otherwise the launch status.
 cudaError_t cholesky_factor(int m, double* A, int lda, int* info, cudaStream_t stream);
 
-// b ← (L Lᵀ)⁻¹ b with L from cholesky_factor (m × m lower, leading dimension lda), one
-// kernel of one thread block. cudaErrorInvalidValue for m < 0, lda < max(1, m) or
-// m > kCholeskySolveMaxOrder; otherwise the launch status.
+// Up to this order (and where the device can place the cluster) cholesky_solve is one
+// kernel of a cluster of 8 blocks holding L in their shared memory, forward and back
+// substitution together; above it, one kernel of one block reading L from global memory.
+constexpr int kCholeskySolveClusterMaxOrder = 512;
+
+// b ← (L Lᵀ)⁻¹ b with L lower triangular (m × m, leading dimension lda; its strictly
+// upper triangle is not read): from cholesky_factor or from cuSOLVER's potrf (lower).
+// One kernel: a cluster of 8 blocks when cholesky_solve_in_cluster(m), else one block.
+// The result does not depend on timing (every sum in a fixed order). cudaErrorInvalidValue
+// for m < 0, lda < max(1, m) or m > kCholeskySolveMaxOrder; otherwise the launch status.
 cudaError_t cholesky_solve(int m, const double* L, int lda, double* b, cudaStream_t stream);
+
+// Whether cholesky_solve(m, …) runs as the cluster kernel on the current device (a host
+// query, asked of the device once; allowed while a stream is being captured).
+bool cholesky_solve_in_cluster(int m);
 
 // cholesky_factor, then b ← (L Lᵀ)⁻¹ b, with the forward substitution fused into the
 // factorisation: for m < kCholeskyClusterMaxOrder the cluster kernel factors [A | b]

@@ -400,4 +400,13 @@ inline bool own_cholesky_enabled() {
   return v && std::string(v) == "own";
 }
 
+// Whether the Newton system's triangular solves (after cuSOLVER's potrf, and with a kept
+// factor) are cuSOLVER's potrs rather than dense_cholesky.h's cholesky_solve: only with
+// HSI_CUDA_SOLVE=cusolver (the reference). cholesky_solve is one cluster kernel up to
+// kCholeskySolveClusterMaxOrder; above it potrs is used either way.
+inline bool cusolver_solve_forced() {
+  const char* v = std::getenv("HSI_CUDA_SOLVE");
+  return v && std::string(v) == "cusolver";
+}
+
 }  // namespace hsi::cuda
