@@ -687,49 +687,35 @@ __global__ void __cluster_dims__(kClusterBlocks, 1, 1) __launch_bounds__(kSolveC
 
 int tiles(int m) { return (m + kT - 1) / kT; }
 
-// Whether the current device can run one cluster of factor_cluster at the largest
-// shared memory it asks for (sm_90 and up; a GPU partition or MPS share may not place 8
-// such blocks in one GPC): otherwise the tiled kernels factor every m. Asked once per
-// device; a host query only, so it is allowed while a stream is being captured.
-bool cluster_factor_available() {
+// Whether the current device can run one cluster of `Kernel` (kClusterBlocks blocks of
+// `threads`) at `bytes` of dynamic shared memory, the most the kernel asks for, whose
+// attribute it sets (sm_90 and up; a GPU partition or MPS share may not place 8 such
+// blocks in one GPC). Asked once per device and kernel; a host query only, so it is
+// allowed while a stream is being captured.
+template <auto Kernel>
+bool cluster_available(int threads, size_t bytes) {
   static std::atomic<int> known[64] = {};  // 0 unknown, 1 yes, 2 no (per device ordinal); racing askers agree
   int device = 0;
   if (cudaGetDevice(&device) != cudaSuccess || device < 0 || device >= 64) return false;
   if (known[device] == 0) {
-    const size_t bytes = cluster_shared_bytes(kClusterMaxTiles);
     int clusters = 0;
     cudaLaunchConfig_t config = {};
     config.gridDim = dim3(kClusterBlocks);
-    config.blockDim = dim3(kClusterThreads);
+    config.blockDim = dim3(static_cast<unsigned>(threads));
     config.dynamicSmemBytes = bytes;
-    const bool ok = cudaFuncSetAttribute(factor_cluster, cudaFuncAttributeMaxDynamicSharedMemorySize, static_cast<int>(bytes)) ==
-                        cudaSuccess &&
-                    cudaOccupancyMaxActiveClusters(&clusters, factor_cluster, &config) == cudaSuccess && clusters >= 1;
+    const bool ok = cudaFuncSetAttribute(Kernel, cudaFuncAttributeMaxDynamicSharedMemorySize, static_cast<int>(bytes)) == cudaSuccess &&
+                    cudaOccupancyMaxActiveClusters(&clusters, Kernel, &config) == cudaSuccess && clusters >= 1;
     (void)cudaGetLastError();  // a refused query leaves no error behind
     known[device] = ok ? 1 : 2;
   }
   return known[device] == 1;
 }
 
-// The same for solve_cluster at its largest shared memory.
+// factor_cluster at its largest T; otherwise the tiled kernels factor every m.
+bool cluster_factor_available() { return cluster_available<factor_cluster>(kClusterThreads, cluster_shared_bytes(kClusterMaxTiles)); }
+// solve_cluster at its largest T; otherwise the one-block kernel solves every m.
 bool cluster_solve_available() {
-  static std::atomic<int> known[64] = {};
-  int device = 0;
-  if (cudaGetDevice(&device) != cudaSuccess || device < 0 || device >= 64) return false;
-  if (known[device] == 0) {
-    const size_t bytes = solve_cluster_shared_bytes(kSolveClusterMaxTiles);
-    int clusters = 0;
-    cudaLaunchConfig_t config = {};
-    config.gridDim = dim3(kClusterBlocks);
-    config.blockDim = dim3(kSolveClusterThreads);
-    config.dynamicSmemBytes = bytes;
-    const bool ok = cudaFuncSetAttribute(solve_cluster, cudaFuncAttributeMaxDynamicSharedMemorySize, static_cast<int>(bytes)) ==
-                        cudaSuccess &&
-                    cudaOccupancyMaxActiveClusters(&clusters, solve_cluster, &config) == cudaSuccess && clusters >= 1;
-    (void)cudaGetLastError();
-    known[device] = ok ? 1 : 2;
-  }
-  return known[device] == 1;
+  return cluster_available<solve_cluster>(kSolveClusterThreads, solve_cluster_shared_bytes(kSolveClusterMaxTiles));
 }
 
 size_t solve_shared_bytes(int T) { return static_cast<size_t>(T) * (kT * sizeof(double) + 2 * sizeof(int)); }
