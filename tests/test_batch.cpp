@@ -3,7 +3,9 @@
 // a sequence that fails is named while the others finish.
 #include <catch2/catch.hpp>
 #include <atomic>
+#include <chrono>
 #include <map>
+#include <thread>
 
 #ifdef _OPENMP
 #include <omp.h>
@@ -161,11 +163,14 @@ TEST_CASE("a batch's boundary evaluators: one per worker and shape, lent to its 
   BatchOptions lent = plain;
   lent.make_boundary = [&](const ShapeSetup& setup) {
     ++made;
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));  // the stats must count it as the cores' set-up
     return make_cpu_mesh_evaluator(setup.cage, setup.overlap.breakpoints().points);
   };
   const BatchResult r = solve_batch(sequences, lent);
   REQUIRE(r.failed() == 0);
   CHECK(made.load() == r.stats.cores_made);  // with each core, not with each Interpolator
+  CHECK(r.stats.core_set_up_s >= 0.02 * made.load());
+  CHECK(r.stats.core_set_up_s < r.stats.set_up_s);  // the interpolators' part is the rest
   CHECK(r.stats.interpolators_built > made.load());
   for (size_t s = 0; s < sequences.size(); ++s) {
     REQUIRE(r.sequences[s].frames.size() == reference.sequences[s].frames.size());

@@ -219,7 +219,7 @@ BatchResult solve_batch(const std::vector<BatchSequence>& sequences, const Batch
     std::unique_ptr<Interpolator> interp;
     int interp_sequence = -1, sequence = -1, group = -1;
     int cores_made = 0, built = 0;
-    double set_up_s = 0;
+    double set_up_s = 0, core_set_up_s = 0;
     for (int r; !cancel.load() && (r = scheduler.claim(sequence, group)) >= 0;) {
       const Run& run = scheduler.run(r);
       const BatchSequence& q = sequences[static_cast<size_t>(run.sequence)];
@@ -234,6 +234,7 @@ BatchResult solve_batch(const std::vector<BatchSequence>& sequences, const Batch
             if (!core) throw InputError("the core factory made no core");
             ++cores_made;
             if (options.make_boundary) boundaries[q.setup] = options.make_boundary(*q.setup);
+            core_set_up_s += seconds_since(ts);
           }
           const auto lent = boundaries.find(q.setup);
           MeshEvaluator* const boundary = lent == boundaries.end() ? nullptr : lent->second.get();
@@ -267,6 +268,7 @@ BatchResult solve_batch(const std::vector<BatchSequence>& sequences, const Batch
     stats.cores_made += cores_made;
     stats.interpolators_built += built;
     stats.set_up_s += set_up_s;
+    stats.core_set_up_s += core_set_up_s;
   };
   std::vector<std::thread> pool;
   for (int w = 0; w < stats.workers; ++w) pool.emplace_back(work);

@@ -69,6 +69,7 @@ struct BatchStats {
   int cores_made = 0;            // Newton cores made by the factory (one per worker and setup it met)
   int interpolators_built = 0;   // each certifies its sequence's keyframes (one per worker and sequence it met)
   double set_up_s = 0;           // time the workers spent making cores and interpolators, summed over workers
+  double core_set_up_s = 0;      // the part of set_up_s spent making cores and boundary evaluators (the rest: interpolators)
   double seconds = 0;            // wall-clock time of solve_batch
   bool cancelled = false;        // the progress callback asked to stop; unfinished sequences have an error
 };
