@@ -233,7 +233,7 @@ class DeviceStepper final : public NewtonStepper {
   }
 
   bool keep(KeptSystem& slot) override {
-    if (!factored_exact_ || kept_ || own_factor_) return false;
+    if (!factored_exact_ || kept_) return false;
     HSI_CUDA_CHECK(cudaMemcpyAsync(S_.Hk.get(), S_.Hr.get(), sz(m_) * sz(m_) * sizeof(double), cudaMemcpyDeviceToDevice, st()));
     if (horizontal_) {  // its rotation frame (linearize's u and tmp = [a; |u|²])
       const size_t n4 = 4 * sz(c_.n_), bytes = n4 * sizeof(double);
@@ -450,9 +450,9 @@ class DeviceStepper final : public NewtonStepper {
     if (kept_) {  // the kept factor (keep): the triangular solves only
       HSI_CUDA_CHECK(cudaMemsetAsync(S_.info.get(), 0, sizeof(int), st()));
       triangular_solves(S_.Hk.get());
-    } else if (own) {  // factor and forward substitution in one kernel, then back substitution
-      HSI_CUDA_CHECK(kernels::cholesky_factor_solve(m, S_.Hr.get(), m, S_.d.get(), S_.info.get(), st()));
-      HSI_CUDA_CHECK(cudaMemsetAsync(S_.info.get() + 1, 0, sizeof(int), st()));  // the solve has no status of its own
+    } else if (own) {  // our factor (L in the lower triangle, as potrf leaves it: keep() may copy it)
+      HSI_CUDA_CHECK(kernels::cholesky_factor(m, S_.Hr.get(), m, S_.info.get(), st()));
+      triangular_solves(S_.Hr.get());
     } else {
       HSI_CUDA_CHECK(cusolverDnDpotrf(c_.solver_, CUBLAS_FILL_MODE_LOWER, m, S_.Hr.get(), m, S_.work.get(), S_.lwork, S_.info.get()));
       triangular_solves(S_.Hr.get());
@@ -512,7 +512,7 @@ class DeviceStepper final : public NewtonStepper {
   bool kept_ = false;            // linearize_kept: solve() solves with the kept factor S_.Hk
   bool exact_ = false;           // the last linearize() built the exact Hessian
   bool factored_exact_ = false;  // the last solve() factored it (keep() may copy S_.Hr)
-  bool own_factor_ = false;      // … with dense_cholesky.h's kernel (its factor is not kept)
+  bool own_factor_ = false;      // … with dense_cholesky.h's kernel
   double diagonal_max_ = 0;      // the last linearize()'s max |diag|
   double trial_step_ = std::numeric_limits<double>::quiet_NaN();  // the step xna holds
   double q0_ = 0, q1_ = 0, q2_ = 0;
