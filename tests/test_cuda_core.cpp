@@ -677,6 +677,55 @@ TEST_CASE("cuda: cuBLAS and cuSOLVER entry points open their libraries on first 
          s == CUSOLVER_STATUS_INTERNAL_ERROR || s == CUSOLVER_STATUS_ARCH_MISMATCH));
 }
 
+// A batch makes one core per worker and shape; D at G and the certifier's rows at the
+// breakpoints (tens of MB per shape) are uploaded once per setup and GPU and shared.
+TEST_CASE("cores made for one setup share its rows on the device; frames the same, the rows kept while any core holds them",
+          "[cuda][small]") {
+  HSI_REQUIRE_GPU();
+  const Scene scene = load_scene(test::asset_scenes().front());
+  const auto setup = make_shape_setup(scene, 10000, 0.2);
+  std::vector<double> times;
+  std::vector<HarmonicMap> maps;
+  for (const Keyframe& k : scene.keyframes) {
+    times.push_back(k.time);
+    maps.push_back(*k.coefficients);
+  }
+  auto free_bytes = [] {
+    size_t free = 0, total = 0;
+    REQUIRE(cudaMemGetInfo(&free, &total) == cudaSuccess);
+    return free;
+  };
+  const Eigen::Index S = setup->certifier.breakpoint_D().rows(), M = setup->certifier.breakpoint_D().cols();
+  const double shared = static_cast<double>(setup->D_G.size()) * 16 + static_cast<double>(setup->H.size()) * (4 + 16.0 * static_cast<double>(setup->D_G.cols())) +
+                        static_cast<double>(2 * S * M) * (16 + 8) + static_cast<double>(S * M) * 8;
+  const size_t f0 = free_bytes();
+  auto a = hsi::cuda::make_newton_core(*setup);
+  const size_t f1 = free_bytes();
+  auto b = hsi::cuda::make_newton_core(*setup);
+  const size_t f2 = free_bytes();
+  const double first = static_cast<double>(f0) - static_cast<double>(f1), second = static_cast<double>(f1) - static_cast<double>(f2);
+  INFO("first core " << first / 1e6 << " MB, second " << second / 1e6 << " MB, shared rows " << shared / 1e6 << " MB");
+  CHECK(first - second >= 0.8 * shared);
+  std::vector<FrameResult> fa, fb;
+  {
+    Interpolator ia(*setup, times, maps, {}, hsi::borrow_core(*a));
+    fa = ia.sequence(8);
+  }
+  a.reset();  // b still holds the rows
+  {
+    Interpolator ib(*setup, times, maps, {}, hsi::borrow_core(*b));
+    fb = ib.sequence(8);
+  }
+  REQUIRE(fa.size() == fb.size());
+  for (size_t i = 0; i < fa.size(); ++i) test::require_same(fb[i], fa[i]);
+  // A core made from copies of D and H (not the setup's) has its own rows.
+  const MatrixXcd D = setup->D_G;
+  const std::vector<int> H = setup->H;
+  const size_t g0 = free_bytes();
+  auto own = hsi::cuda::make_newton_core(D, H);
+  CHECK(static_cast<double>(g0) - static_cast<double>(free_bytes()) >= 0.8 * static_cast<double>(D.size()) * 16);
+}
+
 // The setup core runs every call of a solve once while it is made (first frame fast,
 // issue #23) and must still start from the documented state.
 TEST_CASE("a setup core is warmed up when made and starts from the defined state", "[cuda][small]") {

@@ -1,6 +1,8 @@
 // Harmonic shape interpolation (paper §4–5): metric blending, keyframe
 // reproduction, pose, certified warm-started sequences, the frames file.
 #include <catch2/catch.hpp>
+#include <atomic>
+#include <chrono>
 
 #include <set>
 #include <thread>
@@ -67,6 +69,37 @@ TEST_CASE("blended metric is linear between the neighbouring keyframes", "[inter
   // Keyframe 1's metric is its own pull-back metric (Eq. 5).
   const MapValues v = evaluate_map(evaluate_basis(S.setup->cage, S.setup->G.points, kBasisD), S.maps[1]);
   CHECK((m1[5] - pullback_metric(v.f_z(5), v.fzbar_conj(5))).norm() < 1e-12);
+}
+
+TEST_CASE("a setup's shared backend data: made once while held, made anew once let go, per key, nothing kept on a throw", "[interpolation]") {
+  const Shape s = test::annulus(1.0, 0.45, 32);
+  const ShapeSetup setup(s, build_cage(s), 200, 0.2);
+  std::atomic<int> made{0};
+  auto make = [&] {
+    ++made;
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));  // others ask meanwhile
+    return std::static_pointer_cast<void>(std::make_shared<int>(made.load()));
+  };
+  std::vector<std::shared_ptr<void>> held(6);
+  {
+    std::vector<std::thread> pool;
+    for (size_t t = 0; t < held.size(); ++t) pool.emplace_back([&, t] { held[t] = setup.shared_backend_data("a", make); });
+    for (std::thread& t : pool) t.join();
+  }
+  CHECK(made.load() == 1);  // a batch's workers making cores side by side: one upload
+  for (const auto& h : held) CHECK(h == held.front());
+  const std::shared_ptr<void> other = setup.shared_backend_data("b", make);  // another key: its own
+  CHECK(made.load() == 2);
+  CHECK(other != held.front());
+  const std::weak_ptr<void> first = held.front();
+  held.clear();
+  CHECK(first.expired());  // the setup does not keep it alive
+  const std::shared_ptr<void> again = setup.shared_backend_data("a", make);
+  CHECK(made.load() == 3);
+  CHECK(*std::static_pointer_cast<int>(again) == 3);
+  CHECK_THROWS_WITH(setup.shared_backend_data("c", []() -> std::shared_ptr<void> { throw InputError("no device"); }), "no device");
+  CHECK(setup.shared_backend_data("c", make) != nullptr);  // the failure kept nothing
+  CHECK(made.load() == 4);
 }
 
 TEST_CASE("the setup's interpolation rows are the basis at G, evaluated once for every thread", "[interpolation]") {

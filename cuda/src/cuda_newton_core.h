@@ -70,6 +70,36 @@ struct DeviceSpace {
   double kept_diagonal_max = 0;
 };
 
+// D at G, the subset H and D's rows at H on one device: read only once uploaded, so the
+// cores made for one ShapeSetup on one GPU share one copy (ShapeSetup::shared_backend_data).
+struct SampleRows {
+  DeviceArray<double2> D;   // G × n, column-major (as Eigen stores it)
+  DeviceArray<double2> DH;  // the rows H of D, |H| × n
+  DeviceArray<int> H;       // indices into G
+  // Uploaded on `stream`, which is synchronised before it returns (D and H are the
+  // caller's pageable memory, and other streams read the copy).
+  static std::shared_ptr<SampleRows> upload(const MatrixXcd& D, const std::vector<int>& H, cudaStream_t stream) {
+    auto r = std::make_shared<SampleRows>();
+    const int G = static_cast<int>(D.rows()), n = static_cast<int>(D.cols()), h = static_cast<int>(H.size());
+    r->D = DeviceArray<double2>(sz(G) * sz(n));
+    r->DH = DeviceArray<double2>(sz(h) * sz(n));
+    r->H = DeviceArray<int>(sz(h));
+    static_assert(sizeof(cd) == sizeof(double2), "std::complex<double> and double2 share a layout");
+    HSI_CUDA_CHECK(cudaMemcpyAsync(r->D.get(), D.data(), r->D.bytes(), cudaMemcpyHostToDevice, stream));
+    HSI_CUDA_CHECK(cudaMemcpyAsync(r->H.get(), H.data(), r->H.bytes(), cudaMemcpyHostToDevice, stream));
+    HSI_CUDA_CHECK(kernels::gather_rows(G, h, n, r->D.get(), r->H.get(), r->DH.get(), stream));
+    HSI_CUDA_CHECK(cudaStreamSynchronize(stream));
+    return r;
+  }
+};
+
+// The key of a device's copy of some setup data (ShapeSetup::shared_backend_data).
+inline std::string device_key(const char* what) {
+  int device = 0;
+  HSI_CUDA_CHECK(cudaGetDevice(&device));
+  return std::string("cuda:") + std::to_string(device) + ":" + what;
+}
+
 class CudaNewtonCore final : public NewtonCore {
  public:
   // With a setup, the core can also run whole solves on the device (solve()) for that
@@ -79,9 +109,6 @@ class CudaNewtonCore final : public NewtonCore {
         n_(static_cast<int>(D.cols())),
         h_(static_cast<int>(H.size())),
         blas_(stream_),
-        D_(sz(G_) * sz(n_)),
-        DH_(sz(h_) * sz(n_)),
-        H_(sz(h_)),
         g_(3 * sz(G_)),
         ab_(2 * sz(G_)),
         dab_(2 * sz(G_)),
@@ -99,10 +126,16 @@ class CudaNewtonCore final : public NewtonCore {
         scalar_down_(1),
         coef_down_(2 * sz(n_)) {
     const cudaStream_t s = stream_;
-    static_assert(sizeof(cd) == sizeof(double2), "std::complex<double> and double2 share a layout");
-    HSI_CUDA_CHECK(cudaMemcpyAsync(D_.get(), D.data(), D_.bytes(), cudaMemcpyHostToDevice, s));
-    HSI_CUDA_CHECK(cudaMemcpyAsync(H_.get(), H.data(), H_.bytes(), cudaMemcpyHostToDevice, s));
-    HSI_CUDA_CHECK(kernels::gather_rows(G_, h_, n_, D_.get(), H_.get(), DH_.get(), s));
+    // D at G and H: one copy per setup and GPU, shared by its cores (the first one made
+    // uploads it); without a setup this core's own.
+    if (setup && &D == &setup->D_G && &H == &setup->H)
+      rows_ = std::static_pointer_cast<const SampleRows>(
+          setup->shared_backend_data(device_key("sample rows"), [&] { return SampleRows::upload(D, H, s); }));
+    else
+      rows_ = SampleRows::upload(D, H, s);
+    D_ = rows_->D.get();
+    DH_ = rows_->DH.get();
+    H_ = rows_->H.get();
     // Nothing is ever read uninitialised: a = b = 0 (every sample degenerate, E = +inf)
     // and a zero direction until set; identity targets, as on the CPU.
     HSI_CUDA_CHECK(cudaMemsetAsync(ab_.get(), 0, ab_.bytes(), s));
@@ -114,11 +147,10 @@ class CudaNewtonCore final : public NewtonCore {
       g[3 * i + 2] = 1;
     }
     targets_up_.send(g_.get(), g_.size(), s);
-    // D and H are the caller's (pageable) memory: done with them before returning.
     HSI_CUDA_CHECK(cudaStreamSynchronize(s));
     if (setup) {
       setup_ = setup;
-      certifier_ = std::make_unique<DeviceCertifier>(setup->certifier, setup->cage, stream_, blas_);  // its rows, not evaluated again
+      certifier_ = std::make_unique<DeviceCertifier>(*setup, stream_, blas_);  // its rows, not evaluated again (one copy per GPU)
     }
     warm_up();
   }
@@ -184,7 +216,7 @@ class CudaNewtonCore final : public NewtonCore {
     const cudaStream_t s = stream_;
     HSI_CUDA_CHECK(kernels::gradient_samples(G_, g_.get(), ab_.get(), gab_.get(), s));
     // (∂/∂Re φ + i ∂/∂Im φ) E = Σ conj(D) (∂E/∂Re a + i ∂E/∂Im a): [gφ | gψ] = Dᴴ [ga | gb].
-    HSI_CUDA_CHECK(kernels::tall_adjoint_times_two(G_, n_, D_.get(), gab_.get(), coef_.get(), s));
+    HSI_CUDA_CHECK(kernels::tall_adjoint_times_two(G_, n_, D_, gab_.get(), coef_.get(), s));
     HSI_CUDA_CHECK(cudaMemcpyAsync(coef_down_.get(), coef_.get(), coef_.bytes(), cudaMemcpyDeviceToHost, s));
     HSI_CUDA_CHECK(cudaStreamSynchronize(s));
     const double count = static_cast<double>(G_);
@@ -236,7 +268,7 @@ class CudaNewtonCore final : public NewtonCore {
       c[n + j] = make_double2(v(2 * n + j), v(3 * n + j));
     }
     coef_up_.send(coef_.get(), coef_.size(), stream_);
-    HSI_CUDA_CHECK(kernels::tall_times_two(G_, n_, D_.get(), coef_.get(), out, stream_));
+    HSI_CUDA_CHECK(kernels::tall_times_two(G_, n_, D_, coef_.get(), out, stream_));
   }
 
   // Hv_ ← the real Hessian (4n × 4n), mean over H or, with all_samples, over all of G, on
@@ -248,9 +280,9 @@ class CudaNewtonCore final : public NewtonCore {
     const cudaStream_t s = stream_;
     if (all_samples) prepare_all_samples();
     const int rows = all_samples ? G_ : h_;
-    const double2* DH = all_samples ? D_.get() : DH_.get();
+    const double2* DH = all_samples ? D_ : DH_;
     double2* Wt = all_samples ? Wt_all_.get() : Wt_.get();
-    HSI_CUDA_CHECK(kernels::weighted_rows(G_, rows, n_, all_samples ? all_index_.get() : H_.get(), g_.get(), ab_.get(),
+    HSI_CUDA_CHECK(kernels::weighted_rows(G_, rows, n_, all_samples ? all_index_.get() : H_, g_.get(), ab_.get(),
                                           to_device(projection), exact, DH, all_samples ? W_all_.get() : W_.get(), Wt, s));
     HSI_CUDA_CHECK(cublasZgemm(blas_, CUBLAS_OP_C, CUBLAS_OP_N, n_, 6 * n_, rows, &kOne, DH, rows, Wt, rows, &kZero, R_.get(),
                                n_));
@@ -284,9 +316,10 @@ class CudaNewtonCore final : public NewtonCore {
   int G_, n_, h_;
   Stream stream_;                 // first: everything below is used on it
   BlasHandle blas_;
-  DeviceArray<double2> D_;        // G × n, column-major (as Eigen stores it)
-  DeviceArray<double2> DH_;       // the rows H of D, |H| × n
-  DeviceArray<int> H_;            // indices into G
+  std::shared_ptr<const SampleRows> rows_;  // D, D_H and H (shared with the setup's other cores on this GPU)
+  const double2* D_ = nullptr;    // rows_->D: G × n, column-major (as Eigen stores it)
+  const double2* DH_ = nullptr;   // rows_->DH: the rows H of D, |H| × n
+  const int* H_ = nullptr;        // rows_->H: indices into G
   DeviceArray<double> g_;         // target metric (g1, g2, g3) per sample of G
   DeviceArray<double2> ab_;       // [a | b] = D [φ | ψ], G × 2
   DeviceArray<double2> dab_;      // [da | db], G × 2

@@ -20,15 +20,29 @@ DeviceCertifier::DeviceCertifier(const Shape& shape, const Cage& cage, const Bou
     : stream_(stream), blas_(blas) {
   const CertificateSegments seg = certificate_segments(shape, samples);
   const BasisRows rows = evaluate_basis(cage, seg.points, kBasisD | kBasisE);
-  upload(cage, seg, rows.D, rows.E, certificate_weights(cage, seg));  // the weights as the CPU reference's
+  const CertificateWeights w = certificate_weights(cage, seg);  // the weights as the CPU reference's
+  set_up(cage, seg, rows.D, rows.E, w);
+  rows_ = upload(cage, seg, rows.D, rows.E, w, stream_);
 }
 
 DeviceCertifier::DeviceCertifier(const hsi::Certifier& host, const Cage& cage, cudaStream_t stream, cublasHandle_t blas)
     : stream_(stream), blas_(blas) {
-  upload(cage, host.segments(), host.breakpoint_D(), host.breakpoint_E(), host.weights());
+  set_up(cage, host.segments(), host.breakpoint_D(), host.breakpoint_E(), host.weights());
+  rows_ = upload(cage, host.segments(), host.breakpoint_D(), host.breakpoint_E(), host.weights(), stream_);
 }
 
-void DeviceCertifier::upload(const Cage& cage, const CertificateSegments& seg, const MatrixXcd& D, const MatrixXcd& E,
+DeviceCertifier::DeviceCertifier(const ShapeSetup& setup, cudaStream_t stream, cublasHandle_t blas)
+    : stream_(stream), blas_(blas) {
+  const hsi::Certifier& host = setup.certifier;
+  set_up(setup.cage, host.segments(), host.breakpoint_D(), host.breakpoint_E(), host.weights());
+  int device = 0;
+  HSI_CUDA_CHECK(cudaGetDevice(&device));
+  rows_ = std::static_pointer_cast<const Rows>(setup.shared_backend_data("cuda:" + std::to_string(device) + ":certifier rows", [&] {
+    return upload(setup.cage, host.segments(), host.breakpoint_D(), host.breakpoint_E(), host.weights(), stream_);
+  }));
+}
+
+void DeviceCertifier::set_up(const Cage& cage, const CertificateSegments& seg, const MatrixXcd& D, const MatrixXcd& E,
                              const CertificateWeights& w) {
   m_ = cage.vertex_count();
   N_ = cage.hole_count();
@@ -36,32 +50,11 @@ void DeviceCertifier::upload(const Cage& cage, const CertificateSegments& seg, c
   S_ = static_cast<int>(seg.size());
   loop_ = seg.loop;
   edge_ = seg.edge;
-  std::vector<cd> z;
-  std::vector<int> begin{0};
-  for (const Loop& l : cage.loops) {
-    z.insert(z.end(), l.begin(), l.end());
-    begin.push_back(static_cast<int>(z.size()));
-  }
   // D, E, WD, WE: S × M; [W | Wh]: S × M (W over the cage's vertices, Wh its holes).
   const auto s_by_m = [&](const auto& X) { return X.rows() == S_ && X.cols() == M_; };
   if (!s_by_m(D) || !s_by_m(E) || !s_by_m(w.WD) || !s_by_m(w.WE) || w.W.rows() != S_ || w.Wh.rows() != S_ ||
       w.W.cols() + w.Wh.cols() != M_ || w.touches.size() != sz(S_))
     throw InputError("hsi::cuda certificate: the basis rows or weights do not match the segments and the cage");
-  MatrixXcd DE(2 * static_cast<Eigen::Index>(S_), M_);
-  DE << D, E;
-  Eigen::MatrixXd WDE(2 * static_cast<Eigen::Index>(S_), M_), WWh(static_cast<Eigen::Index>(S_), M_);
-  WDE << w.WD, w.WE;
-  WWh << w.W, w.Wh;
-
-  z_ = DeviceArray<double2>(z.size());
-  holes_ = DeviceArray<double2>(std::max<size_t>(1, cage.hole_points.size()));
-  points_ = DeviceArray<double2>(sz(S_));
-  loop_begin_ = DeviceArray<int>(begin.size());
-  next_ = DeviceArray<int>(sz(S_));
-  DE_ = DeviceArray<double2>(2 * sz(S_) * sz(M_));
-  WDE_ = DeviceArray<double>(2 * sz(S_) * sz(M_));
-  WWh_ = DeviceArray<double>(sz(S_) * sz(M_));
-  touches_ = DeviceArray<char>(sz(S_));
   coef_ = DeviceArray<double2>(2 * sz(M_));
   values_ = DeviceArray<double2>(4 * sz(S_));
   errs_ = DeviceArray<double>(4 * sz(S_));
@@ -74,26 +67,55 @@ void DeviceCertifier::upload(const Cage& cage, const CertificateSegments& seg, c
   stop_ = DeviceArray<int>(1);
   summary_down_ = PinnedArray<kernels::CertifySummary>(1);
   coef_up_ = PinnedArray<double2>(2 * sz(M_));
+}
+
+std::shared_ptr<DeviceCertifier::Rows> DeviceCertifier::upload(const Cage& cage, const CertificateSegments& seg, const MatrixXcd& D,
+                                                               const MatrixXcd& E, const CertificateWeights& w, cudaStream_t stream) {
+  const Eigen::Index S = static_cast<Eigen::Index>(seg.size()), M = D.cols();
+  std::vector<cd> z;
+  std::vector<int> begin{0};
+  for (const Loop& l : cage.loops) {
+    z.insert(z.end(), l.begin(), l.end());
+    begin.push_back(static_cast<int>(z.size()));
+  }
+  MatrixXcd DE(2 * S, M);
+  DE << D, E;
+  Eigen::MatrixXd WDE(2 * S, M), WWh(S, M);
+  WDE << w.WD, w.WE;
+  WWh << w.W, w.Wh;
+
+  auto r = std::make_shared<Rows>();
+  r->z = DeviceArray<double2>(z.size());
+  r->holes = DeviceArray<double2>(std::max<size_t>(1, cage.hole_points.size()));
+  r->points = DeviceArray<double2>(seg.size());
+  r->loop_begin = DeviceArray<int>(begin.size());
+  r->next = DeviceArray<int>(seg.size());
+  r->DE = DeviceArray<double2>(static_cast<size_t>(DE.size()));
+  r->WDE = DeviceArray<double>(static_cast<size_t>(WDE.size()));
+  r->WWh = DeviceArray<double>(static_cast<size_t>(WWh.size()));
+  r->touches = DeviceArray<char>(seg.size());
 
   static_assert(sizeof(cd) == sizeof(double2));
-  HSI_CUDA_CHECK(cudaMemcpyAsync(z_.get(), z.data(), z_.bytes(), cudaMemcpyHostToDevice, stream_));
-  if (N_ > 0)
-    HSI_CUDA_CHECK(cudaMemcpyAsync(holes_.get(), cage.hole_points.data(), sz(N_) * sizeof(double2), cudaMemcpyHostToDevice, stream_));
-  HSI_CUDA_CHECK(cudaMemcpyAsync(points_.get(), seg.points.data(), points_.bytes(), cudaMemcpyHostToDevice, stream_));
-  HSI_CUDA_CHECK(cudaMemcpyAsync(loop_begin_.get(), begin.data(), loop_begin_.bytes(), cudaMemcpyHostToDevice, stream_));
-  HSI_CUDA_CHECK(cudaMemcpyAsync(next_.get(), seg.next.data(), next_.bytes(), cudaMemcpyHostToDevice, stream_));
-  HSI_CUDA_CHECK(cudaMemcpyAsync(DE_.get(), DE.data(), DE_.bytes(), cudaMemcpyHostToDevice, stream_));
-  HSI_CUDA_CHECK(cudaMemcpyAsync(WDE_.get(), WDE.data(), WDE_.bytes(), cudaMemcpyHostToDevice, stream_));
-  HSI_CUDA_CHECK(cudaMemcpyAsync(WWh_.get(), WWh.data(), WWh_.bytes(), cudaMemcpyHostToDevice, stream_));
-  HSI_CUDA_CHECK(cudaMemcpyAsync(touches_.get(), w.touches.data(), touches_.bytes(), cudaMemcpyHostToDevice, stream_));
-  // The host vectors above are pageable: done with them before they go.
-  HSI_CUDA_CHECK(cudaStreamSynchronize(stream_));
+  HSI_CUDA_CHECK(cudaMemcpyAsync(r->z.get(), z.data(), r->z.bytes(), cudaMemcpyHostToDevice, stream));
+  if (!cage.hole_points.empty())
+    HSI_CUDA_CHECK(cudaMemcpyAsync(r->holes.get(), cage.hole_points.data(), cage.hole_points.size() * sizeof(double2),
+                                   cudaMemcpyHostToDevice, stream));
+  HSI_CUDA_CHECK(cudaMemcpyAsync(r->points.get(), seg.points.data(), r->points.bytes(), cudaMemcpyHostToDevice, stream));
+  HSI_CUDA_CHECK(cudaMemcpyAsync(r->loop_begin.get(), begin.data(), r->loop_begin.bytes(), cudaMemcpyHostToDevice, stream));
+  HSI_CUDA_CHECK(cudaMemcpyAsync(r->next.get(), seg.next.data(), r->next.bytes(), cudaMemcpyHostToDevice, stream));
+  HSI_CUDA_CHECK(cudaMemcpyAsync(r->DE.get(), DE.data(), r->DE.bytes(), cudaMemcpyHostToDevice, stream));
+  HSI_CUDA_CHECK(cudaMemcpyAsync(r->WDE.get(), WDE.data(), r->WDE.bytes(), cudaMemcpyHostToDevice, stream));
+  HSI_CUDA_CHECK(cudaMemcpyAsync(r->WWh.get(), WWh.data(), r->WWh.bytes(), cudaMemcpyHostToDevice, stream));
+  HSI_CUDA_CHECK(cudaMemcpyAsync(r->touches.get(), w.touches.data(), r->touches.bytes(), cudaMemcpyHostToDevice, stream));
+  // The host vectors above are pageable, and other streams read the copy: done before returning.
+  HSI_CUDA_CHECK(cudaStreamSynchronize(stream));
+  return r;
 }
 
 kernels::CageView DeviceCertifier::cage_view() const {
-  return {z_.get(), loop_begin_.get(), static_cast<int>(loop_begin_.size()) - 1, m_, holes_.get(), N_};
+  return {rows_->z.get(), rows_->loop_begin.get(), static_cast<int>(rows_->loop_begin.size()) - 1, m_, rows_->holes.get(), N_};
 }
-kernels::SegmentsView DeviceCertifier::segments_view() const { return {points_.get(), next_.get(), S_}; }
+kernels::SegmentsView DeviceCertifier::segments_view() const { return {rows_->points.get(), rows_->next.get(), S_}; }
 
 void DeviceCertifier::enqueue(const double2* coef, const CertificateOptions& options) {
   if (options.max_depth > kernels::kMaxCertifyDepth)
@@ -101,14 +123,14 @@ void DeviceCertifier::enqueue(const double2* coef, const CertificateOptions& opt
                      std::to_string(kernels::kMaxCertifyDepth));
   const cudaStream_t s = stream_;
   // Values at the breakpoints: [a | a1 | b | b1] = [D; E] · [φ | ψ] (a tall product).
-  HSI_CUDA_CHECK(kernels::tall_times_two(2 * S_, M_, DE_.get(), coef, values_.get(), s));
+  HSI_CUDA_CHECK(kernels::tall_times_two(2 * S_, M_, rows_->DE.get(), coef, values_.get(), s));
   // Lipschitz constants of f_zz and (conj f_zbar)' per segment: [W | Wh] · jumps; the
   // values' rounding weights: [WD; WE] · [|φ| | |ψ|].
   HSI_CUDA_CHECK(kernels::lipschitz_jumps(cage_view(), coef, jumps_.get(), abs_coef_.get(), s));
   const double one = 1, zero = 0;
-  HSI_CUDA_CHECK(cublasDgemm(blas_, CUBLAS_OP_N, CUBLAS_OP_N, S_, 2, M_, &one, WWh_.get(), S_, jumps_.get(), M_, &zero,
+  HSI_CUDA_CHECK(cublasDgemm(blas_, CUBLAS_OP_N, CUBLAS_OP_N, S_, 2, M_, &one, rows_->WWh.get(), S_, jumps_.get(), M_, &zero,
                              lip_.get(), S_));
-  HSI_CUDA_CHECK(cublasDgemm(blas_, CUBLAS_OP_N, CUBLAS_OP_N, 2 * S_, 2, M_, &one, WDE_.get(), 2 * S_, abs_coef_.get(), M_,
+  HSI_CUDA_CHECK(cublasDgemm(blas_, CUBLAS_OP_N, CUBLAS_OP_N, 2 * S_, 2, M_, &one, rows_->WDE.get(), 2 * S_, abs_coef_.get(), M_,
                              &zero, errs_.get(), 2 * S_));
   int* stop = nullptr;
   if (options.stop_at_first_failure) {
@@ -116,7 +138,7 @@ void DeviceCertifier::enqueue(const double2* coef, const CertificateOptions& opt
     stop = stop_.get();
   }
   HSI_CUDA_CHECK(kernels::certify_segments(cage_view(), segments_view(), coef, values_.get(), errs_.get(), lip_.get(),
-                                           touches_.get(), options.max_depth, options.max_pieces_per_segment, stop,
+                                           rows_->touches.get(), options.max_depth, options.max_pieces_per_segment, stop,
                                            outcomes_.get(), s));
   HSI_CUDA_CHECK(kernels::reduce_certificate(S_, outcomes_.get(), values_.get(), partials_.get(), summary_.get(), s));
   HSI_CUDA_CHECK(cudaMemcpyAsync(summary_down_.get(), summary_.get(), sizeof(kernels::CertifySummary), cudaMemcpyDeviceToHost, s));
@@ -172,7 +194,7 @@ struct Certifier::Impl {
   BlasHandle blas{stream};
   DeviceCertifier certifier;
   Impl(const Shape& shape, const Cage& cage, const BoundarySamples& samples) : certifier(shape, cage, samples, stream, blas) {}
-  explicit Impl(const ShapeSetup& s) : certifier(s.certifier, s.cage, stream, blas) {}
+  explicit Impl(const ShapeSetup& s) : certifier(s, stream, blas) {}
 };
 
 Certifier::Certifier(const ShapeSetup& s) : impl_(std::make_unique<Impl>(s)) {}

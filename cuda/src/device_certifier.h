@@ -4,11 +4,13 @@
 // device memory and returns one small summary. Host code, not thread-safe.
 #pragma once
 
+#include <memory>
 #include <vector>
 
 #include "certify_kernels.h"
-#include "hsi/certificate.h"
 #include "device.h"
+#include "hsi/certificate.h"
+#include "hsi/shape_setup.h"
 
 namespace hsi::cuda {
 
@@ -19,6 +21,10 @@ class DeviceCertifier {
   // The same from a host certifier of the same shape, cage and samples (a ShapeSetup's):
   // its segments, basis rows and weights uploaded as they are, not evaluated again.
   DeviceCertifier(const hsi::Certifier& host, const Cage& cage, cudaStream_t stream, cublasHandle_t blas);
+  // The same from a setup's certifier, its rows on the device shared by every
+  // DeviceCertifier made from that setup on this GPU (ShapeSetup::shared_backend_data):
+  // uploaded by the first, read only by all.
+  DeviceCertifier(const ShapeSetup& setup, cudaStream_t stream, cublasHandle_t blas);
 
   int coefficient_count() const { return M_; }  // M = m + N complex per φ and ψ
   int segment_count() const { return S_; }
@@ -32,18 +38,27 @@ class DeviceCertifier {
   CertificateResult certify(const HarmonicMap& map, const CertificateOptions& options = {});
 
  private:
-  void upload(const Cage& cage, const CertificateSegments& seg, const MatrixXcd& D, const MatrixXcd& E, const CertificateWeights& w);
+  // What a certification only reads: the cage, the segments, the basis rows and their
+  // weights at the breakpoints.
+  struct Rows {
+    DeviceArray<double2> z, holes, points;
+    DeviceArray<int> loop_begin, next;
+    DeviceArray<double2> DE;        // [D; E] at the breakpoints, 2S × M
+    DeviceArray<double> WDE;        // [WD; WE], the rounding weights of [D; E], 2S × M
+    DeviceArray<double> WWh;        // [W | Wh], S × M (hsi::certificate_weights)
+    DeviceArray<char> touches;      // per segment: a distance bound is not positive
+  };
+  // Rows uploaded on `stream` (synchronised before it returns: the host data is pageable).
+  static std::shared_ptr<Rows> upload(const Cage& cage, const CertificateSegments& seg, const MatrixXcd& D, const MatrixXcd& E,
+                                      const CertificateWeights& w, cudaStream_t stream);
+  // Checks the sizes, sets the counts and makes this certifier's own buffers.
+  void set_up(const Cage& cage, const CertificateSegments& seg, const MatrixXcd& D, const MatrixXcd& E, const CertificateWeights& w);
 
   int m_ = 0, N_ = 0, M_ = 0, S_ = 0;
   cudaStream_t stream_;
   cublasHandle_t blas_;
   std::vector<int> loop_, edge_;  // per segment, to name a failure
-  DeviceArray<double2> z_, holes_, points_;
-  DeviceArray<int> loop_begin_, next_;
-  DeviceArray<double2> DE_;        // [D; E] at the breakpoints, 2S × M
-  DeviceArray<double> WDE_;        // [WD; WE], the rounding weights of [D; E], 2S × M
-  DeviceArray<double> WWh_;        // [W | Wh], S × M (hsi::certificate_weights)
-  DeviceArray<char> touches_;      // per segment: a distance bound is not positive
+  std::shared_ptr<const Rows> rows_;
   DeviceArray<double2> coef_;      // upload target of certify()
   DeviceArray<double2> values_;    // [a | a1 | b | b1], S × 4 (= 2S × 2)
   DeviceArray<double> errs_;       // their rounding weights, the same layout

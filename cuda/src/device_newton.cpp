@@ -387,7 +387,7 @@ class DeviceStepper final : public NewtonStepper {
     }
     // Gradient: [gφ | gψ] = Dᴴ [ga | gb], then g = Tcaᵀ (·) / |G| (+ Q x + c).
     HSI_CUDA_CHECK(kernels::gradient_samples(c_.G_, c_.g_.get(), c_.ab_.get(), c_.gab_.get(), st()));
-    HSI_CUDA_CHECK(kernels::tall_adjoint_times_two(c_.G_, n, c_.D_.get(), c_.gab_.get(), c_.coef_.get(), st()));
+    HSI_CUDA_CHECK(kernels::tall_adjoint_times_two(c_.G_, n, c_.D_, c_.gab_.get(), c_.coef_.get(), st()));
     const double inv_count = 1 / static_cast<double>(c_.G_);
     HSI_CUDA_CHECK(cublasDgemv(c_.blas_, CUBLAS_OP_T, 4 * n, m_, &inv_count, S_.Tca.get(), 4 * n,
                                reinterpret_cast<const double*>(c_.coef_.get()), 1, &kZeroD, S_.g.get(), 1));
@@ -473,7 +473,7 @@ class DeviceStepper final : public NewtonStepper {
     // Direction in the samples, [dφ | dψ] = Tca d, and the largest safe step along it.
     HSI_CUDA_CHECK(cublasDgemv(c_.blas_, CUBLAS_OP_N, 4 * n, m, &kOneD, S_.Tca.get(), 4 * n, S_.d.get(), 1, &kZeroD,
                                reinterpret_cast<double*>(c_.coef_.get()), 1));
-    HSI_CUDA_CHECK(kernels::tall_times_two(c_.G_, n, c_.D_.get(), c_.coef_.get(), c_.dab_.get(), st()));
+    HSI_CUDA_CHECK(kernels::tall_times_two(c_.G_, n, c_.D_, c_.coef_.get(), c_.dab_.get(), st()));
     HSI_CUDA_CHECK(kernels::max_safe_step(c_.G_, c_.ab_.get(), c_.dab_.get(), c_.part_sum_.get(), S_.sc.get() + kSafeStep, st()));
     HSI_CUDA_CHECK(cudaMemcpyAsync(S_.sc_down.get(), S_.sc.get(), kTrials * sizeof(double), cudaMemcpyDeviceToHost, st()));
     HSI_CUDA_CHECK(cudaMemcpyAsync(S_.info_down.get(), S_.info.get(), 2 * sizeof(int), cudaMemcpyDeviceToHost, st()));
@@ -483,7 +483,7 @@ class DeviceStepper final : public NewtonStepper {
   void set_coefficients() {
     HSI_CUDA_CHECK(cublasDgemv(c_.blas_, CUBLAS_OP_N, 4 * c_.n_, S_.dim, &kOneD, S_.Tca.get(), 4 * c_.n_, S_.xa.get(), 1, &kZeroD,
                                reinterpret_cast<double*>(c_.coef_.get()), 1));
-    HSI_CUDA_CHECK(kernels::tall_times_two(c_.G_, c_.n_, c_.D_.get(), c_.coef_.get(), c_.ab_.get(), st()));
+    HSI_CUDA_CHECK(kernels::tall_times_two(c_.G_, c_.n_, c_.D_, c_.coef_.get(), c_.ab_.get(), st()));
   }
 
   // Inside a graph: xna = x ⊕ s·d with s the step slot: x + s d, or regauge(Ta ([x; 0] +

@@ -40,6 +40,16 @@ const InterpolationRows& ShapeSetup::interpolation_rows() const {
   return lazy_->rows;
 }
 
+std::shared_ptr<void> ShapeSetup::shared_backend_data(const std::string& key,
+                                                     const std::function<std::shared_ptr<void>()>& make) const {
+  std::lock_guard<std::mutex> lock(shared_->mutex);
+  std::weak_ptr<void>& slot = shared_->data[key];
+  if (std::shared_ptr<void> held = slot.lock()) return held;
+  std::shared_ptr<void> made = make();
+  slot = made;
+  return made;
+}
+
 std::unique_ptr<ShapeSetup> make_shape_setup(const Scene& scene, int samples, double hessian_ratio) {
   return std::make_unique<ShapeSetup>(scene.shape, scene_cage(scene), samples > 0 ? samples : scene.samples,
                                       hessian_ratio > 0 ? hessian_ratio : scene.hessian_ratio);

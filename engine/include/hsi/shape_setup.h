@@ -2,8 +2,11 @@
 // reduced spaces, the active basis rows at G, the certifier and the overlap check.
 #pragma once
 
+#include <functional>
+#include <map>
 #include <memory>
 #include <mutex>
+#include <string>
 
 #include "hsi/basis.h"
 #include "hsi/certificate.h"
@@ -44,12 +47,26 @@ struct ShapeSetup {
   // that never interpolates, e.g. the viewer's authoring, never evaluates them).
   const InterpolationRows& interpolation_rows() const;
 
+  // Data a backend derives from this setup once and shares between the objects it makes
+  // for it (the CUDA backend's device copies of D_G and of the certifier's rows, one per
+  // GPU, instead of one per Newton core): the data held under `key` while anyone still
+  // holds it, else what make() returns (kept under `key`). The setup keeps only a weak
+  // reference, so the data goes with its last holder, never after the setup. Safe from
+  // many threads at once; make() runs with the key's entry locked (callers of other keys
+  // of this setup wait too) and may throw (nothing is kept).
+  std::shared_ptr<void> shared_backend_data(const std::string& key, const std::function<std::shared_ptr<void>()>& make) const;
+
  private:
   struct Lazy {
     std::once_flag once;
     InterpolationRows rows;
   };
+  struct Shared {
+    std::mutex mutex;
+    std::map<std::string, std::weak_ptr<void>> data;
+  };
   std::unique_ptr<Lazy> lazy_ = std::make_unique<Lazy>();
+  std::unique_ptr<Shared> shared_ = std::make_unique<Shared>();
 };
 
 // From a scene: its cage (user-given or automatic) and its sample settings;
