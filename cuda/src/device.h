@@ -15,6 +15,7 @@
 #include <cstdio>
 #include <mutex>
 #include <optional>
+#include <set>
 #include <shared_mutex>
 #include <string>
 #include <unordered_map>
@@ -312,6 +313,12 @@ class GraphCache {
  public:
   explicit GraphCache(bool enabled) : enabled_(enabled) {}
   bool enabled() const { return enabled_; }
+  // What decides which kernels a key's work launches besides the key (the device and the
+  // problem's sizes): a key's first run with a signature some cache of this process has
+  // already run loaded every module it uses then, so it needs no exclusion from other
+  // threads' captures (a batch's workers make cores of the same shapes side by side).
+  // 0, the default: every first run is excluded.
+  void set_signature(std::uint64_t signature) { signature_ = signature; }
 
   template <class Enqueue>
   void run(std::uint64_t key, cudaStream_t stream, Enqueue&& enqueue) {
@@ -328,10 +335,12 @@ class GraphCache {
       if (first || failures >= kMaxCaptureFailures) {
         if (first) failures = 0;
         // The first run loads modules (lazily, at its first launches): outside any
-        // other thread's capture too.
+        // other thread's capture too, unless the same work has run before in this process.
+        const bool loaded = first && signature_ != 0 && first_run_done(signature_, key, false);
         std::optional<OutsideCaptures> guard;
-        if (first) guard.emplace();
+        if (first && !loaded) guard.emplace();
         enqueue();
+        if (first && !loaded && signature_ != 0) (void)first_run_done(signature_, key, true);
         return;
       }
       // A capture that fails (invalidated, or a call refused while capturing) runs the
@@ -376,7 +385,17 @@ class GraphCache {
   const std::string& last_failure() const { return last_failure_; }
 
  private:
+  // Whether (signature, key) has had its first run in this process; record: mark it.
+  static bool first_run_done(std::uint64_t signature, std::uint64_t key, bool record) {
+    static std::mutex m;
+    static std::set<std::pair<std::uint64_t, std::uint64_t>> done;
+    std::lock_guard<std::mutex> lock(m);
+    if (record) return !done.emplace(signature, key).second;
+    return done.count({signature, key}) != 0;
+  }
+
   static constexpr int kMaxCaptureFailures = 3;
+  std::uint64_t signature_ = 0;
   bool enabled_;
   std::unordered_map<std::uint64_t, GraphExec> graphs_;
   std::unordered_map<std::uint64_t, int> failures_;
