@@ -247,6 +247,7 @@ int main(int argc, char** argv) {
     Row row;
     row.path = "one at a time";
     row.workers = 1;
+    row.core_set_up_s = -1;  // each core is made inside its Interpolator's expression: not timed apart
     row.exact = exacts.front();
     row.image = images.front();
     const auto t0 = Clock::now();
@@ -255,7 +256,6 @@ int main(int argc, char** argv) {
       Interpolator I(*q.setup, q.key_times, q.keyframes, q.options, factories.make_core(*q.setup),
                      boundary_of(*q.setup, images.front() == "host"));
       row.set_up_s += s_since(ts);
-      row.core_set_up_s = -1;  // the core is made inside the Interpolator's expression: not timed apart
       ++row.cores;
       ++row.interpolators;
       count(row, I.sequence(q.times));

@@ -56,6 +56,21 @@ sm::Projection to_sample(HessianProjection p) {
   return sm::Projection::PartProj;
 }
 
+// A scene's keyframe times and maps, as an Interpolator takes them.
+struct SceneKeys {
+  std::vector<double> times;
+  std::vector<HarmonicMap> maps;
+};
+SceneKeys scene_keys(const Scene& scene) {
+  SceneKeys keys;
+  for (const Keyframe& k : scene.keyframes) {
+    REQUIRE(k.coefficients.has_value());
+    keys.times.push_back(k.time);
+    keys.maps.push_back(*k.coefficients);
+  }
+  return keys;
+}
+
 double rel_diff(double got, double want) { return std::abs(got - want) / std::max(std::abs(want), 1e-300); }
 double rel_diff(const Eigen::MatrixXd& got, const Eigen::MatrixXd& want) {
   return (got - want).cwiseAbs().maxCoeff() / std::max(want.cwiseAbs().maxCoeff(), 1e-300);
@@ -320,13 +335,7 @@ void compare_sequences(const std::filesystem::path& path, int frames, int sample
   INFO(path.filename().string() << ", " << frames << " frames, |G| = " << samples << ", exact systems over " << to_string(exact));
   const Scene scene = load_scene(path);
   const auto setup = make_shape_setup(scene, samples, 0.2);
-  std::vector<double> times;
-  std::vector<HarmonicMap> maps;
-  for (const Keyframe& k : scene.keyframes) {
-    REQUIRE(k.coefficients.has_value());
-    times.push_back(k.time);
-    maps.push_back(*k.coefficients);
-  }
+  const auto [times, maps] = scene_keys(scene);
   InterpolationOptions o;
   o.exact_samples = exact;
   Interpolator cpu(*setup, times, maps, o);
@@ -540,12 +549,7 @@ TEST_CASE("the device loop replayed as CUDA graphs gives the frames of direct la
       REQUIRE(unsetenv("HSI_CUDA_GRAPHS") == 0);
       return core;
     };
-    std::vector<double> times;
-    std::vector<HarmonicMap> maps;
-    for (const Keyframe& k : scene.keyframes) {
-      times.push_back(k.time);
-      maps.push_back(*k.coefficients);
-    }
+    const auto [times, maps] = scene_keys(scene);
     Interpolator with(*setup, times, maps, {}, make(true)), without(*setup, times, maps, {}, make(false));
     const auto a = with.sequence(30), b = without.sequence(30);
     REQUIRE(a.size() == b.size());
@@ -581,12 +585,7 @@ TEST_CASE("CUDA graphs captured on many threads beside allocations and frees", "
   HSI_REQUIRE_GPU();
   const Scene scene = load_scene(test::asset_scenes().front());
   const auto setup = make_shape_setup(scene, 4000, 0.2);
-  std::vector<double> times;
-  std::vector<HarmonicMap> maps;
-  for (const Keyframe& k : scene.keyframes) {
-    times.push_back(k.time);
-    maps.push_back(*k.coefficients);
-  }
+  const auto [times, maps] = scene_keys(scene);
   auto make = [&](bool graphs) {
     static std::mutex env;  // setenv is not thread-safe; graphs_enabled reads it as a core is made
     std::lock_guard<std::mutex> lock(env);
@@ -684,12 +683,7 @@ TEST_CASE("cores made for one setup share its rows on the device; frames the sam
   HSI_REQUIRE_GPU();
   const Scene scene = load_scene(test::asset_scenes().front());
   const auto setup = make_shape_setup(scene, 10000, 0.2);
-  std::vector<double> times;
-  std::vector<HarmonicMap> maps;
-  for (const Keyframe& k : scene.keyframes) {
-    times.push_back(k.time);
-    maps.push_back(*k.coefficients);
-  }
+  const auto [times, maps] = scene_keys(scene);
   auto free_bytes = [] {
     size_t free = 0, total = 0;
     REQUIRE(cudaMemGetInfo(&free, &total) == cudaSuccess);

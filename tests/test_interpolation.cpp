@@ -1,9 +1,9 @@
 // Harmonic shape interpolation (paper §4–5): metric blending, keyframe
 // reproduction, pose, certified warm-started sequences, the frames file.
 #include <catch2/catch.hpp>
+
 #include <atomic>
 #include <chrono>
-
 #include <set>
 #include <thread>
 

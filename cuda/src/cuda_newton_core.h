@@ -93,13 +93,6 @@ struct SampleRows {
   }
 };
 
-// The key of a device's copy of some setup data (ShapeSetup::shared_backend_data).
-inline std::string device_key(const char* what) {
-  int device = 0;
-  HSI_CUDA_CHECK(cudaGetDevice(&device));
-  return std::string("cuda:") + std::to_string(device) + ":" + what;
-}
-
 class CudaNewtonCore final : public NewtonCore {
  public:
   // With a setup, the core can also run whole solves on the device (solve()) for that

@@ -20,6 +20,7 @@
 #include <string>
 #include <unordered_map>
 #include <utility>
+#include <vector>
 
 #include "hsi/cuda/newton_core.h"
 
@@ -317,8 +318,9 @@ class GraphCache {
   // problem's sizes): a key's first run with a signature some cache of this process has
   // already run loaded every module it uses then, so it needs no exclusion from other
   // threads' captures (a batch's workers make cores of the same shapes side by side).
-  // 0, the default: every first run is excluded.
-  void set_signature(std::uint64_t signature) { signature_ = signature; }
+  // Empty, the default: every first run is excluded.
+  using Signature = std::vector<long long>;
+  void set_signature(Signature signature) { signature_ = std::move(signature); }
 
   template <class Enqueue>
   void run(std::uint64_t key, cudaStream_t stream, Enqueue&& enqueue) {
@@ -336,11 +338,11 @@ class GraphCache {
         if (first) failures = 0;
         // The first run loads modules (lazily, at its first launches): outside any
         // other thread's capture too, unless the same work has run before in this process.
-        const bool loaded = first && signature_ != 0 && first_run_done(signature_, key, false);
+        const bool loaded = first && !signature_.empty() && first_runs().has(signature_, key);
         std::optional<OutsideCaptures> guard;
         if (first && !loaded) guard.emplace();
         enqueue();
-        if (first && !loaded && signature_ != 0) (void)first_run_done(signature_, key, true);
+        if (first && !loaded && !signature_.empty()) first_runs().add(signature_, key);
         return;
       }
       // A capture that fails (invalidated, or a call refused while capturing) runs the
@@ -385,22 +387,41 @@ class GraphCache {
   const std::string& last_failure() const { return last_failure_; }
 
  private:
-  // Whether (signature, key) has had its first run in this process; record: mark it.
-  static bool first_run_done(std::uint64_t signature, std::uint64_t key, bool record) {
-    static std::mutex m;
-    static std::set<std::pair<std::uint64_t, std::uint64_t>> done;
-    std::lock_guard<std::mutex> lock(m);
-    if (record) return !done.emplace(signature, key).second;
-    return done.count({signature, key}) != 0;
+  // The (signature, key) pairs whose first run has happened in this process.
+  class FirstRuns {
+   public:
+    bool has(const Signature& signature, std::uint64_t key) {
+      std::lock_guard<std::mutex> lock(m_);
+      return done_.count({signature, key}) != 0;
+    }
+    void add(const Signature& signature, std::uint64_t key) {
+      std::lock_guard<std::mutex> lock(m_);
+      done_.emplace(signature, key);
+    }
+
+   private:
+    std::mutex m_;
+    std::set<std::pair<Signature, std::uint64_t>> done_;
+  };
+  static FirstRuns& first_runs() {
+    static FirstRuns runs;
+    return runs;
   }
 
   static constexpr int kMaxCaptureFailures = 3;
-  std::uint64_t signature_ = 0;
+  Signature signature_;
   bool enabled_;
   std::unordered_map<std::uint64_t, GraphExec> graphs_;
   std::unordered_map<std::uint64_t, int> failures_;
   std::string last_failure_;
 };
+
+// The key of this device's copy of some setup data (ShapeSetup::shared_backend_data).
+inline std::string device_key(const char* what) {
+  int device = 0;
+  HSI_CUDA_CHECK(cudaGetDevice(&device));
+  return std::string("cuda:") + std::to_string(device) + ":" + what;
+}
 
 // Whether the CUDA backend replays its recurring call sequences as graphs: yes, unless
 // HSI_CUDA_GRAPHS=0 (then the same work is launched directly, what GraphCache::run does

@@ -35,9 +35,7 @@ DeviceCertifier::DeviceCertifier(const ShapeSetup& setup, cudaStream_t stream, c
     : stream_(stream), blas_(blas) {
   const hsi::Certifier& host = setup.certifier;
   set_up(setup.cage, host.segments(), host.breakpoint_D(), host.breakpoint_E(), host.weights());
-  int device = 0;
-  HSI_CUDA_CHECK(cudaGetDevice(&device));
-  rows_ = std::static_pointer_cast<const Rows>(setup.shared_backend_data("cuda:" + std::to_string(device) + ":certifier rows", [&] {
+  rows_ = std::static_pointer_cast<const Rows>(setup.shared_backend_data(device_key("certifier rows"), [&] {
     return upload(setup.cage, host.segments(), host.breakpoint_D(), host.breakpoint_E(), host.weights(), stream_);
   }));
 }

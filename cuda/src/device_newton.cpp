@@ -155,11 +155,7 @@ DeviceSpace& CudaNewtonCore::device_space(const MapSpace& space) {
   {  // the sizes that pick the kernels (cuBLAS's by shape): the same on every core of a shape
     int device = 0;
     HSI_CUDA_CHECK(cudaGetDevice(&device));
-    std::uint64_t h = 1469598103934665603ull;  // FNV-1a over the sizes
-    for (const long long v : {static_cast<long long>(device), static_cast<long long>(G_), static_cast<long long>(n), static_cast<long long>(h_),
-                              static_cast<long long>(dim), static_cast<long long>(M), static_cast<long long>(ds->lwork)})
-      for (int b = 0; b < 8; ++b) h = (h ^ ((static_cast<unsigned long long>(v) >> (8 * b)) & 0xff)) * 1099511628211ull;
-    ds->graphs.set_signature(h | 1);  // never 0 (0: no signature)
+    ds->graphs.set_signature({device, G_, n, h_, dim, M, ds->lwork});
   }
   HSI_CUDA_CHECK(cudaStreamSynchronize(stream_));
   slot = std::move(ds);
