@@ -453,6 +453,45 @@ TEST_CASE("the GPU certificate agrees with the CPU certificate", "[cuda][certify
   CHECK(refused > 0);
 }
 
+// The setup core certifies maps for its setup's certifier on the device (an
+// Interpolator's keyframes, issue #23), as the device certifier does; for any other
+// certifier it leaves the work to the host.
+TEST_CASE("a setup core certifies maps on the device for its setup's certifier alone", "[cuda][certify][small]") {
+  HSI_REQUIRE_GPU();
+  for (const auto& path : test::asset_scenes()) {
+    INFO(path.filename().string());
+    const Scene scene = load_scene(path);
+    const auto setup = make_shape_setup(scene, 2000, 0.2);
+    auto core = hsi::cuda::make_newton_core(*setup);
+    hsi::cuda::Certifier device(*setup);
+    const auto [times, maps] = scene_keys(scene);
+    std::vector<HarmonicMap> tried = maps;
+    tried.push_back(affine_map(setup->cage, 0.5, 1.0, 0));  // reverses orientation: refused
+    for (size_t i = 0; i < tried.size(); ++i) {
+      INFO("map " << i);
+      const std::optional<CertificateResult> d = core->certify_map(setup->certifier, tried[i]);
+      REQUIRE(d.has_value());
+      const CertificateResult want = device.certify(tried[i]);
+      CHECK(d->certified == want.certified);
+      CHECK(d->certified == (i < maps.size()));
+      CHECK(d->reason == want.reason);
+      CHECK(d->segments == want.segments);
+      CHECK(d->subdivisions == want.subdivisions);
+      CHECK(d->sigma1_max == want.sigma1_max);
+      CHECK(d->sigma2_min == want.sigma2_min);
+      CHECK(d->observed_isometric_max == want.observed_isometric_max);
+      CHECK(d->certified == setup->certifier.certify(tried[i]).certified);
+    }
+    // Another certifier of the same shape: not the core's to answer for.
+    const auto other = make_shape_setup(scene, 2000, 0.2);
+    CHECK_FALSE(core->certify_map(other->certifier, maps[0]).has_value());
+    // A core made from rows alone has no certifier.
+    CHECK_FALSE(hsi::cuda::make_newton_core(setup->D_G, setup->H)->certify_map(setup->certifier, maps[0]).has_value());
+    // Lent: the same answer.
+    CHECK(hsi::borrow_core(*core)->certify_map(setup->certifier, maps[0]).has_value());
+  }
+}
+
 TEST_CASE("the GPU certificate finds a zero of f_z inside and a fold between breakpoints", "[cuda][certify]") {
   HSI_REQUIRE_GPU();
   // As in test_certificate.cpp: Φ(w) ≈ (w − w0)²/2 has f_z = 0 at w0 inside Ω while

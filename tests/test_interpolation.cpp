@@ -442,6 +442,62 @@ TEST_CASE("frames after a keyframe whose coefficients are not certified are flag
 }
 
 namespace {
+// The CPU core, certifying maps itself (NewtonCore::certify_map): the setup's certificate,
+// marked, or a refusal; counting the calls.
+class CertifyingCore final : public ForwardingCore {
+ public:
+  CertifyingCore(const ShapeSetup& s, bool refuse) : ForwardingCore(s), setup_(s), refuse_(refuse) {}
+  const char* name() const override { return "certifying cpu"; }
+  std::optional<CertificateResult> certify_map(const Certifier& certifier, const HarmonicMap& map) override {
+    ++calls;
+    CHECK(&certifier == &setup_.certifier);
+    CertificateResult c;
+    if (refuse_) {
+      c.reason = "refused by the core";
+      return c;
+    }
+    c = certifier.certify(map);
+    c.subdivisions = -7;  // the mark
+    return c;
+  }
+  int calls = 0;
+
+ private:
+  const ShapeSetup& setup_;
+  bool refuse_;
+};
+}  // namespace
+
+// Keyframes are certified on the core's backend where it can (the CUDA core's device
+// certifier, issue #23: the host's certificate was most of an Interpolator's set-up), and
+// its verdict is the one that counts: its certificate is the keyframe frame's, its
+// refusal refuses the keyframe.
+TEST_CASE("an Interpolator certifies its keyframes on the core where the core can", "[interpolation]") {
+  TwistScene& S = twist_scene();
+  {
+    auto core = std::make_unique<CertifyingCore>(*S.setup, false);
+    CertifyingCore* c = core.get();
+    Interpolator I(*S.setup, S.times, S.maps, {}, std::move(core));
+    CHECK(c->calls == static_cast<int>(S.maps.size()));
+    for (size_t k = 0; k < S.times.size(); ++k) {
+      const FrameResult f = I.frame(S.times[k]);
+      CHECK(f.keyframe);
+      CHECK(f.certified);
+      CHECK(f.certificate.subdivisions == -7);
+    }
+  }
+  try {
+    Interpolator I(*S.setup, S.times, S.maps, {}, std::make_unique<CertifyingCore>(*S.setup, true));
+    FAIL("a keyframe the core refused was accepted");
+  } catch (const InputError& e) {
+    CHECK_THAT(e.what(), Catch::Matchers::Contains("keyframe 0 is not locally injective: refused by the core"));
+  }
+  // The CPU core certifies nothing itself: the host does.
+  std::unique_ptr<NewtonCore> cpu = make_cpu_newton_core(S.setup->D_G, S.setup->H);
+  CHECK_FALSE(cpu->certify_map(S.setup->certifier, S.maps[0]).has_value());
+}
+
+namespace {
 // The CPU core, counting the Hessians asked of it.
 class CountingCore final : public ForwardingCore {
  public:

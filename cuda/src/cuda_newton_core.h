@@ -240,6 +240,12 @@ class CudaNewtonCore final : public NewtonCore {
   std::unique_ptr<NewtonStepper> make_stepper(const MapSpace& space, const Certifier* certifier,
                                               const QuadraticTerm* quad) override;
 
+  // The setup's certifier on the device (the frames' certificate); any other: the host's.
+  std::optional<CertificateResult> certify_map(const Certifier& certifier, const HarmonicMap& map) override {
+    if (!setup_ || !certifier_ || &certifier != &setup_->certifier) return std::nullopt;
+    return certifier_->certify(map);
+  }
+
   double max_safe_step() override {
     HSI_CUDA_CHECK(kernels::max_safe_step(G_, ab_.get(), dab_.get(), part_sum_.get(), scalar_.get(), stream_));
     return download_scalar();

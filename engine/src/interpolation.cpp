@@ -47,7 +47,8 @@ Interpolator::Interpolator(const ShapeSetup& setup, std::vector<double> times, s
   c_rot_bar_ = rows.c_rot_bar;
   const BasisRows& D = rows.D;
   for (size_t k = 0; k < keys_.size(); ++k) {
-    const CertificateResult c = setup_.certifier.certify(keys_[k]);
+    std::optional<CertificateResult> on_core = core_->certify_map(setup_.certifier, keys_[k]);
+    const CertificateResult c = on_core ? std::move(*on_core) : setup_.certifier.certify(keys_[k]);
     if (!c.certified) throw InputError("keyframe " + std::to_string(k) + " is not locally injective: " + c.reason);
     key_distortion_.push_back(measure(c));
     key_certified_.push_back(certified_distortion(c));

@@ -875,6 +875,9 @@ class BorrowedCore final : public NewtonCore {
   std::unique_ptr<NewtonStepper> make_stepper(const MapSpace& space, const Certifier* certifier, const QuadraticTerm* quad) override {
     return core_.make_stepper(space, certifier, quad);
   }
+  std::optional<CertificateResult> certify_map(const Certifier& certifier, const HarmonicMap& map) override {
+    return core_.certify_map(certifier, map);
+  }
 
  private:
   NewtonCore& core_;

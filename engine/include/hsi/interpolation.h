@@ -193,7 +193,8 @@ class Interpolator {
   // (null: the CPU one). boundary: f at setup.overlap.breakpoints().points, the image
   // every frame's overlap check tests (null: the setup's CPU evaluator; runtime's
   // make_newton_core gives one on the core's backend); InputError if made for another
-  // number of points. Set-up also certifies each keyframe, checks its overlap and
+  // number of points. Set-up also certifies each keyframe (on the core's backend where it
+  // can: NewtonCore::certify_map, else the setup's certifier), checks its overlap and
   // certifies its reduced coefficients as a solve's start (so no frame certifies from
   // scratch: the first solved frame costs what a warm one does).
   Interpolator(const ShapeSetup& setup, std::vector<double> times, std::vector<HarmonicMap> keyframes,

@@ -19,6 +19,7 @@
 #include <cstdint>
 #include <functional>
 #include <memory>
+#include <optional>
 #include <span>
 #include <string>
 #include <vector>
@@ -95,6 +96,16 @@ class NewtonCore {
   virtual std::unique_ptr<NewtonStepper> make_stepper(const MapSpace& /*space*/, const Certifier* /*certifier*/,
                                                       const QuadraticTerm* /*quad*/) {
     return nullptr;
+  }
+
+  // The full certificate of `map` (CertificateOptions' defaults) by `certifier` on the
+  // core's backend, where the core can: the CUDA core made from a ShapeSetup answers for
+  // that setup's certifier with its device certifier (the certificate its frames get).
+  // nullopt: the caller certifies on the host. An Interpolator certifies its keyframes
+  // so at set-up (issue #23: on the host it was 6-8 ms of a keyframe's ~13 ms there at
+  // |G| = 10,000, one thread).
+  virtual std::optional<CertificateResult> certify_map(const Certifier& /*certifier*/, const HarmonicMap& /*map*/) {
+    return std::nullopt;
   }
 
   // A token no other set_target_keys call of any core gets.
