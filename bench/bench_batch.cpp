@@ -4,7 +4,9 @@
 // Interpolator per sequence, then Interpolator::sequence: what a loop over `hsi bake`
 // or hsi_interpolator_sequence does) and by solve_batch with W workers for each W of
 // the list, in one run on one backend. Prints per path: frames, wall time, frames/s,
-// speed-up over one at a time, the set-up inside it (cores, interpolators), certified
+// speed-up over one at a time, the set-up inside it (cores, interpolators), the process's
+// CPU time over the row and how many host cores that kept busy on average (waiting
+// threads that spin count: --cuda-wait block shows the host's own work), certified
 // and converged frames, and whether the frames are identical to the first batch row's
 // (the batch's output must not depend on W). Every time counts everything after the
 // shapes' setups are built (cores, interpolators with their keyframe certificates,
@@ -16,6 +18,8 @@
 #include <filesystem>
 #include <set>
 #include <sstream>
+
+#include <sys/resource.h>
 
 #ifdef _OPENMP
 #include <omp.h>
@@ -32,6 +36,13 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 double s_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
+
+// The process's CPU time so far, user and system, in seconds (every thread's).
+double cpu_s() {
+  rusage u{};
+  getrusage(RUSAGE_SELF, &u);
+  return static_cast<double>(u.ru_utime.tv_sec + u.ru_stime.tv_sec) + 1e-6 * static_cast<double>(u.ru_utime.tv_usec + u.ru_stime.tv_usec);
+}
 
 std::vector<int> parse_list(const std::string& s) {
   std::vector<int> out;
@@ -80,6 +91,7 @@ struct Row {
   size_t frames = 0, certified = 0, converged = 0, failed = 0;
   PartSums parts;
   double seconds = 0, set_up_s = 0, core_set_up_s = 0;
+  double cpu_s = 0;  // the process's CPU time (user + system, every thread) over the row
   int cores = 0, runs = 0, interpolators = 0;
   std::string wait = "-";  // the CUDA wait (--cuda-wait); "-" on the CPU
   std::string exact;       // the exact systems' samples (--exact-samples)
@@ -251,6 +263,7 @@ int main(int argc, char** argv) {
     row.exact = exacts.front();
     row.image = images.front();
     const auto t0 = Clock::now();
+    const double c0 = cpu_s();
     for (const BatchSequence& q : batch) {
       const auto ts = Clock::now();
       Interpolator I(*q.setup, q.key_times, q.keyframes, q.options, factories.make_core(*q.setup),
@@ -262,6 +275,7 @@ int main(int argc, char** argv) {
       std::fprintf(stderr, "\r[one at a time] %zu/%zu frames   ", row.frames, total);
     }
     row.seconds = s_since(t0);
+    row.cpu_s = cpu_s() - c0;
     row.runs = static_cast<int>(batch.size());
     std::fprintf(stderr, "\n");
     rows.push_back(row);
@@ -283,6 +297,7 @@ int main(int argc, char** argv) {
           o.threads_per_worker = threads_per_worker;
           o.make_core = factories.make_core;
           o.make_boundary = image == "host" ? nullptr : factories.make_boundary;
+          const double c0 = cpu_s();
           const BatchResult r = solve_batch(batch, o, [&](const FrameResult&, int, int, size_t done, size_t all) {
             if (done % 100 == 0 || done == all) std::fprintf(stderr, "\r[batch W = %d, wait %s, exact %s, image %s] %zu/%zu frames   ", W, wait.c_str(), exact.c_str(),
                                                      image.c_str(), done, all);
@@ -296,6 +311,7 @@ int main(int argc, char** argv) {
           row.image = image;
           row.workers = r.stats.workers;
           row.seconds = r.stats.seconds;
+          row.cpu_s = cpu_s() - c0;
           row.set_up_s = r.stats.set_up_s;
           row.core_set_up_s = r.stats.core_set_up_s;
           row.cores = r.stats.cores_made;
@@ -319,8 +335,8 @@ int main(int argc, char** argv) {
     }
 
   const double base = skip_single ? 0 : static_cast<double>(rows.front().frames) / rows.front().seconds;
-  std::printf("| path | exact systems | image | CUDA wait | W | frames | s | frames/s | speed-up | set-up s (summed) | of it cores s | cores made | interpolators | runs | certified | converged | same frames as first batch row |\n");
-  std::printf("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
+  std::printf("| path | exact systems | image | CUDA wait | W | frames | s | frames/s | speed-up | set-up s (summed) | of it cores s | cores made | interpolators | runs | host CPU s | host cores busy | certified | converged | same frames as first batch row |\n");
+  std::printf("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
   bool all_certified = true;
   for (const Row& r : rows) {
     const double fps = static_cast<double>(r.frames) / std::max(r.seconds, 1e-12);
@@ -330,9 +346,10 @@ int main(int argc, char** argv) {
     if (base > 0) std::snprintf(speed, sizeof speed, "%.2fx", fps / base);
     char cores_s[32] = "-";
     if (r.core_set_up_s >= 0) std::snprintf(cores_s, sizeof cores_s, "%.2f", r.core_set_up_s);
-    std::printf("| %s | %s | %s | %s | %d | %zu | %.2f | %.0f | %s | %.2f | %s | %d | %d | %d | %zu%s | %zu | %s |\n", r.path.c_str(),
+    std::printf("| %s | %s | %s | %s | %d | %zu | %.2f | %.0f | %s | %.2f | %s | %d | %d | %d | %.2f | %.1f | %zu%s | %zu | %s |\n", r.path.c_str(),
                 r.exact.c_str(), r.image.c_str(), r.wait.c_str(), r.workers,
-                r.frames, r.seconds, fps, speed, r.set_up_s, cores_s, r.cores, r.interpolators, r.runs, r.certified, every ? "" : " (NOT ALL CERTIFIED)", r.converged,
+                r.frames, r.seconds, fps, speed, r.set_up_s, cores_s, r.cores, r.interpolators, r.runs, r.cpu_s,
+                r.cpu_s / std::max(r.seconds, 1e-12), r.certified, every ? "" : " (NOT ALL CERTIFIED)", r.converged,
                 r.same.empty() ? "-" : r.same.c_str());
   }
   // Where a solved frame's wall clock goes, per row: what grows with W is what the
