@@ -38,7 +38,7 @@ using Clock = std::chrono::steady_clock;
 double s_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
 
 // The process's CPU time so far, user and system, in seconds (every thread's).
-double cpu_s() {
+double process_cpu_s() {
   rusage u{};
   getrusage(RUSAGE_SELF, &u);
   return static_cast<double>(u.ru_utime.tv_sec + u.ru_stime.tv_sec) + 1e-6 * static_cast<double>(u.ru_utime.tv_usec + u.ru_stime.tv_usec);
@@ -263,7 +263,7 @@ int main(int argc, char** argv) {
     row.exact = exacts.front();
     row.image = images.front();
     const auto t0 = Clock::now();
-    const double c0 = cpu_s();
+    const double c0 = process_cpu_s();
     for (const BatchSequence& q : batch) {
       const auto ts = Clock::now();
       Interpolator I(*q.setup, q.key_times, q.keyframes, q.options, factories.make_core(*q.setup),
@@ -275,7 +275,7 @@ int main(int argc, char** argv) {
       std::fprintf(stderr, "\r[one at a time] %zu/%zu frames   ", row.frames, total);
     }
     row.seconds = s_since(t0);
-    row.cpu_s = cpu_s() - c0;
+    row.cpu_s = process_cpu_s() - c0;
     row.runs = static_cast<int>(batch.size());
     std::fprintf(stderr, "\n");
     rows.push_back(row);
@@ -297,7 +297,7 @@ int main(int argc, char** argv) {
           o.threads_per_worker = threads_per_worker;
           o.make_core = factories.make_core;
           o.make_boundary = image == "host" ? nullptr : factories.make_boundary;
-          const double c0 = cpu_s();
+          const double c0 = process_cpu_s();
           const BatchResult r = solve_batch(batch, o, [&](const FrameResult&, int, int, size_t done, size_t all) {
             if (done % 100 == 0 || done == all) std::fprintf(stderr, "\r[batch W = %d, wait %s, exact %s, image %s] %zu/%zu frames   ", W, wait.c_str(), exact.c_str(),
                                                      image.c_str(), done, all);
@@ -311,7 +311,7 @@ int main(int argc, char** argv) {
           row.image = image;
           row.workers = r.stats.workers;
           row.seconds = r.stats.seconds;
-          row.cpu_s = cpu_s() - c0;
+          row.cpu_s = process_cpu_s() - c0;
           row.set_up_s = r.stats.set_up_s;
           row.core_set_up_s = r.stats.core_set_up_s;
           row.cores = r.stats.cores_made;
