@@ -71,8 +71,7 @@ std::string Clocks::describe() const {
 
 Clocks clocks() {
   Clocks c;
-  int dev = 0;
-  HSI_CUDA_CHECK(cudaGetDevice(&dev));
+  const int dev = current_device();
   cudaDeviceProp prop{};
   HSI_CUDA_CHECK(cudaGetDeviceProperties(&prop, dev));
   c.device = prop.name;

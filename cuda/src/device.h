@@ -416,11 +416,16 @@ class GraphCache {
   std::string last_failure_;
 };
 
-// The key of this device's copy of some setup data (ShapeSetup::shared_backend_data).
-inline std::string device_key(const char* what) {
+// The calling thread's current device ordinal (throws on a CUDA error).
+inline int current_device() {
   int device = 0;
   HSI_CUDA_CHECK(cudaGetDevice(&device));
-  return std::string("cuda:") + std::to_string(device) + ":" + what;
+  return device;
+}
+
+// The key of this device's copy of some setup data (ShapeSetup::shared_backend_data).
+inline std::string device_key(const char* what) {
+  return std::string("cuda:") + std::to_string(current_device()) + ":" + what;
 }
 
 // Whether the CUDA backend replays its recurring call sequences as graphs: yes, unless

@@ -152,11 +152,8 @@ DeviceSpace& CudaNewtonCore::device_space(const MapSpace& space) {
   HSI_CUDA_CHECK(cudaMemsetAsync(ds->xna.get(), 0, ds->xna.bytes(), stream_));
   HSI_CUDA_CHECK(cusolverDnDpotrf_bufferSize(solver_, CUBLAS_FILL_MODE_LOWER, m, ds->Hr.get(), m, &ds->lwork));
   ds->work = DeviceArray<double>(sz(std::max(1, ds->lwork)));
-  {  // the sizes that pick the kernels (cuBLAS's by shape): the same on every core of a shape
-    int device = 0;
-    HSI_CUDA_CHECK(cudaGetDevice(&device));
-    ds->graphs.set_signature({device, G_, n, h_, dim, M, ds->lwork});
-  }
+  // The sizes that pick the kernels (cuBLAS's by shape): the same on every core of a shape.
+  ds->graphs.set_signature({current_device(), G_, n, h_, dim, M, ds->lwork});
   HSI_CUDA_CHECK(cudaStreamSynchronize(stream_));
   slot = std::move(ds);
   return *slot;
