@@ -134,6 +134,7 @@ int main(int argc, char** argv) {
   std::vector<std::string> waits = {"auto"};
   std::vector<std::string> exacts = {to_string(InterpolationOptions{}.exact_samples)};
   std::vector<std::string> images = {"backend"};
+  std::string predict = to_string(InterpolationOptions{}.predict_start);
   app.add_option("--backend", backend, runtime::kBackendHelp)->capture_default_str()->check(CLI::IsMember(runtime::backend_names()));
   app.add_option("--workers", workers_list, "Batch worker counts W, comma-separated")->capture_default_str();
   app.add_option("--sequences", sequences, "Sequences S, made from the bundled scenes in turn")->capture_default_str()->check(CLI::Range(1, 100000));
@@ -165,6 +166,10 @@ int main(int argc, char** argv) {
       ->delimiter(',')
       ->capture_default_str()
       ->check(CLI::IsMember({"backend", "host"}));
+  app.add_option("--predict-start", predict,
+                 "Where every sequence's frames start (InterpolationOptions::predict_start: off, always, auto)")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"off", "always", "auto"}));
   app.add_flag("--skip-single", skip_single, "Leave out the one-at-a-time path (the speed-up column is then empty)");
   CLI11_PARSE(app, argc, argv);
   std::vector<int> worker_counts;
@@ -226,6 +231,7 @@ int main(int argc, char** argv) {
     const int intervals = static_cast<int>(L.times.size()) - 1;
     q.times = repeat % 2 == 0 ? sequence_times(L.times, F) : frame_times(L.times, std::max(1, (F - 1) / intervals));
     q.options.exact_samples = parse_exact_samples(exacts.front());
+    q.options.predict_start = parse_predict_start(predict);
     batch.push_back(std::move(q));
   }
   size_t total = 0;
@@ -244,8 +250,9 @@ int main(int argc, char** argv) {
   for (const BatchSequence& q : batch) setups.insert(q.setup);
   std::printf("%d sequences from %zu scenes (%zu shapes), %zu frames; |G| = %s, first sequence of each scene %d frames (+7 per repeat)\n",
               sequences, scenes.size(), setups.size(), total, samples > 0 ? std::to_string(samples).c_str() : "each scene's", frames);
-  std::printf("one at a time: a core and an Interpolator per sequence, %d OpenMP threads; batch: W workers x %d OpenMP thread(s) each\n\n",
-              omp_threads, threads_per_worker);
+  std::printf("one at a time: a core and an Interpolator per sequence, %d OpenMP threads; batch: W workers x %d OpenMP thread(s) each; "
+              "start prediction %s\n\n",
+              omp_threads, threads_per_worker, predict.c_str());
 
   // Warm-up outside every timing: libraries loaded, the first core's modules.
   {

@@ -27,6 +27,7 @@
 #include <thread>
 
 #include "hsi/machine.h"
+
 #include "hsi/interpolation.h"
 #include "hsi/keyframes.h"
 #include "hsi/runtime/backend.h"
@@ -168,18 +169,14 @@ void trace_run(Interpolator& interp, const ShapeSetup& setup, const std::vector<
   NewtonOptions no = frame_newton_options(interp.options());
   KeptSystem kept;
   if (interp.options().chord_steps) no.kept_system = &kept;
+  SecantPredictor predictor;  // InterpolationOptions::predict_start, as Interpolator::sequence
+  int last_iterations = 0;
   const std::vector<double> times = sequence_times({interp.t_begin(), interp.t_end()}, frames);
   Eigen::VectorXd x;
   std::string out = "trace " + what + "\n";
-  for (size_t i = 0; i < times.size(); ++i) {
-    if (std::count(key_times.begin(), key_times.end(), times[i])) {  // a keyframe: the frame is the keyframe itself
-      x = interp.frame(times[i]).x;
-      continue;
-    }
-    interp.core().set_targets(interp.blended_metric(times[i]));
-    const NewtonResult r = newton_solve(interp.core(), setup.metric_space, &setup.certifier, nullptr, x, no);
-    char b[300];
-    std::snprintf(b, sizeof b, "  t %.4f: %d it, %s\n", times[i], r.iterations, r.message.c_str());
+  char b[300];
+  const auto print = [&](const NewtonResult& r, double t, const char* start) {
+    std::snprintf(b, sizeof b, "  t %.4f: %d it, %s%s\n", t, r.iterations, r.message.c_str(), start);
     out += b;
     for (const NewtonIteration& k : r.log) {
       std::snprintf(b, sizeof b, "    E %.12f step %.3g %s%s %s dec2 %.3g |g| %.3g smax %.3g bt %d rej %d\n", k.energy, k.step, k.chord ? "chord " : "",
@@ -187,7 +184,39 @@ void trace_run(Interpolator& interp, const ShapeSetup& setup, const std::vector<
                     k.certificate_rejections);
       out += b;
     }
+  };
+  for (size_t i = 0; i < times.size(); ++i) {
+    if (std::count(key_times.begin(), key_times.end(), times[i])) {  // a keyframe: the frame is the keyframe itself
+      x = interp.frame(times[i]).x;
+      predictor.add(times[i], x);
+      kept = KeptSystem{};  // as Interpolator::sequence: nothing carried across a keyframe
+      last_iterations = 0;
+      continue;
+    }
+    interp.core().set_targets(interp.blended_metric(times[i]));
+    const auto hi = std::upper_bound(key_times.begin(), key_times.end(), times[i]);
+    const PredictStart mode = interp.options().predict_start;
+    const bool predict = mode == PredictStart::Always || (mode == PredictStart::Auto && last_iterations > 1);
+    const Eigen::VectorXd p = predict ? predictor.predict(times[i], *(hi - 1), *hi) : Eigen::VectorXd();
+    NewtonResult r;
+    if (p.size()) {
+      NewtonOptions np = no;
+      np.chord_from_start = false;
+      r = newton_solve(interp.core(), setup.metric_space, &setup.certifier, nullptr, p, np);
+      print(r, times[i], " (from the secant's start)");
+    }
+    if (!p.size() || !(r.certified && r.converged)) {
+      const int before = p.size() ? r.iterations : 0;
+      r = newton_solve(interp.core(), setup.metric_space, &setup.certifier, nullptr, x, no);
+      print(r, times[i], p.size() ? " (again, from the previous frame)" : "");
+      r.iterations += before;
+    }
+    last_iterations = r.iterations;
     if (r.certified) x = r.x;
+    if (r.certified && r.converged)
+      predictor.add(times[i], x);
+    else
+      predictor.clear();
   }
   std::fputs(out.c_str(), stderr);
 }
@@ -222,6 +251,7 @@ int main(int argc, char** argv) {
   int limit = 0, samples = 0, max_iterations = 100, jobs = 1, threads = 0;
   bool paper_newton = false, author_only = false, trace = false, reverse_loops = false, no_chord = false, no_checked_stop = false,
        no_carry = false;
+  std::string predict_start = to_string(InterpolationOptions{}.predict_start);
   double hessian_ratio = 0;
   std::string exact_samples = to_string(InterpolationOptions{}.exact_samples);
   double time_limit = 0, projected_decrement_stop = InterpolationOptions{}.projected_decrement_stop;
@@ -261,6 +291,11 @@ int main(int argc, char** argv) {
   app.add_flag("--no-chord", no_chord,
                "Sequences without chord steps (InterpolationOptions::chord_steps off): every frame's Newton systems built "
                "and factored at its own points, as before the chord steps");
+  app.add_option("--predict-start", predict_start,
+                 "Where frames start (InterpolationOptions::predict_start): off (the previous frame), always (the "
+                 "secant through the last two), auto (the secant after a frame of more than one iteration)")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"off", "always", "auto"}));
   app.add_flag("--paper-newton", paper_newton,
                "The paper's plain projected Newton (rotation gauged, no exact Hessian): the reference the fix is measured against");
   app.add_option("--backend", backend, runtime::kBackendHelp)
@@ -369,13 +404,14 @@ int main(int argc, char** argv) {
   std::printf("Machine: %s, %d logical cores; backend %s; %d workers x %d OpenMP threads\n", machine.cpu.c_str(), machine.cores,
               backend.c_str(), jobs, omp_threads);
   std::printf("Corpus: %s (seed %d): %d of %zu sequences on %zu shapes; |G| %s; frames per interval %s; projections %s; "
-              "iteration cap %d; exact systems over %s; projected-decrement stop %g%s%s%s%s%s\n\n",
+              "iteration cap %d; exact systems over %s; projected-decrement stop %g%s%s%s%s%s%s\n\n",
               corpus_file.c_str(), corpus.seed, total_sequences, corpus.sequences.size(), plan.size(),
               samples > 0 ? std::to_string(samples).c_str() : "per sequence", frames_opt.c_str(), projections_opt.c_str(),
               max_iterations, exact_samples.c_str(), projected_decrement_stop, paper_newton ? "; the paper's plain Newton (--paper-newton)" : "",
               no_chord && !paper_newton ? "; no chord steps (--no-chord)" : "",
               no_checked_stop && !paper_newton ? "; no checked decrement stop (--no-checked-decrement-stop)" : "",
               no_carry && !paper_newton ? "; no carry of all samples (--no-carry-all-samples)" : "",
+              paper_newton ? "" : ("; start prediction " + predict_start).c_str(),
               reverse_loops ? "; every shape's loops reversed (--reverse-loops)" : "");
   std::printf("Per run: F frames per keyframe interval, F x (keyframes - 1) + 1 frames in all, warm-started; the\n"
               "keyframes themselves are not counted. at cap: iterations >= cap or not converged. it: Newton\n"
@@ -608,6 +644,7 @@ int main(int argc, char** argv) {
       o.exact_hessian_when_definite = o.free_rotation = !paper_newton;
       if (paper_newton) o.escalate_after_iterations = 0;  // the paper's projection throughout
       o.chord_steps = !no_chord && !paper_newton;
+      o.predict_start = paper_newton ? PredictStart::Off : parse_predict_start(predict_start);
       o.exact_samples = parse_exact_samples(exact_samples);
       o.projected_decrement_stop = projected_decrement_stop;
       o.checked_decrement_stop = !no_checked_stop && !paper_newton;
@@ -660,7 +697,7 @@ int main(int argc, char** argv) {
   out["options"] = {{"corpus", corpus_file},     {"seed", corpus.seed},         {"samples", samples},
                     {"frames", frame_counts},    {"projections", split(projections_opt)}, {"max_iterations", max_iterations},
                     {"limit", limit},            {"paper_newton", paper_newton}, {"time_limit", time_limit},
-                    {"hessian_ratio", hessian_ratio}, {"chord_steps", !no_chord && !paper_newton}, {"checked_decrement_stop", !no_checked_stop && !paper_newton}, {"carry_all_samples", no_carry || paper_newton ? "off" : "auto"}, {"exact_samples", exact_samples},
+                    {"hessian_ratio", hessian_ratio}, {"chord_steps", !no_chord && !paper_newton}, {"predict_start", paper_newton ? "off" : predict_start}, {"checked_decrement_stop", !no_checked_stop && !paper_newton}, {"carry_all_samples", no_carry || paper_newton ? "off" : "auto"}, {"exact_samples", exact_samples},
                     {"projected_decrement_stop", projected_decrement_stop}, {"reverse_loops", reverse_loops}};
   json runs_json = json::array(), shapes_json = json::array();
   std::map<RunKey, Stats> total;

@@ -73,6 +73,12 @@ TEST_CASE("a batch gives every sequence's frames bit-identical to Interpolator::
   sequences.push_back(sequence_of("arm", {}, sequence_times({0, 3}, 8)));      // misses keyframes 1 and 2
   sequences.push_back(sequence_of("annulus", {}, sequence_times({0, 2}, 7)));  // same setup as the first: a worker's core is reused
   REQUIRE(bundled("arm").times.size() == 4);
+  // Exact systems over all of G (the CUDA core's choice: a move to all of G is carried to
+  // the next frames) and every start predicted: neither may cross a keyframe, or the runs
+  // the batch cuts there differ from the whole sequence.
+  sequences.push_back(sequence_of("glyph_8", {KeyTiming::Smooth}, frame_times({0, 1, 2}, 5)));
+  sequences.back().options.exact_samples = ExactSamples::All;
+  sequences.back().options.predict_start = PredictStart::Always;
 
   std::vector<std::vector<FrameResult>> reference;
   {

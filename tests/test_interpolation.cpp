@@ -283,18 +283,24 @@ TEST_CASE("frames are those of the plain frame loop: set-up certificates and the
   // documented, the overlap from the dense basis product at the breakpoints.
   TwistScene& S = twist_scene();
   const ShapeSetup& setup = *S.setup;
-  Interpolator I(setup, S.times, S.maps, {}, nullptr,
+  InterpolationOptions io;
+  io.predict_start = PredictStart::Auto;  // the replay below covers the predicted starts too
+  Interpolator I(setup, S.times, S.maps, io, nullptr,
                  make_cpu_mesh_evaluator(setup.cage, setup.overlap.breakpoints().points));  // injected: as the default
   const auto frames = I.sequence(9);
-  const auto dflt = Interpolator(setup, S.times, S.maps).sequence(9);
+  const auto dflt = Interpolator(setup, S.times, S.maps, io).sequence(9);
   auto core = make_cpu_newton_core(setup.D_G, setup.H);
   const MatrixXcd C = evaluate_basis(setup.cage, setup.overlap.breakpoints().points, kBasisC).C;
-  const InterpolationOptions io;
   const CertificateResult* previous = nullptr;
-  KeptSystem kept;  // the sequence's chord slot (InterpolationOptions::chord_steps), kept across keyframes too
+  KeptSystem kept;  // the sequence's chord slot (InterpolationOptions::chord_steps), emptied at keyframes
+  SecantPredictor predictor;  // InterpolationOptions::predict_start (Auto)
+  int last_iterations = 0, predicted = 0;
   for (size_t i = 0; i < frames.size(); ++i) {
     const FrameResult& f = frames[i];
     INFO("frame " << i << ", t = " << f.t);
+    const size_t k = f.t <= S.times[1] ? 0 : 1;
+    const Eigen::VectorXd p = last_iterations > 1 ? predictor.predict(f.t, S.times[k], S.times[k + 1]) : Eigen::VectorXd();
+    predictor.add(f.t, f.x);  // (every frame here is certified and converged: checked below)
     CHECK(f.x == dflt[i].x);
     CHECK(f.overlap.crossings == dflt[i].overlap.crossings);
     const VectorXcd dense = C * f.map.phi + (C * f.map.psi).conjugate();
@@ -308,13 +314,24 @@ TEST_CASE("frames are those of the plain frame loop: set-up certificates and the
       CHECK(f.certificate.sigma1_max == c.sigma1_max);
       CHECK(f.certificate.observed_sigma1_max == c.observed_sigma1_max);
       previous = nullptr;
+      kept = KeptSystem{};
+      last_iterations = 0;
       continue;
     }
     core->set_targets(I.blended_metric(f.t));
     NewtonOptions no = frame_newton_options(io);
     no.start_certificate = previous;
     no.kept_system = &kept;
-    const NewtonResult n = newton_solve(*core, setup.metric_space, &setup.certifier, nullptr, frames[i - 1].x, no);
+    CHECK(f.predicted == (p.size() > 0));
+    if (p.size()) {  // from the secant's start, certified by the solve, no chord step
+      no.start_certificate = nullptr;
+      no.chord_from_start = false;
+      ++predicted;
+    }
+    const NewtonResult n = newton_solve(*core, setup.metric_space, &setup.certifier, nullptr, p.size() ? p : frames[i - 1].x, no);
+    REQUIRE(n.certified);
+    REQUIRE(n.converged);
+    last_iterations = n.iterations;
     CHECK(f.x == n.x);
     CHECK(f.iterations == n.iterations);
     CHECK(f.energy == n.energy);
@@ -336,6 +353,7 @@ TEST_CASE("frames are those of the plain frame loop: set-up certificates and the
     CHECK(f.map.psi == posed.psi);
     previous = &f.certificate;
   }
+  CHECK(predicted > 0);  // the replay above covers the predicted path too
   // The first solved frame started from keyframe 0's set-up certificate, as a frame
   // asked for alone does.
   CHECK(I.frame(frames[1].t).x == frames[1].x);
@@ -517,6 +535,7 @@ TEST_CASE("a sequence with chord steps builds fewer Hessians, takes no more iter
   auto run = [&](bool chord, int& hessians) {
     InterpolationOptions o;
     o.chord_steps = chord;
+    o.predict_start = PredictStart::Off;  // chord steps alone (a predicted start takes none)
     auto core = std::make_unique<CountingCore>(*S.setup);
     CountingCore* counting = core.get();
     Interpolator I(*S.setup, S.times, S.maps, o, std::move(core));
@@ -552,4 +571,68 @@ TEST_CASE("a sequence with chord steps builds fewer Hessians, takes no more iter
   }
   INFO("iterations: " << chord_iterations << " with chord steps, " << plain_iterations << " without");
   CHECK(chord_iterations <= plain_iterations);
+}
+
+TEST_CASE("the secant predictor extrapolates the last two frames of an interval and nothing else", "[interpolation][predict]") {
+  SecantPredictor p;
+  const Eigen::Vector3d a(1, 2, 3), b(2, 0, 3.5);
+  CHECK(p.predict(2, 0, 5).size() == 0);  // nothing known
+  p.add(0, a);
+  CHECK(p.predict(2, 0, 5).size() == 0);  // one frame
+  p.add(1, b);
+  const Eigen::VectorXd x = p.predict(3, 0, 5);
+  REQUIRE(x.size() == 3);
+  CHECK((x - (b + 2 * (b - a))).norm() <= 1e-15);  // a line is continued exactly
+  CHECK(p.predict(1, 0, 5).size() == 0);     // not after the frames
+  CHECK(p.predict(3, 0.5, 5).size() == 0);   // the older frame lies in another interval
+  CHECK(p.predict(3, 0, 0.9).size() == 0);   // the newer one too
+  const Eigen::Vector3d c(4, -2, 4);
+  p.add(2, c);  // the older is dropped
+  CHECK((p.predict(2.5, 0, 5) - (c + 0.5 * (c - b))).norm() <= 1e-15);
+  p.clear();
+  CHECK(p.predict(2.5, 0, 5).size() == 0);
+  CHECK(parse_predict_start("always") == PredictStart::Always);
+  CHECK(to_string(parse_predict_start("off")) == std::string("off"));
+  CHECK_THROWS_WITH(parse_predict_start("secant"), Contains("unknown start prediction 'secant'"));
+}
+
+TEST_CASE("frames started from the secant's prediction take fewer iterations to the same minimisers", "[interpolation][predict][long]") {
+  TwistScene& S = twist_scene();
+  auto run = [&](PredictStart mode) {
+    InterpolationOptions o;
+    o.predict_start = mode;
+    return Interpolator(*S.setup, S.times, S.maps, o).sequence(41);
+  };
+  const std::vector<FrameResult> off = run(PredictStart::Off), always = run(PredictStart::Always), autom = run(PredictStart::Auto);
+  REQUIRE(off.size() == always.size());
+  int it_off = 0, it_always = 0, it_auto = 0, predicted = 0;
+  for (size_t i = 0; i < off.size(); ++i) {
+    INFO("frame " << i << ", t = " << off[i].t << ": " << always[i].message);
+    for (const auto* f : {&always[i], &autom[i]}) {
+      CHECK(f->certified);
+      CHECK(f->converged);
+    }
+    CHECK_FALSE(off[i].predicted);
+    if (off[i].keyframe) {
+      CHECK(always[i].x == off[i].x);  // keyframes reproduced exactly
+      CHECK(autom[i].x == off[i].x);
+      CHECK_FALSE(always[i].predicted);
+      continue;
+    }
+    // Auto predicts only after a solved frame of more than one iteration.
+    if (autom[i].predicted) CHECK((!autom[i - 1].keyframe && autom[i - 1].iterations > 1));
+    // Always predicts wherever the interval has two frames before this one.
+    const bool two_before = i >= 2 && !off[i - 1].keyframe;
+    CHECK(always[i].predicted == two_before);
+    predicted += always[i].predicted;
+    it_off += off[i].iterations;
+    it_always += always[i].iterations;
+    it_auto += autom[i].iterations;
+    CHECK(std::abs(always[i].energy - off[i].energy) <= 1e-6 * off[i].energy);
+    CHECK(std::abs(always[i].distortion.conformal_max - off[i].distortion.conformal_max) <= 1e-3 * off[i].distortion.conformal_max);
+  }
+  INFO("iterations: " << it_off << " off, " << it_always << " always, " << it_auto << " auto; " << predicted << " frames predicted");
+  CHECK(predicted >= 30);
+  CHECK(it_always < it_off);
+  CHECK(it_auto < it_off);
 }

@@ -268,10 +268,10 @@ FrameResult Interpolator::frame(double t, const Eigen::VectorXd& warm_start, con
 }
 
 FrameResult Interpolator::frame_searched(double t, const Eigen::VectorXd& warm_start, const CertificateResult* warm_certificate,
-                                         KeptSystem* kept) {
+                                         KeptSystem* kept, const Eigen::VectorXd* predicted) {
   const auto t0 = Clock::now();
   bool search = false;
-  FrameResult r = frame_before_crossings(t, warm_start, warm_certificate, boundary_values_[0], search, kept);
+  FrameResult r = frame_before_crossings(t, warm_start, warm_certificate, boundary_values_[0], search, kept, predicted);
   if (search) {
     const auto tp = Clock::now();
     r.overlap = setup_.overlap.check_points(points_of(boundary_values_[0]), crossing_workspace_);
@@ -283,7 +283,7 @@ FrameResult Interpolator::frame_searched(double t, const Eigen::VectorXd& warm_s
 
 FrameResult Interpolator::frame_before_crossings(double t, const Eigen::VectorXd& warm_start,
                                                  const CertificateResult* warm_certificate, MapValues& image, bool& search,
-                                                 KeptSystem* kept) {
+                                                 KeptSystem* kept, const Eigen::VectorXd* predicted) {
   const auto t0 = Clock::now();
   search = false;
   FrameResult r;
@@ -338,7 +338,28 @@ FrameResult Interpolator::frame_before_crossings(double t, const Eigen::VectorXd
   if (start) no.start_certificate = start;  // certified or not (NewtonOptions::from_uncertified_start)
   no.kept_system = kept;
   tp = Clock::now();
-  const NewtonResult n = newton_solve(*core_, setup_.metric_space, &setup_.certifier, nullptr, x0, no);
+  NewtonResult n;
+  if (predicted && predicted->size() == x0.size()) {
+    // The secant's start (InterpolationOptions::predict_start), certified by the solve
+    // itself; where that solve fails, the previous frame's start as without it.
+    NewtonOptions np = no;
+    np.start_certificate = nullptr;
+    np.chord_from_start = false;
+    n = newton_solve(*core_, setup_.metric_space, &setup_.certifier, nullptr, *predicted, np);
+    r.predicted = n.certified && n.converged;
+    if (!r.predicted) {
+      NewtonResult w = newton_solve(*core_, setup_.metric_space, &setup_.certifier, nullptr, x0, no);
+      w.iterations += n.iterations;
+      w.timing.energy_gradient += n.timing.energy_gradient;
+      w.timing.hessian += n.timing.hessian;
+      w.timing.solve += n.timing.solve;
+      w.timing.line_search += n.timing.line_search;
+      w.timing.certificate += n.timing.certificate;
+      n = std::move(w);
+    }
+  } else {
+    n = newton_solve(*core_, setup_.metric_space, &setup_.certifier, nullptr, x0, no);
+  }
   r.parts.solve = ms_since(tp);
   r.x = n.x;
   r.iterations = n.iterations;
@@ -395,10 +416,13 @@ std::vector<FrameResult> Interpolator::sequence(const std::vector<double>& times
   // limit whose reduced coefficients the certificate refuses: every frame after a failed
   // one was reported certified without a step, bench_stress grid_6/bend_steps).
   bool warm_is_key = false;
-  // The last exact Newton system of the frames so far, for the next frame's chord steps
-  // (InterpolationOptions::chord_steps).
+  // The last exact Newton system of the frames since the last keyframe, for the next
+  // frame's chord steps (InterpolationOptions::chord_steps).
   KeptSystem kept;
   KeptSystem* const chord = options_.chord_steps ? &kept : nullptr;
+  SecantPredictor predictor;  // InterpolationOptions::predict_start
+  Eigen::VectorXd prediction;
+  int last_iterations = 0;  // of the last solved frame (PredictStart::Auto)
   // Pipelined: solved frame i's crossing search runs on `crossings` while frame i + 1 is
   // solved and its image made (into the other of the two image buffers); then the
   // sequence waits for frame i's search, completes frame i and calls progress for it.
@@ -424,15 +448,37 @@ std::vector<FrameResult> Interpolator::sequence(const std::vector<double>& times
     // next solve's start (a keyframe's, or a held one's, is of the posed map: frame()
     // takes the keyframe's start certificate made at set-up instead).
     const CertificateResult* start = warm.size() == 0 || warm_is_key ? nullptr : &warm_certificate;
+    const Eigen::VectorXd* predicted = nullptr;
+    const bool predict = options_.predict_start == PredictStart::Always ||
+                         (options_.predict_start == PredictStart::Auto && last_iterations > 1);
+    if (predict && !keyframe_itself(t)) {
+      const size_t k = static_cast<size_t>(segment(t));
+      prediction = predictor.predict(t, times_[k], times_[k + 1]);
+      if (prediction.size()) predicted = &prediction;
+    }
     bool search = false;
     if (options_.pipelined_overlap)
-      out.push_back(frame_before_crossings(t, warm, start, boundary_values_[static_cast<size_t>(buffer)], search, chord));
+      out.push_back(frame_before_crossings(t, warm, start, boundary_values_[static_cast<size_t>(buffer)], search, chord, predicted));
     else
-      out.push_back(frame_searched(t, warm, start, chord));
+      out.push_back(frame_searched(t, warm, start, chord, predicted));
     if (out.back().certified) {
       warm = out.back().x;
       warm_certificate = out.back().certificate;
       warm_is_key = out.back().keyframe || out.back().held;
+    }
+    if (out.back().certified && out.back().converged)
+      predictor.add(t, out.back().x);
+    else
+      predictor.clear();
+    if (out.back().keyframe || out.back().held) {
+      // The frames after a keyframe (or a held one) depend on nothing before it, so that
+      // a sequence cut there (batch.h's runs) solves them alike: no chord system or move
+      // to all of G carried across it, and no predicted start until two frames of its
+      // interval are known (the predictor keeps to the interval itself).
+      kept = KeptSystem{};
+      last_iterations = 0;
+    } else {
+      last_iterations = out.back().iterations;
     }
     if (pending >= 0) complete(std::exchange(pending, -1));
     if (search) {
@@ -446,6 +492,37 @@ std::vector<FrameResult> Interpolator::sequence(const std::vector<double>& times
   }
   if (pending >= 0) complete(pending);
   return out;
+}
+
+const char* to_string(PredictStart p) {
+  switch (p) {
+    case PredictStart::Off: return "off";
+    case PredictStart::Always: return "always";
+    case PredictStart::Auto: return "auto";
+  }
+  return "?";
+}
+
+PredictStart parse_predict_start(const std::string& name) {
+  for (PredictStart p : {PredictStart::Off, PredictStart::Always, PredictStart::Auto})
+    if (name == to_string(p)) return p;
+  throw InputError("unknown start prediction '" + name + "' (off, always or auto)");
+}
+
+void SecantPredictor::add(double t, const Eigen::VectorXd& x) {
+  if (count_ == 2) {
+    t_[0] = t_[1];
+    x_[0].swap(x_[1]);
+  }
+  const size_t i = count_ == 2 ? 1 : static_cast<size_t>(count_++);
+  t_[i] = t;
+  x_[i] = x;
+}
+
+Eigen::VectorXd SecantPredictor::predict(double t, double lo, double hi) const {
+  if (count_ < 2 || !(t_[0] >= lo && t_[1] <= hi && t_[0] < t_[1] && t > t_[1]) || x_[0].size() != x_[1].size()) return {};
+  const double s = (t - t_[1]) / (t_[1] - t_[0]);
+  return x_[1] + s * (x_[1] - x_[0]);
 }
 
 NewtonOptions frame_newton_options(const InterpolationOptions& o) {

@@ -526,7 +526,7 @@ NewtonResult newton_run(NewtonStepper& st, bool certify, bool rotation_invariant
     //     iteration builds its system at x instead, as without a slot.
     std::array<double, kTrialBatch> steps{}, energies{};
     int batch_begin = 0, batch_size = 0;  // the line search's trial batch (its first one asked here for a chord)
-    if (kept && !kept->empty() && !prev) {
+    if (kept && !kept->empty() && !prev && opt.chord_from_start) {
       t0 = Clock::now();
       const bool solvable = st.linearize_kept(*kept);
       res.timing.energy_gradient += ms_since(t0);

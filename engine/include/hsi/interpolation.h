@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cstdint>
 #include <functional>
 #include <memory>
 #include <string>
@@ -17,6 +18,18 @@
 #include "hsi/timing.h"
 
 namespace hsi {
+
+// Where a sequence's frames start (InterpolationOptions::predict_start).
+enum class PredictStart : std::uint8_t {
+  Off,     // the previous frame's solution, with a chord step from its last exact system
+  Always,  // the secant's prediction wherever two frames of the interval are known
+  // The secant's where the frame before took more than one iteration (its chord step did
+  // not end it: the path turns faster than one step from the previous frame follows);
+  // else the previous frame's, whose chord step costs no system of its own.
+  Auto
+};
+const char* to_string(PredictStart p);
+PredictStart parse_predict_start(const std::string& name);  // "off", "always", "auto"
 
 struct InterpolationOptions {
   double tolerance = 5e-8;    // relative: NewtonOptions::tolerance (the paper's absolute 1e-7 at E = 2)
@@ -77,6 +90,22 @@ struct InterpolationOptions {
   // mostly builds and factors no system at all (issue #23). false: every frame's systems
   // built at its own points, as frame() does.
   bool chord_steps = true;
+  // Interpolator::sequence's starts (PredictStart): the previous frame's solution, or the
+  // secant through the last two solved frames of the keyframe interval extrapolated to
+  // the frame's time (SecantPredictor, a first-order continuation predictor: off from
+  // the frame's solution by O(h²) in the frame spacing h where the previous frame is off
+  // by O(h)). A solve from the secant's start takes no chord step (NewtonOptions::
+  // chord_from_start) and certifies that start itself; where it ends not certified or not
+  // converged, the frame is solved again from the previous frame (the iterations of
+  // both counted; FrameResult::predicted says which start the frame came from).
+  // Off by default: measured (issue #20/#23, 2026-12-04, one NVIDIA H200, CUDA core) Auto
+  // cut the stress corpus' iterations per frame at 100 frames per interval from 1.34 /
+  // 1.30 to 1.25 / 1.20 (Delete / PartProj; FullProj 1.19), every frame certified and
+  // converged, none at the cap, but bench_batch lost ~5 % of its frames per second
+  // (16 workers 3,166 against 3,358, one worker 698 against 737; 1.40 against 1.58
+  // iterations per frame): a predicted frame builds and factors a system at its start
+  // where a chord step from the previous frame builds none.
+  PredictStart predict_start = PredictStart::Off;
   // NewtonOptions::carry_all_samples, carried in the chord steps' slot (so off with
   // chord_steps off: frames then independent of each other's solves): once a frame's
   // solve moved its Hessians to all of G, the later frames of the sequence start there.
@@ -106,6 +135,10 @@ struct FrameResult {
   HarmonicMap map;           // the frame, posed
   Eigen::VectorXd x;         // its reduced coefficients (ModuloRigid gauge), the next warm start
   bool keyframe = false;     // t is a keyframe time: the keyframe itself
+  // Solved from the secant's prediction (InterpolationOptions::predict_start), not from
+  // the previous frame's solution (false too where a solve from the prediction failed
+  // and the frame was solved again from the previous one).
+  bool predicted = false;
   bool held = false;         // t lies in a Hold interval: the held keyframe itself (timing.h)
   bool certified = false;
   bool converged = false;
@@ -178,6 +211,25 @@ std::vector<double> frame_times(const std::vector<double>& key_times, int per_in
 // `frames` (≥ 2) uniform over [first, last] key time, both ends exact. Throws InputError.
 std::vector<double> sequence_times(const std::vector<double>& key_times, int frames, int per_interval = 0);
 
+// Starts for a sequence's frames (InterpolationOptions::predict_start): the secant
+// through the last two frames added, extrapolated to the next frame's time t,
+// x_b + (t − t_b)/(t_b − t_a)·(x_b − x_a), where both lie in t's keyframe interval
+// [lo, hi] (the path x(t) need not be smooth across a keyframe).
+class SecantPredictor {
+ public:
+  // A frame solved (certified and converged), or a keyframe, at t after the others.
+  void add(double t, const Eigen::VectorXd& x);
+  // A frame that was not: the next predictions need two frames after it.
+  void clear() { count_ = 0; }
+  // Empty where fewer than two frames of [lo, hi] are known, or t is not after them.
+  Eigen::VectorXd predict(double t, double lo, double hi) const;
+
+ private:
+  std::array<double, 2> t_{};  // [0] the older
+  std::array<Eigen::VectorXd, 2> x_;
+  int count_ = 0;
+};
+
 // Whether the frame at t is a keyframe itself (t one of key_times, or inside a Hold
 // interval of `timing`): Interpolator::frame solves nothing there and ignores its warm
 // start, so a sequence's frames from such a t on do not depend on the frames before it
@@ -243,10 +295,12 @@ class Interpolator {
   // and `search` set (a keyframe or held frame has its overlap from set-up: not set);
   // ms does not count it.
   // kept: the sequence's chord slot (InterpolationOptions::chord_steps), or null.
+  // predicted: a start to solve from before warm_start (InterpolationOptions::predict_start), or null.
   FrameResult frame_before_crossings(double t, const Eigen::VectorXd& warm_start, const CertificateResult* warm_certificate,
-                                     MapValues& image, bool& search, KeptSystem* kept = nullptr);
+                                     MapValues& image, bool& search, KeptSystem* kept = nullptr,
+                                     const Eigen::VectorXd* predicted = nullptr);
   FrameResult frame_searched(double t, const Eigen::VectorXd& warm_start, const CertificateResult* warm_certificate,
-                             KeptSystem* kept);
+                             KeptSystem* kept, const Eigen::VectorXd* predicted = nullptr);
 
   const ShapeSetup& setup_;
   std::vector<double> times_;

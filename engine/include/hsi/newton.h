@@ -429,6 +429,17 @@ struct NewtonOptions {
   // on the kept system, Deuflhard's simplified Newton, can replace the exact system.)
   // null: no chord step.
   KeptSystem* kept_system = nullptr;
+  // A solve's first step may be a chord step from the kept system (above). false: the
+  // start is not the point the kept system was built at (a continuation predictor's
+  // start, InterpolationOptions::predict_start), and the first iteration builds its
+  // system at x as without a slot; the exact systems it factors are kept as usual. A
+  // chord step from such a start overshoots: the kept system is the Hessian modulo the
+  // rotation at the point it was built, and the gradient here has a part along the
+  // difference of the two points' rotation generators, which that system barely
+  // stiffens (chromium_superbomb/hinge, issue #20: the energy up by 0.1 to 3e4 in 95 of
+  // 99 chord trials from predicted starts, every one refused by Armijo, with or without
+  // the increment's soft modes damped).
+  bool chord_from_start = true;
   // With a slot above: a solve whose Hessians moved to all of G (escalate_after_cuts,
   // escalate_after_cut_iterations) marks the slot (KeptSystem::all_samples), and a solve
   // that finds it marked builds its Hessians over all of G from its first iteration. The
