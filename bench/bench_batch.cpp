@@ -77,11 +77,7 @@ struct PartSums {
     crossings += f.parts.crossings;
     crossings_wait += f.parts.crossings_wait;
     distortion += f.parts.distortion;
-    t.energy_gradient += f.timing.energy_gradient;
-    t.hessian += f.timing.hessian;
-    t.solve += f.timing.solve;
-    t.line_search += f.timing.line_search;
-    t.certificate += f.timing.certificate;
+    t += f.timing;
   }
 };
 
@@ -169,7 +165,7 @@ int main(int argc, char** argv) {
   app.add_option("--predict-start", predict,
                  "Where every sequence's frames start (InterpolationOptions::predict_start: off, always, auto)")
       ->capture_default_str()
-      ->check(CLI::IsMember({"off", "always", "auto"}));
+      ->check(CLI::IsMember(predict_start_names()));
   app.add_flag("--skip-single", skip_single, "Leave out the one-at-a-time path (the speed-up column is then empty)");
   CLI11_PARSE(app, argc, argv);
   std::vector<int> worker_counts;

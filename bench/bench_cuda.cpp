@@ -202,11 +202,7 @@ SequenceStats run_sequence(const Loaded& L, MakeCore&& make_core, int frames, bo
     s.mean_ms += f.ms;
     s.max_ms = std::max(s.max_ms, f.ms);
     its += f.iterations;
-    t.energy_gradient += f.timing.energy_gradient;
-    t.hessian += f.timing.hessian;
-    t.solve += f.timing.solve;
-    t.line_search += f.timing.line_search;
-    t.certificate += f.timing.certificate;
+    t += f.timing;
   }
   solved = std::max(solved, 1);
   const double total_ms = s.mean_ms;

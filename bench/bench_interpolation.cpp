@@ -98,11 +98,7 @@ int main(int argc, char** argv) {
       ms += f.ms;
       mx = std::max(mx, f.ms);
       it += f.iterations;
-      t.energy_gradient += f.timing.energy_gradient;
-      t.hessian += f.timing.hessian;
-      t.solve += f.timing.solve;
-      t.line_search += f.timing.line_search;
-      t.certificate += f.timing.certificate;
+      t += f.timing;
     }
     const double its = std::max(1.0, it);
     std::printf("| %s | %d | %.1f | %.1f | %.2f | %d | %.1f | %.1f | %.1f | %.1f | %.1f |\n", L.name.c_str(), L.setup->map_space.n(),

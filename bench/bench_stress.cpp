@@ -27,7 +27,6 @@
 #include <thread>
 
 #include "hsi/machine.h"
-
 #include "hsi/interpolation.h"
 #include "hsi/keyframes.h"
 #include "hsi/runtime/backend.h"
@@ -195,9 +194,9 @@ void trace_run(Interpolator& interp, const ShapeSetup& setup, const std::vector<
     }
     interp.core().set_targets(interp.blended_metric(times[i]));
     const auto hi = std::upper_bound(key_times.begin(), key_times.end(), times[i]);
-    const PredictStart mode = interp.options().predict_start;
-    const bool predict = mode == PredictStart::Always || (mode == PredictStart::Auto && last_iterations > 1);
-    const Eigen::VectorXd p = predict ? predictor.predict(times[i], *(hi - 1), *hi) : Eigen::VectorXd();
+    const Eigen::VectorXd p = predicts_start(interp.options().predict_start, last_iterations)
+                                  ? predictor.predict(times[i], *(hi - 1), *hi)
+                                  : Eigen::VectorXd();
     NewtonResult r;
     if (p.size()) {
       NewtonOptions np = no;
@@ -295,7 +294,7 @@ int main(int argc, char** argv) {
                  "Where frames start (InterpolationOptions::predict_start): off (the previous frame), always (the "
                  "secant through the last two), auto (the secant after a frame of more than one iteration)")
       ->capture_default_str()
-      ->check(CLI::IsMember({"off", "always", "auto"}));
+      ->check(CLI::IsMember(predict_start_names()));
   app.add_flag("--paper-newton", paper_newton,
                "The paper's plain projected Newton (rotation gauged, no exact Hessian): the reference the fix is measured against");
   app.add_option("--backend", backend, runtime::kBackendHelp)

@@ -591,6 +591,11 @@ TEST_CASE("the secant predictor extrapolates the last two frames of an interval 
   CHECK((p.predict(2.5, 0, 5) - (c + 0.5 * (c - b))).norm() <= 1e-15);
   p.clear();
   CHECK(p.predict(2.5, 0, 5).size() == 0);
+  CHECK(predict_start_names() == std::vector<std::string>{"off", "always", "auto"});
+  CHECK(predicts_start(PredictStart::Always, 0));
+  CHECK_FALSE(predicts_start(PredictStart::Auto, 1));
+  CHECK(predicts_start(PredictStart::Auto, 2));
+  CHECK_FALSE(predicts_start(PredictStart::Off, 9));
   CHECK(parse_predict_start("always") == PredictStart::Always);
   CHECK(to_string(parse_predict_start("off")) == std::string("off"));
   CHECK_THROWS_WITH(parse_predict_start("secant"), Contains("unknown start prediction 'secant'"));

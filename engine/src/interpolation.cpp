@@ -350,11 +350,7 @@ FrameResult Interpolator::frame_before_crossings(double t, const Eigen::VectorXd
     if (!r.predicted) {
       NewtonResult w = newton_solve(*core_, setup_.metric_space, &setup_.certifier, nullptr, x0, no);
       w.iterations += n.iterations;
-      w.timing.energy_gradient += n.timing.energy_gradient;
-      w.timing.hessian += n.timing.hessian;
-      w.timing.solve += n.timing.solve;
-      w.timing.line_search += n.timing.line_search;
-      w.timing.certificate += n.timing.certificate;
+      w.timing += n.timing;
       n = std::move(w);
     }
   } else {
@@ -449,9 +445,7 @@ std::vector<FrameResult> Interpolator::sequence(const std::vector<double>& times
     // takes the keyframe's start certificate made at set-up instead).
     const CertificateResult* start = warm.size() == 0 || warm_is_key ? nullptr : &warm_certificate;
     const Eigen::VectorXd* predicted = nullptr;
-    const bool predict = options_.predict_start == PredictStart::Always ||
-                         (options_.predict_start == PredictStart::Auto && last_iterations > 1);
-    if (predict && !keyframe_itself(t)) {
+    if (predicts_start(options_.predict_start, last_iterations) && !keyframe_itself(t)) {
       const size_t k = static_cast<size_t>(segment(t));
       prediction = predictor.predict(t, times_[k], times_[k + 1]);
       if (prediction.size()) predicted = &prediction;
@@ -466,10 +460,12 @@ std::vector<FrameResult> Interpolator::sequence(const std::vector<double>& times
       warm_certificate = out.back().certificate;
       warm_is_key = out.back().keyframe || out.back().held;
     }
-    if (out.back().certified && out.back().converged)
-      predictor.add(t, out.back().x);
-    else
-      predictor.clear();
+    if (options_.predict_start != PredictStart::Off) {  // (Off: no history kept)
+      if (out.back().certified && out.back().converged)
+        predictor.add(t, out.back().x);
+      else
+        predictor.clear();
+    }
     if (out.back().keyframe || out.back().held) {
       // The frames after a keyframe (or a held one) depend on nothing before it, so that
       // a sequence cut there (batch.h's runs) solves them alike: no chord system or move
@@ -503,8 +499,21 @@ const char* to_string(PredictStart p) {
   return "?";
 }
 
+namespace {
+constexpr std::array kPredictStarts{PredictStart::Off, PredictStart::Always, PredictStart::Auto};
+}  // namespace
+
+const std::vector<std::string>& predict_start_names() {
+  static const std::vector<std::string> names = [] {
+    std::vector<std::string> v;
+    for (PredictStart p : kPredictStarts) v.emplace_back(to_string(p));
+    return v;
+  }();
+  return names;
+}
+
 PredictStart parse_predict_start(const std::string& name) {
-  for (PredictStart p : {PredictStart::Off, PredictStart::Always, PredictStart::Auto})
+  for (PredictStart p : kPredictStarts)
     if (name == to_string(p)) return p;
   throw InputError("unknown start prediction '" + name + "' (off, always or auto)");
 }

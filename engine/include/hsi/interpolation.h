@@ -29,7 +29,15 @@ enum class PredictStart : std::uint8_t {
   Auto
 };
 const char* to_string(PredictStart p);
-PredictStart parse_predict_start(const std::string& name);  // "off", "always", "auto"
+PredictStart parse_predict_start(const std::string& name);  // one of predict_start_names()
+// "off", "always", "auto": every PredictStart by its to_string name, in declaration order
+// (for an option's check, e.g. CLI::IsMember(predict_start_names())).
+const std::vector<std::string>& predict_start_names();
+// Whether a sequence's next frame starts from the secant's prediction under `mode`, the
+// solved frame before it (since the last keyframe) having taken `last_iterations` (0: none).
+inline bool predicts_start(PredictStart mode, int last_iterations) {
+  return mode == PredictStart::Always || (mode == PredictStart::Auto && last_iterations > 1);
+}
 
 struct InterpolationOptions {
   double tolerance = 5e-8;    // relative: NewtonOptions::tolerance (the paper's absolute 1e-7 at E = 2)

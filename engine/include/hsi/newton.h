@@ -500,7 +500,17 @@ struct NewtonResult {
   // at the new x), hessian the gradient and Hessian (linearize), solve the
   // factorisation, direction and safe step, line_search the trial energies,
   // certificate every certificate.
-  struct Timing { double energy_gradient = 0, hessian = 0, solve = 0, line_search = 0, certificate = 0; } timing;
+  struct Timing {
+    double energy_gradient = 0, hessian = 0, solve = 0, line_search = 0, certificate = 0;
+    Timing& operator+=(const Timing& o) {
+      energy_gradient += o.energy_gradient;
+      hessian += o.hessian;
+      solve += o.solve;
+      line_search += o.line_search;
+      certificate += o.certificate;
+      return *this;
+    }
+  } timing;
 };
 
 // Minimises mean_G E_iso + quad(x) from x0 (a certified map, or see
