@@ -63,6 +63,7 @@ namespace {
 struct BakeOpts {
   std::vector<std::string> scenes;
   std::string out = "sequence.hsib", from, backend = "cpu";
+  std::string predict_start = to_string(InterpolationOptions{}.predict_start);
   int frames = 120, samples = 0, per_interval = 0, jobs = 0;
   double ratio = 0;
   bool f64 = false, allow_unconverged = false;
@@ -127,6 +128,7 @@ SceneSequenceOptions sequence_options(const BakeOpts& o) {
   so.samples = o.samples;
   so.hessian_ratio = o.ratio;
   so.interpolation.max_iterations = o.max_iterations;
+  so.interpolation.predict_start = parse_predict_start(o.predict_start);
   return so;
 }
 
@@ -282,6 +284,7 @@ void register_bake(CLI::App& app) {
   cmd->add_option("--ratio", o->ratio, "Hessian sample ratio r (default: the scene's)")->check(CLI::Range(1e-6, 1.0));
   cmd->add_option("--from", o->from, "Bake the frames of an earlier hsi interpolate (its folder or frames.hsif) instead");
   cmd->add_option("--max-iterations", o->max_iterations, "Newton iterations per frame at most")->capture_default_str()->check(CLI::Range(1, 1000000));
+  add_predict_start_option(cmd, o->predict_start);
   cmd->add_option("--backend", o->backend, runtime::kBackendHelp)->capture_default_str()->check(CLI::IsMember(runtime::backend_names()));
   cmd->add_option("--jobs", o->jobs,
                   "With several scenes: workers solving them together, each with its own Newton core and one OpenMP thread\n"

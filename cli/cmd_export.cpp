@@ -23,6 +23,7 @@ void register_export(CLI::App& app) {
     int max_iterations = 100;
     std::string size = "512";
     int every = 1;
+    std::string predict_start = to_string(InterpolationOptions{}.predict_start);
   };
   auto o = std::make_shared<Opts>();
   CLI::App* cmd = app.add_subcommand(
@@ -43,6 +44,7 @@ void register_export(CLI::App& app) {
   cmd->add_option("--samples", o->samples, "Boundary samples |G| (default: the scene's)")->check(CLI::Range(kMinSamples, kMaxSamples));
   cmd->add_option("--ratio", o->ratio, "Hessian sample ratio r (default: the scene's)")->check(CLI::Range(1e-6, 1.0));
   cmd->add_option("--max-iterations", o->max_iterations, "Newton iterations per frame at most")->capture_default_str()->check(CLI::Range(1, 1000000));
+  add_predict_start_option(cmd, o->predict_start);
   cmd->add_flag("--allow-unconverged", o->allow_unconverged, "Exit 0 when certified frames did not converge (still flagged in the outputs)");
   cmd->add_option("--gltf-frames", o->gltf_frames, "Frames sampled into the glTF animation (morph targets + 1)")
       ->capture_default_str()->check(CLI::Range(2, 4096));
@@ -68,6 +70,7 @@ void register_export(CLI::App& app) {
       so.samples = o->samples;
       so.hessian_ratio = o->ratio;
       so.interpolation.max_iterations = o->max_iterations;
+      so.interpolation.predict_start = parse_predict_start(o->predict_start);
       const SceneSequence seq = interpolate_with_progress(scene, so, "export");
       ff = seq.frame_file();
       if (!o->json.empty()) {

@@ -33,6 +33,7 @@ void register_interpolate(CLI::App& app) {
     std::string exact_samples = to_string(InterpolationOptions{}.exact_samples);
     std::string backend = "auto";
     std::string timing;  // empty: the scene's keyframe timings
+    std::string predict_start = to_string(InterpolationOptions{}.predict_start);
     bool projected_only = false, gauged_rotation = false, no_chord = false, no_carry = false;
     bool allow_unconverged = false;
   };
@@ -73,6 +74,7 @@ void register_interpolate(CLI::App& app) {
   cmd->add_flag("--no-carry-all-samples", o->no_carry,
                 "Start every frame's Hessians on the subset H, even after an earlier frame's solve moved them to all of G "
                 "(by default a sequence carries that move on the CUDA core)");
+  add_predict_start_option(cmd, o->predict_start);
   cmd->add_option("--backend", o->backend, runtime::kBackendHelp)
       ->capture_default_str()
       ->check(CLI::IsMember(runtime::backend_names()));
@@ -115,6 +117,7 @@ void register_interpolate(CLI::App& app) {
     io.chord_steps = !o->no_chord;
     if (o->no_carry) io.carry_all_samples = AllSamplesCarry::Off;
     io.exact_samples = parse_exact_samples(o->exact_samples);
+    io.predict_start = parse_predict_start(o->predict_start);
     io.timing = o->timing.empty() ? scene_timings(scene) : std::vector<KeyTiming>{*parse_key_timing(o->timing)};
     std::printf("Newton core: %s\n", runtime::describe(core.choice).c_str());
     Interpolator interp(*setup, times, maps, io, std::move(core.core), std::move(core.boundary));

@@ -179,6 +179,7 @@ std::string report_json(const Scene& scene, const SceneSequence& seq, const std:
                   {"converged", f.converged},
                   {"stop", to_string(f.stop)},
                   {"iterations", f.iterations},
+                  {"predicted_start", f.predicted},
                   {"energy", f.energy},
                   {"ms", f.ms},
                   {"sigma1_max", f.distortion.sigma1_max},
