@@ -17,7 +17,6 @@
 #include <cstdio>
 #include <filesystem>
 #include <set>
-#include <sstream>
 
 #include <sys/resource.h>
 
@@ -25,6 +24,7 @@
 #include <omp.h>
 #endif
 
+#include "bench_args.h"
 #include "bench_scenes.h"
 #include "hsi/batch.h"
 #include "hsi/machine.h"
@@ -42,20 +42,6 @@ double process_cpu_s() {
   rusage u{};
   getrusage(RUSAGE_SELF, &u);
   return static_cast<double>(u.ru_utime.tv_sec + u.ru_stime.tv_sec) + 1e-6 * static_cast<double>(u.ru_utime.tv_usec + u.ru_stime.tv_usec);
-}
-
-std::vector<int> parse_list(const std::string& s) {
-  std::vector<int> out;
-  std::stringstream in(s);
-  std::string item;
-  while (std::getline(in, item, ','))
-    if (!item.empty()) {
-      const int w = std::stoi(item);
-      if (w < 1) throw CLI::ValidationError("--workers", "worker counts must be at least 1 (got " + item + ")");
-      out.push_back(w);
-    }
-  if (out.empty()) throw CLI::ValidationError("--workers", "no worker count given");
-  return out;
 }
 
 // A frame's wall clock split into its parts (FrameResult::parts, the solve by
@@ -170,7 +156,7 @@ int main(int argc, char** argv) {
   CLI11_PARSE(app, argc, argv);
   std::vector<int> worker_counts;
   try {
-    worker_counts = parse_list(workers_list);
+    worker_counts = bench::parse_counts(workers_list, "--workers");
   } catch (const CLI::Error& e) {
     return app.exit(e);
   }
@@ -194,19 +180,7 @@ int main(int argc, char** argv) {
   };
 
   // The scenes, then the sequences.
-  std::vector<std::filesystem::path> files;
-  for (const auto& e : std::filesystem::directory_iterator(assets))
-    if (e.path().extension() == ".json") files.push_back(e.path());
-  std::sort(files.begin(), files.end());
-  std::vector<bench::Loaded> scenes;
-  for (const auto& f : files) {
-    try {
-      bench::Loaded L = bench::load(f.string(), samples, ratio);
-      if (L.times.size() >= 2) scenes.push_back(std::move(L));
-    } catch (const std::exception& e) {
-      std::fprintf(stderr, "bench_batch: %s left out: %s\n", f.string().c_str(), e.what());
-    }
-  }
+  std::vector<bench::Loaded> scenes = bench::load_folder(assets, samples, ratio, "bench_batch");
   if (scenes.empty()) {
     std::fprintf(stderr, "bench_batch: no scene with keyframes in %s\n", assets.c_str());
     return 1;

@@ -4,6 +4,8 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cstdio>
+#include <filesystem>
 #include <memory>
 #include <string>
 #include <vector>
@@ -34,6 +36,25 @@ inline Loaded load(const std::string& path, int samples, double ratio) {
     L.maps.push_back(*k.coefficients);
   }
   return L;
+}
+
+// Every scene of `folder` (*.json, in name order) with two or more keyframes, loaded;
+// a file that fails to load is named on stderr (with `tag`) and left out.
+inline std::vector<Loaded> load_folder(const std::string& folder, int samples, double ratio, const char* tag) {
+  std::vector<std::filesystem::path> files;
+  for (const auto& e : std::filesystem::directory_iterator(folder))
+    if (e.path().extension() == ".json") files.push_back(e.path());
+  std::sort(files.begin(), files.end());
+  std::vector<Loaded> scenes;
+  for (const auto& f : files) {
+    try {
+      Loaded L = load(f.string(), samples, ratio);
+      if (L.times.size() >= 2) scenes.push_back(std::move(L));
+    } catch (const std::exception& e) {
+      std::fprintf(stderr, "%s: %s left out: %s\n", tag, f.string().c_str(), e.what());
+    }
+  }
+  return scenes;
 }
 
 // Where the frames' time went (FrameResult::parts): the first solved frame apart (what

@@ -21,9 +21,9 @@
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
-#include <sstream>
 #include <thread>
 
+#include "bench_args.h"
 #include "bench_scenes.h"
 #include "hsi/machine.h"
 #include "hsi/runtime/backend.h"
@@ -54,20 +54,6 @@ const std::vector<Variant>& variants() {
   return v;
 }
 
-std::vector<int> parse_list(const std::string& s) {
-  std::vector<int> out;
-  std::stringstream in(s);
-  std::string item;
-  while (std::getline(in, item, ','))
-    if (!item.empty()) {
-      const int w = std::stoi(item);
-      if (w < 1) throw CLI::ValidationError("--workers", "worker counts must be at least 1 (got " + item + ")");
-      out.push_back(w);
-    }
-  if (out.empty()) throw CLI::ValidationError("--workers", "no worker count given");
-  return out;
-}
-
 // One thread's scene: its core, a warm frame's start and targets, its stepper.
 struct Worker {
   std::unique_ptr<NewtonCore> core;
@@ -91,22 +77,19 @@ int main(int argc, char** argv) {
   app.add_option("--seconds", seconds, "Wall time each row runs for")->capture_default_str()->check(CLI::Range(0.1, 600.0));
   app.add_option("--assets", assets, "Folder of bundled scenes (every *.json with two or more keyframes)")->capture_default_str();
   CLI11_PARSE(app, argc, argv);
-  const std::vector<int> worker_counts = parse_list(workers_list);
+  std::vector<int> worker_counts;
+  try {
+    worker_counts = bench::parse_counts(workers_list, "--workers");
+  } catch (const CLI::Error& e) {
+    return app.exit(e);
+  }
   const runtime::Backend requested = runtime::parse_backend(backend);
   const runtime::CudaStatus cuda = runtime::cuda_status();
 
-  std::vector<bench::Loaded> scenes;
-  std::vector<std::filesystem::path> paths;
-  for (const auto& e : std::filesystem::directory_iterator(assets))
-    if (e.path().extension() == ".json") paths.push_back(e.path());
-  std::sort(paths.begin(), paths.end());
-  for (const auto& p : paths) {
-    Scene probe = load_scene(p.string());
-    if (probe.keyframes.size() < 2) continue;
-    scenes.push_back(bench::load(p.string(), samples, 0));
-    std::fprintf(stderr, "[stages] %s: n = %d, |G| = %zu, |H| = %zu\n", scenes.back().name.c_str(), scenes.back().setup->map_space.n(),
-                 scenes.back().setup->G.size(), scenes.back().setup->H.size());
-  }
+  std::vector<bench::Loaded> scenes = bench::load_folder(assets, samples, 0, "bench_stages");
+  for (const bench::Loaded& L : scenes)
+    std::fprintf(stderr, "[stages] %s: n = %d, |G| = %zu, |H| = %zu\n", L.name.c_str(), L.setup->map_space.n(), L.setup->G.size(),
+                 L.setup->H.size());
   if (scenes.empty()) {
     std::fprintf(stderr, "no scene with two or more keyframes in %s\n", assets.c_str());
     return 2;
