@@ -99,7 +99,8 @@ void register_interpolate(CLI::App& app) {
       else
         std::printf("keyframe %d: certified locally injective\n", k.index);
       // Locally injective is not globally injective: say so when its outline crosses itself.
-      if (k.overlap.overlaps()) std::printf("WARNING: keyframe %d %s\n", k.index, describe(k.overlap).c_str());
+      if (k.overlap.overlaps())
+        std::printf("WARNING: keyframe %d %s%s\n", k.index, describe(k.overlap).c_str(), start_from_rest_hint(k).c_str());
     });
     std::vector<double> times;
     std::vector<HarmonicMap> maps;

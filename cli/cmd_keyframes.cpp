@@ -179,7 +179,7 @@ void register_keyframes(CLI::App& app) {
       }
       if (k.overlap.overlaps()) {
         ++overlapping;
-        std::printf("WARNING: %s %s\n", label.c_str(), describe(k.overlap).c_str());
+        std::printf("WARNING: %s %s%s\n", label.c_str(), describe(k.overlap).c_str(), start_from_rest_hint(k).c_str());
       }
       if (!o->png_dir.empty()) {
         MapPlot extras;

@@ -7,6 +7,7 @@
 #include <string>
 
 #include "hsi/interpolation.h"
+#include "hsi/keyframes.h"
 
 namespace hsi::cli {
 
@@ -72,6 +73,15 @@ inline void add_predict_start_option(CLI::App* cmd, std::string& name) {
                   "no faster. A predicted solve that ends not certified or not converged is solved again from the previous frame")
       ->capture_default_str()
       ->check(CLI::IsMember(predict_start_names()));
+}
+
+// A hint after a keyframe authored from the previous keyframe's pose is found to overlap
+// itself (a pose far from the previous one can end folded over itself although the same
+// targets from rest give an undistorted map); empty where it does not apply.
+inline std::string start_from_rest_hint(const SceneKeyframe& k) {
+  if (!k.solved || k.from_rest || k.index == 0 || !k.overlap.overlaps()) return "";
+  return "  (authored from keyframe " + std::to_string(k.index - 1) + "'s pose; if this pose is not meant to carry that one's " +
+         "turns, \"start\": \"rest\" in keyframe " + std::to_string(k.index) + " authors it from the rest pose)";
 }
 
 // hsi render's description (cmd_render.cpp, or cmd_render_unavailable.cpp in a build without Vulkan).

@@ -1,7 +1,11 @@
 // Keyframe authoring by handles (math.md §7) and import of coefficient keyframes.
 #include <catch2/catch.hpp>
 
+#include <filesystem>
+
 #include "hsi/keyframes.h"
+#include "hsi/scene_io.h"
+#include "hsi/shape_setup.h"
 #include "test_shapes.h"
 
 using namespace hsi;
@@ -111,4 +115,50 @@ TEST_CASE("every bundled scene has at least two keyframes, all certified", "[key
       }
     }
   }
+}
+
+// Keyframe::start (scene "start": "rest"): authoring from targets starts at the rest pose
+// instead of the previous keyframe. On two_holes, keyframe 0 turns the whole shape by
+// 2.5 rad (and scales it 1.3), keyframe 1 turns its right-hand part 2 rad from rest and
+// keyframe 2 is the rest pose moved: authored each from the one before, keyframe 2 meets
+// its targets but stays twisted over itself (energy ~42, 14 crossings; found by a
+// generated scene, 2026-12-05); from rest it is the rigid motion itself.
+TEST_CASE("a keyframe authored from rest depends on its targets alone", "[keyframes][long]") {
+  Scene scene = load_scene(std::filesystem::path(HSI_ASSETS_DIR) / "two_holes.json");
+  const std::vector<cd> rest = scene.handles;
+  REQUIRE(rest.size() == 7);
+  const cd spin = 1.3 * std::polar(1.0, 2.5), turn = std::polar(1.0, 2.0), about = rest[3], shift(0.5, -0.3);
+  std::vector<cd> k0, k1, k2;
+  for (size_t i = 0; i < rest.size(); ++i) {
+    k0.push_back(spin * rest[i]);
+    k1.push_back(i < 3 ? rest[i] : about + turn * (rest[i] - about));
+    k2.push_back(rest[i] + shift);
+  }
+  scene.keyframes = {Keyframe{0, k0, {}}, Keyframe{1, k1, {}}, Keyframe{2, k2, {}}};
+  scene.samples = 2000;
+  const auto setup = make_shape_setup(scene, 2000, 0.2);
+  scene.cage = setup->cage;
+  const std::vector<SceneKeyframe> a = solve_scene_keyframes(scene, *setup);
+  REQUIRE(a.size() == 3);
+  CHECK_FALSE(a[2].from_rest);
+  // Keyframes 0 and 1 as solved; keyframe 2 again, from rest.
+  Scene from_rest = scene;
+  from_rest.keyframes[2].coefficients.reset();
+  from_rest.keyframes[2].start = Keyframe::Start::Rest;
+  const std::vector<SceneKeyframe> b = solve_scene_keyframes(from_rest, *setup);
+  REQUIRE(b.size() == 3);
+  CHECK_FALSE(b[1].solved);  // given as coefficients now: only certified
+  CHECK(b[2].from_rest);
+  REQUIRE(b[2].result.certified);
+  CHECK(b[2].result.reached);
+  CHECK(b[2].result.energy == Approx(2.0).epsilon(1e-6));  // the isometry
+  CHECK_FALSE(b[2].overlap.overlaps());
+  const auto pts = test::interior_points(setup->shape, 100);
+  const std::vector<cd> f = map_points(setup->cage, *from_rest.keyframes[2].coefficients, pts);
+  for (size_t i = 0; i < pts.size(); ++i) CHECK(std::abs(f[i] - (pts[i] + shift)) < 1e-4 * setup->size);
+  // From keyframe 1 the same targets are met by a map folded over itself.
+  INFO("from keyframe 1: energy " << a[2].result.energy);
+  CHECK(a[2].result.reached);
+  CHECK(a[2].overlap.overlaps());
+  CHECK(a[2].result.energy > 10);
 }

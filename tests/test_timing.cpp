@@ -303,3 +303,33 @@ TEST_CASE("a core's target blend sets the blended metrics and refuses a stale to
   CHECK_FALSE(b->blend_targets(newer, std::vector<double>{1, 0}, false));  // another core's token
   CHECK(a->blend_targets(newer, std::vector<double>{0.5, 0.5}, false));
 }
+
+TEST_CASE("scene files carry a keyframe's authoring start (version 2) and refuse what they cannot mean", "[scene_io][keyframes]") {
+  const std::string shape = R"("shape": {"outer": [[0,0],[4,0],[4,3],[0,3]]}, "handles": [[1,1],[3,2]])";
+  const std::string keys = R"("keyframes": [{"time": 0, "targets": [[1,1],[3,2]]},
+                                            {"time": 1, "targets": [[1,1],[3,2.5]], "start": "rest"},
+                                            {"time": 2, "targets": [[1,1],[3,2]], "start": "previous"}])";
+  const Scene s = parse_scene("{\"hsi_scene\": 2, " + shape + ", " + keys + "}", ".");
+  REQUIRE(s.keyframes.size() == 3);
+  CHECK(s.keyframes[0].start == Keyframe::Start::Previous);
+  CHECK(s.keyframes[1].start == Keyframe::Start::Rest);
+  CHECK(s.keyframes[2].start == Keyframe::Start::Previous);
+  const std::string written = scene_to_json(s);
+  CHECK_THAT(written, Contains("\"hsi_scene\": 2") && Contains("\"start\": \"rest\""));
+  const Scene again = parse_scene(written, ".");
+  CHECK(again.keyframes[1].start == Keyframe::Start::Rest);
+  CHECK(again.keyframes[2].start == Keyframe::Start::Previous);
+  CHECK_THROWS_WITH(parse_scene("{\"hsi_scene\": 1, " + shape + ", " + keys + "}", "."),
+                    Contains("keyframes[1].start") && Contains("needs \"hsi_scene\": 2"));
+  CHECK_THROWS_WITH(parse_scene("{\"hsi_scene\": 2, " + shape + R"(, "keyframes": [{"time": 0, "targets": [[1,1],[3,2]], "start": "identity"}]})", "."),
+                    Contains("keyframes[0].start") && Contains("expected \"previous\" or \"rest\", got \"identity\""));
+  CHECK_THROWS_WITH(parse_scene("{\"hsi_scene\": 2, " + shape + R"(, "keyframes": [{"time": 0, "targets": [[1,1],[3,2]], "start": 1}]})", "."),
+                    Contains("keyframes[0].start") && Contains("expected \"previous\" or \"rest\""));
+  // Only authoring from targets starts somewhere: on a keyframe of coefficients alone it means nothing.
+  CHECK_THROWS_WITH(parse_scene(R"({"hsi_scene": 2, "shape": {"outer": [[0,0],[4,0],[4,3],[0,3]]}, "keyframes": [{"time": 0, "start": "rest"}]})", "."),
+                    Contains("keyframes[0].start") && Contains("gives no \"targets\""));
+  // Without a start of rest (and without timing) a scene keeps version 1 when written.
+  Scene plain = s;
+  for (Keyframe& k : plain.keyframes) k.start = Keyframe::Start::Previous;
+  CHECK_THAT(scene_to_json(plain), Contains("\"hsi_scene\": 1") && !Contains("\"start\""));
+}

@@ -130,7 +130,8 @@ namespace hsi {
 std::vector<SceneKeyframe> solve_scene_keyframes(Scene& scene, const ShapeSetup& setup, const KeyframeOptions& options,
                                                  bool force, const std::function<void(const SceneKeyframe&)>& on_keyframe) {
   std::vector<SceneKeyframe> out;
-  HarmonicMap previous = identity_map(setup.cage);
+  const HarmonicMap rest = identity_map(setup.cage);
+  HarmonicMap previous = rest;
   std::unique_ptr<NewtonCore> core;
   try {
   for (size_t k = 0; k < scene.keyframes.size(); ++k) {
@@ -144,7 +145,8 @@ std::vector<SceneKeyframe> solve_scene_keyframes(Scene& scene, const ShapeSetup&
       if (key.targets.empty()) throw InputError(label + ": has neither targets nor coefficients");
       rep.solved = true;
       if (!core) core = authoring_core(setup, options);  // one core for the scene's keyframes, made when first needed
-      rep.result = author_on(*core, setup, scene.handles, key.targets, previous, options, {});
+      rep.from_rest = key.start == Keyframe::Start::Rest;
+      rep.result = author_on(*core, setup, scene.handles, key.targets, rep.from_rest ? rest : previous, options, {});
       if (!rep.result.certified) throw InputError(label + ": " + rep.result.message);
       key.coefficients = rep.result.map;
     }

@@ -335,7 +335,7 @@ Scene parse_scene(const std::string& text, const std::filesystem::path& base_dir
       const std::string p = "keyframes[" + std::to_string(k) + "]";
       const json& kf = (*kfs)[k];
       if (!kf.is_object()) c.fail(p, "expected an object");
-      check_keys(c, kf, p, {"time", "targets", "layout", "phi", "psi", "timing"});
+      check_keys(c, kf, p, {"time", "targets", "layout", "phi", "psi", "timing", "start"});
       Keyframe key;
       const json* t = field(kf, "time");
       if (!t) c.fail(p, "missing \"time\"");
@@ -385,6 +385,13 @@ Scene parse_scene(const std::string& text, const std::filesystem::path& base_dir
         if (!timing) c.fail(p + ".timing", "unknown timing \"" + tm->get<std::string>() + "\" (expected one of: " + kKeyTimingNames + ")");
         key.timing = *timing;
       }
+      if (const json* st = field(kf, "start")) {
+        if (file_version < 2) c.fail(p + ".start", "a keyframe's \"start\" needs \"hsi_scene\": 2 (this file says version 1)");
+        if (!st->is_string() || (*st != "previous" && *st != "rest"))
+          c.fail(p + ".start", "expected \"previous\" or \"rest\", got " + (st->is_string() ? "\"" + st->get<std::string>() + "\"" : type_name(*st)));
+        if (key.targets.empty()) c.fail(p + ".start", "says where authoring from targets starts; this keyframe gives no \"targets\"");
+        key.start = *st == "rest" ? Keyframe::Start::Rest : Keyframe::Start::Previous;
+      }
       if (key.targets.empty() && !key.coefficients && !s.handles.empty())
         c.fail(p, "needs \"targets\" (one per handle) or coefficients \"phi\"/\"psi\"");
       s.keyframes.push_back(std::move(key));
@@ -410,8 +417,10 @@ Scene load_scene(const std::filesystem::path& path) {
 
 std::string scene_to_json(const Scene& s) {
   json j;
-  const bool timed = std::any_of(s.keyframes.begin(), s.keyframes.end(), [](const Keyframe& k) { return k.timing != KeyTiming::Linear; });
-  j["hsi_scene"] = timed ? kSceneVersion : 1;
+  // Version 1 where nothing needs 2 (keyframe timing, a keyframe's start), so such files keep it.
+  const bool v2 = std::any_of(s.keyframes.begin(), s.keyframes.end(),
+                              [](const Keyframe& k) { return k.timing != KeyTiming::Linear || k.start != Keyframe::Start::Previous; });
+  j["hsi_scene"] = v2 ? kSceneVersion : 1;
   if (!s.name.empty()) j["name"] = s.name;
   j["shape"]["outer"] = to_json(s.shape.outer);
   j["shape"]["holes"] = json::array();
@@ -440,6 +449,7 @@ std::string scene_to_json(const Scene& s) {
         kj["psi"] = to_json(k.coefficients->psi);
       }
       if (k.timing != KeyTiming::Linear) kj["timing"] = to_string(k.timing);
+      if (k.start == Keyframe::Start::Rest) kj["start"] = "rest";
       j["keyframes"].push_back(kj);
     }
   }

@@ -99,6 +99,7 @@ namespace hsi {
 struct SceneKeyframe {
   int index = 0;
   bool solved = false;     // authored from targets now (else certified coefficients)
+  bool from_rest = false;  // … starting from the rest pose (Keyframe::start), not the previous keyframe
   KeyframeResult result;   // when solved
   // Whether the keyframe's boundary image crosses itself (overlap.h): certified means
   // locally injective only, so an authored pose can still lay one part over another.
@@ -107,8 +108,8 @@ struct SceneKeyframe {
 
 // Makes every keyframe of a scene a certified map, in time order: keyframes with
 // coefficients are certified (re-solved from targets when `force`), the others are
-// authored from their targets starting at the previous keyframe (the first from the
-// identity). Coefficients are written into scene.keyframes. Throws InputError for a
+// authored from their targets starting at the previous keyframe (the first, and any
+// whose Keyframe::start is Rest, from the identity). Coefficients are written into scene.keyframes. Throws InputError for a
 // keyframe that cannot be made certified. The scene's cage must be setup's cage.
 std::vector<SceneKeyframe> solve_scene_keyframes(Scene& scene, const ShapeSetup& setup, const KeyframeOptions& options = {},
                                                  bool force = false,

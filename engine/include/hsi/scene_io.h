@@ -25,10 +25,15 @@
 //                    "layout": "full",           //   optional: "full" (default) or "reduced"
 //                    "phi": [[re, im], ...],     //   coefficients over the user cage
 //                    "psi": [[re, im], ...],
-//                    "timing": "smooth" } ]      //   optional (version 2): how the interval leaving this
+//                    "timing": "smooth",         //   optional (version 2): how the interval leaving this
 //                                                //   keyframe is travelled: "linear" (default, the
 //                                                //   paper's), "smooth" (C¹ through the keyframes),
 //                                                //   "ease" (in and out), "hold" (timing.h)
+//                    "start": "rest" } ]         //   optional (version 2): where authoring this keyframe
+//                                                //   from its targets starts: "previous" (default: the
+//                                                //   previous keyframe's map, so a part turned over
+//                                                //   several keyframes keeps its turns) or "rest" (the
+//                                                //   identity: the pose depends on the targets alone)
 // }
 // Any other key is refused, naming its JSON path and the nearest known key (a misspelt
 // "sample" must not silently fall back to the default).
@@ -54,6 +59,7 @@
 #pragma once
 
 #include <array>
+#include <cstdint>
 #include <filesystem>
 #include <optional>
 #include <string>
@@ -75,6 +81,12 @@ struct Keyframe {
   std::vector<cd> targets;             // one per handle (may be empty if coefficients given)
   std::optional<HarmonicMap> coefficients;
   KeyTiming timing = KeyTiming::Linear;  // the interval leaving this keyframe (timing.h)
+  // Where solve_scene_keyframes starts authoring it from its targets ("start"): the
+  // previous keyframe's map (keyframe 0: the identity), or the rest pose, the identity.
+  // From the previous keyframe a pose far from it can end folded over itself although
+  // the same targets reached from rest give an undistorted map (a part turned 115° in
+  // one keyframe and back in the next stays twisted over the body).
+  enum class Start : std::uint8_t { Previous, Rest } start = Start::Previous;
 };
 
 struct Scene {
