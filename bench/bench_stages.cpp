@@ -84,7 +84,7 @@ int main(int argc, char** argv) {
     return app.exit(e);
   }
   const runtime::Backend requested = runtime::parse_backend(backend);
-  const runtime::CudaStatus cuda = runtime::cuda_status();
+  const runtime::CudaStatus cuda = requested == runtime::Backend::Cpu ? runtime::CudaStatus{} : runtime::cuda_status();
 
   std::vector<bench::Loaded> scenes = bench::load_folder(assets, samples, 0, "bench_stages");
   for (const bench::Loaded& L : scenes)
