@@ -20,7 +20,6 @@
 #include <barrier>
 #include <chrono>
 #include <cstdio>
-#include <filesystem>
 #include <thread>
 
 #include "bench_args.h"
@@ -34,7 +33,7 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
-enum class Stage { Start, ExactG, ExactH, Factor, FactorH, Try, Chord };
+enum class Stage { Start, ExactG, ExactH, Factor, Try, Chord };
 
 struct Variant {
   const char* name;
@@ -48,7 +47,7 @@ const std::vector<Variant>& variants() {
       {"start + exact G + factor", {Stage::Start, Stage::ExactG, Stage::Factor}},
       {"start + exact G + factor + try", {Stage::Start, Stage::ExactG, Stage::Factor, Stage::Try}},
       {"start + exact H", {Stage::Start, Stage::ExactH}},
-      {"start + exact H + factor", {Stage::Start, Stage::ExactH, Stage::FactorH}},
+      {"start + exact H + factor", {Stage::Start, Stage::ExactH, Stage::Factor}},
       {"start + chord (kept factor) + try", {Stage::Start, Stage::Chord, Stage::Try}},
   };
   return v;
@@ -104,7 +103,6 @@ int main(int argc, char** argv) {
   std::vector<std::string> skipped;  // scenes none of whose candidate points factors on this backend
   for (int t = 0; t < most; ++t) {
     Worker& w = workers[static_cast<size_t>(t)];
-    w.factored = false;
     // Thread t takes scene t mod S, or the next one where a warm frame's exact system
     // factors (so every row times the same work on every thread).
     for (size_t o = 0; o < scenes.size() && !w.factored; ++o) {
@@ -168,15 +166,14 @@ int main(int argc, char** argv) {
         case Stage::Start: st.start(w.x); break;
         case Stage::ExactG: dmax = st.linearize({true, HessianProjection::FullProj, true, true}); break;
         case Stage::ExactH: dmax = st.linearize({true, HessianProjection::FullProj, true, false}); break;
-        case Stage::Factor:
-        case Stage::FactorH: st.solve(1e-15 * dmax); break;
+        case Stage::Factor: st.solve(1e-15 * dmax); break;
         case Stage::Chord:
           if (!st.linearize_kept(w.kept)) throw InputError("bench_stages: the kept factor is not this stepper's");
           st.solve(0);
           break;
         case Stage::Try: {
-          const double step = 1.0, e = 0;
-          double energy = e;
+          const double step = 1.0;
+          double energy = 0;
           st.trial_energies(std::span<const double>(&step, 1), std::span<double>(&energy, 1));
           (void)st.certify(step, false);
           break;

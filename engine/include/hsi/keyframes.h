@@ -109,8 +109,9 @@ struct SceneKeyframe {
 // Makes every keyframe of a scene a certified map, in time order: keyframes with
 // coefficients are certified (re-solved from targets when `force`), the others are
 // authored from their targets starting at the previous keyframe (the first, and any
-// whose Keyframe::start is Rest, from the identity). Coefficients are written into scene.keyframes. Throws InputError for a
-// keyframe that cannot be made certified. The scene's cage must be setup's cage.
+// whose Keyframe::start is Rest, from the identity). Coefficients are written into
+// scene.keyframes. Throws InputError for a keyframe that cannot be made certified. The
+// scene's cage must be setup's cage.
 std::vector<SceneKeyframe> solve_scene_keyframes(Scene& scene, const ShapeSetup& setup, const KeyframeOptions& options = {},
                                                  bool force = false,
                                                  const std::function<void(const SceneKeyframe&)>& on_keyframe = {});
