@@ -156,6 +156,9 @@ struct SequenceStats {
   int scratch_iterations = 0;
   bench::FrameParts parts;  // where the frames' time went (FrameResult::parts)
   bench::CrossingSearchTimes crossing;  // the crossing search alone on these frames' images (when asked)
+  // CUDA graphs launched and their nodes, per solved frame of the sequence (the first
+  // frame's captures included; device.h graph_counts: 0 on the CPU core).
+  double graph_launches = 0, graph_nodes = 0;
 };
 
 // gpu_boundary: the overlap check's image (f at its breakpoints) by the CUDA mesh
@@ -181,8 +184,15 @@ SequenceStats run_sequence(const Loaded& L, MakeCore&& make_core, int frames, bo
   Interpolator interp(*L.setup, L.times, L.maps, o, std::move(core), std::move(boundary));
   s.interpolator_ms = ms_since(t0);
   t0 = Clock::now();
+  const long launches0 = hc::graph_counts().launches.load(), nodes0 = hc::graph_counts().nodes.load();
   const auto seq = interp.sequence(frames);
   s.parts = bench::frame_parts(seq, ms_since(t0));
+  {
+    int solved_frames = 0;
+    for (const FrameResult& f : seq) solved_frames += !f.keyframe;
+    s.graph_launches = static_cast<double>(hc::graph_counts().launches.load() - launches0) / std::max(solved_frames, 1);
+    s.graph_nodes = static_cast<double>(hc::graph_counts().nodes.load() - nodes0) / std::max(solved_frames, 1);
+  }
   if (crossing_reps > 0) s.crossing = bench::time_crossing_search(*L.setup, seq, 20, crossing_reps);
   s.ran = true;
   int solved = 0;
@@ -379,10 +389,12 @@ int main(int argc, char** argv) {
            "setup's CPU one otherwise; crossings: the exact crossing search on the host, its own time, on the sequence's "
            "crossing thread beside the next solve (cuda-series: in series, InterpolationOptions::pipelined_overlap off); "
            "crossings wait: what the sequence waited for it (counted in the warm frame); wall / frame: the sequence's "
-           "wall clock over its solved frames; rest: the warm frame outside its parts, crossings counted by the wait)\n\n"
+           "wall clock over its solved frames; rest: the warm frame outside its parts, crossings counted by the wait; graphs / "
+           "nodes: CUDA graphs launched per solved frame and the kernel, copy and memset nodes they held, the first frame's "
+           "captures included: work launched outside graphs is not counted)\n\n"
         << "| scene | |G| | backend | first frame | first: solve | first: image + crossings | warm frame | wall / frame | "
-           "targets | solve | pose | image | crossings | crossings wait | distortion | rest |\n"
-           "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
+           "targets | solve | pose | image | crossings | crossings wait | distortion | rest | graphs | nodes |\n"
+           "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
   crossing << "## The overlap check's crossing search alone (ms per call, one host thread, over 20 images of the cuda "
               "sequence's frames, each searched " << std::max(reps, 1) << " times: kept = the hierarchy kept by the checker "
               "and refit, check_points; reference = the polylines and hierarchy made per call, check_points_reference)\n\n"
@@ -481,10 +493,10 @@ int main(int argc, char** argv) {
           const bench::FrameParts& p = s->parts;
           std::snprintf(row, sizeof row,
                         "| %s | %d | %s | %.3f | %.3f | %.3f | %.3f | %.3f | %.3f | %.3f | %.3f | %.3f | %.3f | %.3f | %.3f | "
-                        "%.3f |\n",
+                        "%.3f | %.1f | %.1f |\n",
                         L.name.c_str(), G, label, p.first_ms, p.first.solve, p.first.image + p.first.crossings, p.mean_ms,
                         p.wall_ms, p.mean.targets, p.mean.solve, p.mean.pose, p.mean.image, p.mean.crossings,
-                        p.mean.crossings_wait, p.mean.distortion, p.rest());
+                        p.mean.crossings_wait, p.mean.distortion, p.rest(), s->graph_launches, s->graph_nodes);
           parts << row;
         }
       }

@@ -66,6 +66,16 @@ inline std::atomic<long>& capture_failures() {
   static std::atomic<long> n{0};
   return n;
 }
+// Graphs launched by GraphCache in this process and the nodes they held (kernels,
+// copies, memsets; a library call captured as a child graph counts once): benchmarks
+// read them (issue #23: under load a frame costs about its count of small launches).
+struct GraphCounts {
+  std::atomic<long> launches{0}, nodes{0};
+};
+inline GraphCounts& graph_counts() {
+  static GraphCounts c;
+  return c;
+}
 // What this thread holds of capture_guard: nothing, the lock exclusively (an
 // OutsideCaptures further up its stack, e.g. a graph key's first run, which may make
 // buffers), or shared (it is capturing).
@@ -378,9 +388,13 @@ class GraphCache {
         enqueue();
         return;
       }
-      it = graphs_.emplace(key, GraphExec(graph)).first;
+      size_t nodes = 0;
+      if (cudaGraphGetNodes(graph, nullptr, &nodes) != cudaSuccess) nodes = 0;
+      it = graphs_.emplace(key, Captured{GraphExec(graph), static_cast<long>(nodes)}).first;
     }
-    HSI_CUDA_CHECK(cudaGraphLaunch(it->second, stream));
+    HSI_CUDA_CHECK(cudaGraphLaunch(it->second.exec, stream));
+    graph_counts().launches.fetch_add(1, std::memory_order_relaxed);
+    graph_counts().nodes.fetch_add(it->second.nodes, std::memory_order_relaxed);
   }
   size_t size() const { return graphs_.size(); }
   // Why the last failed capture failed (empty if none has).
@@ -409,9 +423,13 @@ class GraphCache {
   }
 
   static constexpr int kMaxCaptureFailures = 3;
+  struct Captured {
+    GraphExec exec;
+    long nodes = 0;  // its top-level nodes (graph_counts)
+  };
   Signature signature_;
   bool enabled_;
-  std::unordered_map<std::uint64_t, GraphExec> graphs_;
+  std::unordered_map<std::uint64_t, Captured> graphs_;
   std::unordered_map<std::uint64_t, int> failures_;
   std::string last_failure_;
 };
