@@ -13,6 +13,7 @@
 
 #include <cuda_runtime.h>
 
+#include <array>
 #include <atomic>
 #include <chrono>
 #include <memory>
@@ -23,6 +24,7 @@
 #include "hsi/cuda/mesh_evaluator.h"
 #include "hsi/cuda/newton_core.h"
 #include "device.h"
+#include "newton_kernels.h"
 #include "sample_math.cuh"
 #include "hsi/interpolation.h"
 #include "hsi/keyframes.h"
@@ -324,6 +326,112 @@ TEST_CASE("CUDA core results are deterministic and its initial state is defined"
   // The projected Hessian is PSD, as the CPU one is.
   const Eigen::VectorXd ev = Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(H1).eigenvalues();
   CHECK(ev.minCoeff() >= -1e-10 * ev.maxCoeff());
+}
+
+// The launches that replaced cuBLAS GEMVs, copies and two-pass reductions in the device
+// loop (issue #23: under load a frame costs about its count of small launches):
+// tall_times_one with each option against Eigen, copy, and the one-launch reductions'
+// counter, which must be back at 0 after every launch (else the next launch's last
+// block is never found and its result never written).
+TEST_CASE("the one-launch kernels: real products, copies, reductions run again and again", "[cuda][small]") {
+  HSI_REQUIRE_GPU();
+  namespace k = hsi::cuda::kernels;
+  using hsi::cuda::DeviceArray;
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> u(-1, 1);
+  auto random = [&](Eigen::Index r, Eigen::Index c) {
+    Eigen::MatrixXd m(r, c);
+    for (Eigen::Index i = 0; i < m.size(); ++i) m.data()[i] = u(rng);
+    return m;
+  };
+  auto up = [](const Eigen::MatrixXd& m) {
+    DeviceArray<double> d(static_cast<size_t>(m.size()));
+    REQUIRE(cudaMemcpy(d.get(), m.data(), d.bytes(), cudaMemcpyHostToDevice) == cudaSuccess);
+    return d;
+  };
+  auto down = [](const DeviceArray<double>& d, Eigen::Index r) {
+    Eigen::VectorXd v(r);
+    REQUIRE(cudaMemcpy(v.data(), d.get(), static_cast<size_t>(r) * sizeof(double), cudaMemcpyDeviceToHost) == cudaSuccess);
+    return v;
+  };
+  for (const auto& [rows, cols, rows2] : std::vector<std::array<int, 3>>{{1, 1, 1}, {31, 7, 65}, {304, 293, 304}, {700, 40, 33}}) {
+    INFO(rows << " x " << cols << ", second " << rows2);
+    const Eigen::MatrixXd A = random(rows, cols), A2 = random(rows2, cols), x0 = random(cols, 1), dx = random(cols, 1),
+                          y0 = random(rows, 1);
+    const Eigen::MatrixXd step = Eigen::MatrixXd::Constant(1, 1, 0.375);
+    DeviceArray<double> dA = up(A), dA2 = up(A2), dx0 = up(x0), ddx = up(dx), dy0 = up(y0), dstep = up(step);
+    DeviceArray<double> y(static_cast<size_t>(rows)), y2(static_cast<size_t>(rows2)), xc(static_cast<size_t>(cols));
+    // Plain: y = A x0.
+    REQUIRE(k::tall_times_one(rows, cols, dA.get(), dx0.get(), y.get(), nullptr) == cudaSuccess);
+    REQUIRE(cudaDeviceSynchronize() == cudaSuccess);
+    CHECK((down(y, rows) - A * x0).cwiseAbs().maxCoeff() <= 1e-13 * cols);
+    // Every option: y = y0 + A x, y2 = A2 x, x = x0 + s dx copied out.
+    k::TallOptions o;
+    o.y0 = dy0.get();
+    o.dx = ddx.get();
+    o.step = dstep.get();
+    o.x_copy = xc.get();
+    o.second_A = dA2.get();
+    o.second_rows = rows2;
+    o.second_y = y2.get();
+    REQUIRE(k::tall_times_one(rows, cols, dA.get(), dx0.get(), y.get(), nullptr, o) == cudaSuccess);
+    REQUIRE(cudaDeviceSynchronize() == cudaSuccess);
+    const Eigen::VectorXd x = x0 + 0.375 * dx;
+    CHECK((down(xc, cols) - x).cwiseAbs().maxCoeff() <= 1e-15);  // x0 + s dx (a fused multiply-add or not)
+    CHECK((down(y, rows) - (y0 + A * x)).cwiseAbs().maxCoeff() <= 1e-13 * cols);
+    CHECK((down(y2, rows2) - A2 * x).cwiseAbs().maxCoeff() <= 1e-13 * cols);
+    // The same call again: the same bits.
+    const Eigen::VectorXd first = down(y, rows);
+    REQUIRE(k::tall_times_one(rows, cols, dA.get(), dx0.get(), y.get(), nullptr, o) == cudaSuccess);
+    REQUIRE(cudaDeviceSynchronize() == cudaSuccess);
+    CHECK(down(y, rows) == first);
+  }
+  {  // Four copies of different lengths in one launch, a fifth refused.
+    const Eigen::MatrixXd a = random(5, 1), b = random(3000, 1), c = random(1, 1), d = random(300, 1);
+    DeviceArray<double> da = up(a), db = up(b), dc = up(c), dd = up(d);
+    DeviceArray<double> oa(5), ob(3000), oc(1), od(300);
+    k::CopyList list;
+    list.entry[0] = {da.get(), oa.get(), 5};
+    list.entry[1] = {db.get(), ob.get(), 3000};
+    list.entry[2] = {dc.get(), oc.get(), 1};
+    list.entry[3] = {dd.get(), od.get(), 300};
+    REQUIRE(k::copy(list, 4, nullptr) == cudaSuccess);
+    REQUIRE(cudaDeviceSynchronize() == cudaSuccess);
+    CHECK(down(oa, 5) == a);
+    CHECK(down(ob, 3000) == b);
+    CHECK(down(oc, 1) == c);
+    CHECK(down(od, 300) == d);
+    CHECK(k::copy(list, 5, nullptr) == cudaErrorInvalidValue);
+  }
+  // The reductions through the core's per-call interface (one counter per core): many
+  // energies and safe steps in a row, each equal to the CPU core's, at |G| = 2,000 (8
+  // blocks) on two assets.
+  for (const auto& path : {test::asset_scenes().front(), test::asset_scenes().back()}) {
+    AssetCores ac(path);
+    for (unsigned seed = 0; seed < 6; ++seed) {
+      INFO(path.filename().string() << ", seed " << seed);
+      // (perturbed_identity sets the CPU core's targets and coefficients: all three first)
+      const Eigen::VectorXd x = ac.perturbed_identity(seed, 0.02), dv = 0.1 * ac.perturbed_identity(seed + 100, 0.02);
+      const std::vector<Metric> targets = ac.metrics_of(ac.perturbed_identity(seed + 50, 0.01));
+      for (NewtonCore* c : {ac.cpu.get(), ac.gpu.get()}) {
+        c->set_targets(targets);
+        c->set_coefficients(ac.space().T() * x);
+        c->set_direction(ac.space().T() * dv);
+      }
+      const double E = ac.cpu->energy(), sc = ac.cpu->max_safe_step(), s = std::isfinite(sc) ? 0.5 * sc : 0.5;
+      const double Es = ac.cpu->energy_at(s);
+      const double E1 = ac.gpu->energy(), Es1 = ac.gpu->energy_at(s), sg1 = ac.gpu->max_safe_step();
+      CHECK(rel_diff(E1, E) < 1e-10);
+      CHECK(rel_diff(Es1, Es) < 1e-10);
+      if (std::isinf(sc)) CHECK(std::isinf(sg1));
+      else CHECK(rel_diff(sg1, sc) < 1e-10);
+      for (int rep = 0; rep < 3; ++rep) {  // again and again: the same bits
+        CHECK(ac.gpu->energy() == E1);
+        CHECK(ac.gpu->energy_at(s) == Es1);
+        CHECK(ac.gpu->max_safe_step() == sg1);
+      }
+    }
+  }
 }
 
 namespace {

@@ -101,8 +101,9 @@ __device__ Values values_at(const CageView& cage, const double2* __restrict__ co
 }
 
 __global__ void jumps_kernel(CageView cage, const double2* __restrict__ coef, double* __restrict__ jumps,
-                             double* __restrict__ abs_coef) {
+                             double* __restrict__ abs_coef, int* __restrict__ stop) {
   const int M = cage.m + cage.N;
+  if (stop && blockIdx.x == 0 && threadIdx.x == 0) *stop = 0;  // certify_segments' flag, cleared before it runs
   for (int i = static_cast<int>(blockIdx.x * blockDim.x + threadIdx.x); i < M; i += static_cast<int>(gridDim.x * blockDim.x)) {
     abs_coef[i] = cabs(coef[i]);
     abs_coef[M + i] = cabs(coef[M + i]);
@@ -279,8 +280,23 @@ __device__ Fold block_fold(Fold f) {
 }
 
 // Pass 1: each block folds a grid-strided subset of the segments into partials[block].
-__global__ void __launch_bounds__(kReduceThreads) reduce_partials_kernel(int S, const SegmentOutcome* __restrict__ outcomes,
-                                                                         const double2* __restrict__ values, Fold* partials) {
+// A Fold from global memory through L2 (__ldcg, 8 bytes at a time): another block's
+// partial, written in this launch, is never read from a stale L1 line.
+__device__ Fold load_fold(const Fold* p) {
+  static_assert(sizeof(Fold) % sizeof(unsigned long long) == 0 && alignof(Fold) >= alignof(unsigned long long));
+  Fold f;
+  const auto* src = reinterpret_cast<const unsigned long long*>(p);
+  auto* dst = reinterpret_cast<unsigned long long*>(&f);
+  for (size_t w = 0; w < sizeof(Fold) / sizeof(unsigned long long); ++w) dst[w] = __ldcg(src + w);
+  return f;
+}
+
+// One launch: each block folds its segments into partials[block]; the block that
+// counts last on `done` (newton_kernels' one-launch reductions: 0 before, 0 again after)
+// folds the partials in order, as one finishing block would, and writes the summary.
+__global__ void __launch_bounds__(kReduceThreads) reduce_kernel(int S, const SegmentOutcome* __restrict__ outcomes,
+                                                                const double2* __restrict__ values, Fold* partials,
+                                                                unsigned* __restrict__ done, CertifySummary* out) {
   Fold f = fold_identity(S);
   for (int i = static_cast<int>(blockIdx.x * blockDim.x + threadIdx.x); i < S; i += static_cast<int>(gridDim.x * blockDim.x)) {
     const SegmentOutcome& o = outcomes[i];
@@ -300,16 +316,21 @@ __global__ void __launch_bounds__(kReduceThreads) reduce_partials_kernel(int S, 
     g.v[8] = 0.5 * (x1 * x1 + 1 / (x1 * x1) + x2 * x2 + 1 / (x2 * x2));
     fold_combine(f, g);
   }
-  const Fold r = block_fold(f);
-  if (threadIdx.x == 0) partials[blockIdx.x] = r;
-}
-
-// Pass 2 (one block): the partials in order, then the summary.
-__global__ void __launch_bounds__(kReduceThreads) reduce_finish_kernel(int parts, const Fold* __restrict__ partials, int S,
-                                                                       const SegmentOutcome* __restrict__ outcomes,
-                                                                       CertifySummary* out) {
-  const int t = static_cast<int>(threadIdx.x);
-  const Fold r = block_fold(t < parts ? partials[t] : fold_identity(S));
+  const Fold block = block_fold(f);
+  __shared__ bool last;
+  if (threadIdx.x == 0) {
+    partials[blockIdx.x] = block;
+    __threadfence();  // the partial is visible device-wide before this block counts
+    last = atomicAdd(done, 1u) == gridDim.x - 1;
+    if (last) {
+      *done = 0;
+      __threadfence();
+    }
+  }
+  __syncthreads();
+  if (!last) return;
+  const int t = static_cast<int>(threadIdx.x), parts = static_cast<int>(gridDim.x);
+  const Fold r = block_fold(t < parts ? load_fold(partials + t) : fold_identity(S));
   if (t == 0) {
     CertifySummary c;
     c.arg_total = r.v[0];
@@ -336,8 +357,8 @@ unsigned blocks(long long count, int threads) {
 
 }  // namespace
 
-cudaError_t lipschitz_jumps(CageView cage, const double2* coef, double* jumps, double* abs_coef, cudaStream_t stream) {
-  jumps_kernel<<<blocks(cage.m + cage.N, 128), 128, 0, stream>>>(cage, coef, jumps, abs_coef);
+cudaError_t lipschitz_jumps(CageView cage, const double2* coef, double* jumps, double* abs_coef, int* stop, cudaStream_t stream) {
+  jumps_kernel<<<blocks(cage.m + cage.N, 128), 128, 0, stream>>>(cage, coef, jumps, abs_coef, stop);
   return cudaGetLastError();
 }
 
@@ -350,15 +371,13 @@ cudaError_t certify_segments(CageView cage, SegmentsView seg, const double2* coe
   return cudaGetLastError();
 }
 
-cudaError_t reduce_certificate(int S, const SegmentOutcome* outcomes, const double2* values, void* partials, CertifySummary* out,
-                               cudaStream_t stream) {
+cudaError_t reduce_certificate(int S, const SegmentOutcome* outcomes, const double2* values, void* partials, unsigned* done,
+                               CertifySummary* out, cudaStream_t stream) {
   static_assert(kReducePartials <= kReduceThreads);
   const long long per_block = 4LL * kReduceThreads;  // a few segments per thread
   const int parts = static_cast<int>(std::min<long long>(std::max<long long>((S + per_block - 1) / per_block, 1), kReducePartials));
   Fold* p = static_cast<Fold*>(partials);
-  reduce_partials_kernel<<<static_cast<unsigned>(parts), kReduceThreads, 0, stream>>>(S, outcomes, values, p);
-  if (const cudaError_t e = cudaGetLastError(); e != cudaSuccess) return e;
-  reduce_finish_kernel<<<1, kReduceThreads, 0, stream>>>(parts, p, S, outcomes, out);
+  reduce_kernel<<<static_cast<unsigned>(parts), kReduceThreads, 0, stream>>>(S, outcomes, values, p, done, out);
   return cudaGetLastError();
 }
 

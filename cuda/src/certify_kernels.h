@@ -52,8 +52,9 @@ struct CertifySummary {
 // for c = φ (column 0) and ψ (column 1); rows m..m+N−1: 2 |c_log,h| rounded up, so that
 // [W | Wh] · jumps = (La, Lb) per segment before the sum's rounding (certificate.cpp).
 // abs_coef (M × 2): |φ| and |ψ|, for the values' error bounds.
-// coef: [φ | ψ] full, M × 2 complex, column-major.
-cudaError_t lipschitz_jumps(CageView cage, const double2* coef, double* jumps, double* abs_coef, cudaStream_t stream);
+// coef: [φ | ψ] full, M × 2 complex, column-major. stop (may be null): certify_segments'
+// flag, set to 0 here (one launch fewer than a memset before the segments).
+cudaError_t lipschitz_jumps(CageView cage, const double2* coef, double* jumps, double* abs_coef, int* stop, cudaStream_t stream);
 
 // values (S × 4, column-major, as [D; E] · [φ | ψ] leaves them): f_z, f_zz, conj f_zbar,
 // (conj f_zbar)' at the breakpoints ([a | a1 | b | b1]); errs (the same layout):
@@ -65,12 +66,13 @@ cudaError_t certify_segments(CageView cage, SegmentsView seg, const double2* coe
                              const double* lip, const char* touches, int max_depth, long long max_pieces, int* stop,
                              SegmentOutcome* out, cudaStream_t stream);
 
-// The summary of all outcomes plus the observed values at the breakpoints: two passes
-// (up to kReducePartials blocks, then one), deterministic. partials: device scratch of
-// reduce_partials_bytes().
+// The summary of all outcomes plus the observed values at the breakpoints: one launch of
+// up to kReducePartials blocks whose last one folds their partials in order
+// (deterministic). partials: device scratch of reduce_partials_bytes(); done: a device
+// counter, 0 before and again after (newton_kernels.h's one-launch reductions).
 constexpr int kReducePartials = 64;
 size_t reduce_partials_bytes();
-cudaError_t reduce_certificate(int S, const SegmentOutcome* outcomes, const double2* values, void* partials, CertifySummary* out,
-                               cudaStream_t stream);
+cudaError_t reduce_certificate(int S, const SegmentOutcome* outcomes, const double2* values, void* partials, unsigned* done,
+                               CertifySummary* out, cudaStream_t stream);
 
 }  // namespace hsi::cuda::kernels

@@ -48,11 +48,9 @@ struct DeviceSpace {
   DeviceArray<double> X;    // 4M × dim: the full coefficients [φ | ψ] (double2) per unit x
   DeviceArray<double> X0;   // 4M: expand(0)
   DeviceArray<int> primary; // MapSpace::primary_rows
-  DeviceArray<double> xa, xna, z, g, d, tmp, v, Hr, Hr0, Y, work, full, Q, c;  // xa = [x; 0], xna the trial
-  DeviceArray<int> info;      // potrf's, potrs' status
+  DeviceArray<double> xa, xna, g, d, tmp, v, Hr, Hr0, Y, work, full, Q, c;  // xa = [x; 0], xna the trial
   DeviceArray<double> sc;     // the stepper's scalar slots (device_newton.cpp)
   PinnedArray<double> sc_down;
-  PinnedArray<int> info_down;
   PinnedArray<double> x_up;
   PinnedArray<double> params;  // per-call numbers (ridge, steps) the graphs copy into sc
   Event params_done;           // recorded after the last graph that copied from params
@@ -113,6 +111,7 @@ class CudaNewtonCore final : public NewtonCore {
         Hv_(16 * sz(n_) * sz(n_)),
         part_sum_(sz(kernels::kMaxPartials) * sz(kernels::kMaxSteps)),
         part_bad_(sz(kernels::kMaxPartials) * sz(kernels::kMaxSteps)),
+        done_(1),
         scalar_(1),
         targets_up_(3 * sz(G_)),
         coef_up_(2 * sz(n_)),
@@ -133,6 +132,7 @@ class CudaNewtonCore final : public NewtonCore {
     // and a zero direction until set; identity targets, as on the CPU.
     HSI_CUDA_CHECK(cudaMemsetAsync(ab_.get(), 0, ab_.bytes(), s));
     HSI_CUDA_CHECK(cudaMemsetAsync(dab_.get(), 0, dab_.bytes(), s));
+    HSI_CUDA_CHECK(cudaMemsetAsync(done_.get(), 0, done_.bytes(), s));  // the one-launch reductions' counter
     double* g = targets_up_.begin_fill();
     for (size_t i = 0; i < sz(G_); ++i) {
       g[3 * i] = 1;
@@ -247,7 +247,7 @@ class CudaNewtonCore final : public NewtonCore {
   }
 
   double max_safe_step() override {
-    HSI_CUDA_CHECK(kernels::max_safe_step(G_, ab_.get(), dab_.get(), part_sum_.get(), scalar_.get(), stream_));
+    HSI_CUDA_CHECK(kernels::max_safe_step(G_, ab_.get(), dab_.get(), part_sum_.get(), done_.get(), scalar_.get(), stream_));
     return download_scalar();
   }
 
@@ -301,8 +301,8 @@ class CudaNewtonCore final : public NewtonCore {
   }
 
   double mean_energy(double s) {
-    HSI_CUDA_CHECK(kernels::mean_energy(G_, g_.get(), ab_.get(), dab_.get(), s, part_sum_.get(), part_bad_.get(), scalar_.get(),
-                                        stream_));
+    HSI_CUDA_CHECK(kernels::mean_energy(G_, g_.get(), ab_.get(), dab_.get(), s, part_sum_.get(), part_bad_.get(), done_.get(),
+                                        scalar_.get(), stream_));
     return download_scalar();
   }
 
@@ -332,6 +332,7 @@ class CudaNewtonCore final : public NewtonCore {
   DeviceArray<double2> W_all_, Wt_all_;
   DeviceArray<double> part_sum_;  // reduction partials (sums or minima)
   DeviceArray<int> part_bad_;
+  DeviceArray<unsigned> done_;    // the one-launch reductions' counter (newton_kernels.h): 0 between launches
   DeviceArray<double> scalar_;
   Upload<double> targets_up_;
   Upload<double2> coef_up_;

@@ -63,6 +63,8 @@ void DeviceCertifier::set_up(const Cage& cage, const CertificateSegments& seg, c
   summary_ = DeviceArray<kernels::CertifySummary>(1);
   partials_ = DeviceArray<unsigned char>(kernels::reduce_partials_bytes());
   stop_ = DeviceArray<int>(1);
+  done_ = DeviceArray<unsigned>(1);
+  HSI_CUDA_CHECK(cudaMemsetAsync(done_.get(), 0, done_.bytes(), stream_));  // reduce_certificate's counter
   summary_down_ = PinnedArray<kernels::CertifySummary>(1);
   coef_up_ = PinnedArray<double2>(2 * sz(M_));
 }
@@ -124,21 +126,17 @@ void DeviceCertifier::enqueue(const double2* coef, const CertificateOptions& opt
   HSI_CUDA_CHECK(kernels::tall_times_two(2 * S_, M_, rows_->DE.get(), coef, values_.get(), s));
   // Lipschitz constants of f_zz and (conj f_zbar)' per segment: [W | Wh] · jumps; the
   // values' rounding weights: [WD; WE] · [|φ| | |ψ|].
-  HSI_CUDA_CHECK(kernels::lipschitz_jumps(cage_view(), coef, jumps_.get(), abs_coef_.get(), s));
+  int* stop = options.stop_at_first_failure ? stop_.get() : nullptr;  // cleared by lipschitz_jumps
+  HSI_CUDA_CHECK(kernels::lipschitz_jumps(cage_view(), coef, jumps_.get(), abs_coef_.get(), stop, s));
   const double one = 1, zero = 0;
   HSI_CUDA_CHECK(cublasDgemm(blas_, CUBLAS_OP_N, CUBLAS_OP_N, S_, 2, M_, &one, rows_->WWh.get(), S_, jumps_.get(), M_, &zero,
                              lip_.get(), S_));
   HSI_CUDA_CHECK(cublasDgemm(blas_, CUBLAS_OP_N, CUBLAS_OP_N, 2 * S_, 2, M_, &one, rows_->WDE.get(), 2 * S_, abs_coef_.get(), M_,
                              &zero, errs_.get(), 2 * S_));
-  int* stop = nullptr;
-  if (options.stop_at_first_failure) {
-    HSI_CUDA_CHECK(cudaMemsetAsync(stop_.get(), 0, sizeof(int), s));
-    stop = stop_.get();
-  }
   HSI_CUDA_CHECK(kernels::certify_segments(cage_view(), segments_view(), coef, values_.get(), errs_.get(), lip_.get(),
                                            rows_->touches.get(), options.max_depth, options.max_pieces_per_segment, stop,
                                            outcomes_.get(), s));
-  HSI_CUDA_CHECK(kernels::reduce_certificate(S_, outcomes_.get(), values_.get(), partials_.get(), summary_.get(), s));
+  HSI_CUDA_CHECK(kernels::reduce_certificate(S_, outcomes_.get(), values_.get(), partials_.get(), done_.get(), summary_.get(), s));
   HSI_CUDA_CHECK(cudaMemcpyAsync(summary_down_.get(), summary_.get(), sizeof(kernels::CertifySummary), cudaMemcpyDeviceToHost, s));
 }
 

@@ -69,6 +69,7 @@ class DeviceCertifier {
   DeviceArray<kernels::CertifySummary> summary_;
   DeviceArray<unsigned char> partials_;  // the summary's first pass
   DeviceArray<int> stop_;
+  DeviceArray<unsigned> done_;     // reduce_certificate's counter: 0 between launches
   PinnedArray<kernels::CertifySummary> summary_down_;
   PinnedArray<double2> coef_up_;
 

@@ -11,6 +11,7 @@
 // synchronises once, to hand back its few scalars.
 #include <cmath>
 #include <cstdint>
+#include <cstring>
 #include <limits>
 
 #include "cuda_newton_core.h"
@@ -32,7 +33,8 @@ enum Slot {
   kQuad1 = 6,  // (Q x + c)ᵀ d
   kQuad2 = 7,  // dᵀ Q d
   kScratch = 8,
-  kTrials = 9,
+  kInfo = 9,  // two ints: the factor's and the triangular solves' status (copied down with the scalars)
+  kTrials = 10,
   kRidge = kTrials + kBatch,  // the per-call numbers, copied in from DeviceSpace::params
   kStep = kRidge + 1,
   kSteps = kStep + 1,
@@ -129,7 +131,6 @@ DeviceSpace& CudaNewtonCore::device_space(const MapSpace& space) {
   const size_t D = sz(m);
   ds->xa = DeviceArray<double>(D);  // [x; 0]
   ds->xna = DeviceArray<double>(D);
-  ds->z = DeviceArray<double>(D);
   ds->g = DeviceArray<double>(D);
   ds->d = DeviceArray<double>(D);
   ds->tmp = DeviceArray<double>(D);
@@ -142,10 +143,8 @@ DeviceSpace& CudaNewtonCore::device_space(const MapSpace& space) {
   ds->ka = DeviceArray<double>(D);
   ds->Y = DeviceArray<double>(4 * sz(n) * D);
   ds->full = DeviceArray<double>(4 * sz(M));
-  ds->info = DeviceArray<int>(2);
   ds->sc = DeviceArray<double>(kSlots);
   ds->sc_down = PinnedArray<double>(kSlots);
-  ds->info_down = PinnedArray<int>(2);
   ds->params = PinnedArray<double>(kParams);
   ds->x_up = PinnedArray<double>(D);
   HSI_CUDA_CHECK(cudaMemsetAsync(ds->xa.get(), 0, ds->xa.bytes(), stream_));
@@ -184,7 +183,7 @@ class DeviceStepper final : public NewtonStepper {
       HSI_CUDA_CHECK(cudaMemcpyAsync(S_.xa.get(), S_.x_up.get(), sz(dim) * sizeof(double), cudaMemcpyHostToDevice, st()));
       set_coefficients();
       HSI_CUDA_CHECK(kernels::mean_energy(c_.G_, c_.g_.get(), c_.ab_.get(), c_.dab_.get(), 0.0, c_.part_sum_.get(),
-                                          c_.part_bad_.get(), S_.sc.get() + kEnergy0, st()));
+                                          c_.part_bad_.get(), c_.done_.get(), S_.sc.get() + kEnergy0, st()));
       HSI_CUDA_CHECK(cudaMemcpyAsync(S_.sc_down.get() + kEnergy0, S_.sc.get() + kEnergy0, sizeof(double), cudaMemcpyDeviceToHost, st()));
     });
     HSI_CUDA_CHECK(cudaStreamSynchronize(st()));  // also frees x_up
@@ -223,26 +222,33 @@ class DeviceStepper final : public NewtonStepper {
       // stepper's linearize_kept): its u as the last columns of Ta and Tca, its a = Tᵀu
       // and |u|² (tmp), then the gradient and its horizontal part.
       if (rotation_) {
-        const size_t n4 = 4 * sz(c_.n_), bytes = n4 * sizeof(double);
-        HSI_CUDA_CHECK(cudaMemcpyAsync(S_.Ta.get() + n4 * sz(dim), S_.ku.get(), bytes, cudaMemcpyDeviceToDevice, st()));
-        HSI_CUDA_CHECK(cudaMemcpyAsync(S_.Tca.get() + n4 * sz(dim), S_.kuc.get(), bytes, cudaMemcpyDeviceToDevice, st()));
-        HSI_CUDA_CHECK(cudaMemcpyAsync(S_.tmp.get(), S_.ka.get(), sz(m_) * sizeof(double), cudaMemcpyDeviceToDevice, st()));
+        const size_t n4 = 4 * sz(c_.n_);
+        kernels::CopyList copies;
+        copies.entry[0] = {S_.ku.get(), S_.Ta.get() + n4 * sz(dim), n4};
+        copies.entry[1] = {S_.kuc.get(), S_.Tca.get() + n4 * sz(dim), n4};
+        copies.entry[2] = {S_.ka.get(), S_.tmp.get(), sz(m_)};
+        HSI_CUDA_CHECK(kernels::copy(copies, 3, st()));
       }
-      enqueue_gradient(/*fresh_rotation=*/false);
-      if (horizontal_) HSI_CUDA_CHECK(kernels::horizontal_gradient(dim, S_.tmp.get(), S_.g.get(), st()));
+      enqueue_gradient(/*fresh_rotation=*/false, /*horizontal=*/horizontal_);
     });
     return true;  // solve() synchronises
   }
 
   bool keep(KeptSystem& slot) override {
     if (!factored_exact_ || kept_) return false;
-    HSI_CUDA_CHECK(cudaMemcpyAsync(S_.Hk.get(), S_.Hr.get(), sz(m_) * sz(m_) * sizeof(double), cudaMemcpyDeviceToDevice, st()));
-    if (horizontal_) {  // its rotation frame (linearize's u and tmp = [a; |u|²])
-      const size_t n4 = 4 * sz(c_.n_), bytes = n4 * sizeof(double);
-      HSI_CUDA_CHECK(cudaMemcpyAsync(S_.ku.get(), S_.Ta.get() + n4 * sz(S_.dim), bytes, cudaMemcpyDeviceToDevice, st()));
-      HSI_CUDA_CHECK(cudaMemcpyAsync(S_.kuc.get(), S_.Tca.get() + n4 * sz(S_.dim), bytes, cudaMemcpyDeviceToDevice, st()));
-      HSI_CUDA_CHECK(cudaMemcpyAsync(S_.ka.get(), S_.tmp.get(), sz(m_) * sizeof(double), cudaMemcpyDeviceToDevice, st()));
+    // The factor and, with the rotation freed, its rotation frame (linearize's u and
+    // tmp = [a; |u|²]): one launch.
+    kernels::CopyList copies;
+    copies.entry[0] = {S_.Hr.get(), S_.Hk.get(), sz(m_) * sz(m_)};
+    int entries = 1;
+    if (horizontal_) {
+      const size_t n4 = 4 * sz(c_.n_);
+      copies.entry[1] = {S_.Ta.get() + n4 * sz(S_.dim), S_.ku.get(), n4};
+      copies.entry[2] = {S_.Tca.get() + n4 * sz(S_.dim), S_.kuc.get(), n4};
+      copies.entry[3] = {S_.tmp.get(), S_.ka.get(), sz(m_)};
+      entries = 4;
     }
+    HSI_CUDA_CHECK(kernels::copy(copies, entries, st()));
     S_.kept_order = m_;
     S_.kept_diagonal_max = diagonal_max_;
     slot.owner = &S_;
@@ -273,7 +279,9 @@ class DeviceStepper final : public NewtonStepper {
     sys.max_safe_step = S_.sc_down[kSafeStep];
     // The factorisation's and the solve's own status: potrs after a failed potrf reads
     // an unfinished factor, whose numbers may well be finite.
-    sys.factored = S_.info_down[0] == 0 && S_.info_down[1] == 0 && std::isfinite(sys.slope);
+    int info[2];
+    std::memcpy(info, S_.sc_down.get() + kInfo, sizeof info);
+    sys.factored = info[0] == 0 && info[1] == 0 && std::isfinite(sys.slope);
     factored_exact_ = sys.factored && exact_ && !kept_;
     if (quad_) {
       q0_ = 0.5 * S_.sc_down[kQuad0] + S_.sc_down[kScratch] + quad_->k;
@@ -290,7 +298,8 @@ class DeviceStepper final : public NewtonStepper {
       S_.graphs.run(key(kTrialEnergies, static_cast<std::uint64_t>(count)), st(), [&] {
         copy_params(kSteps, count);
         HSI_CUDA_CHECK(kernels::mean_energies(c_.G_, c_.g_.get(), c_.ab_.get(), c_.dab_.get(), S_.sc.get() + kSteps, count,
-                                              c_.part_sum_.get(), c_.part_bad_.get(), S_.sc.get() + kTrials, st()));
+                                              c_.part_sum_.get(), c_.part_bad_.get(), c_.done_.get(), S_.sc.get() + kTrials,
+                                              st()));
         HSI_CUDA_CHECK(cudaMemcpyAsync(S_.sc_down.get() + kTrials, S_.sc.get() + kTrials, sz(count) * sizeof(double),
                                        cudaMemcpyDeviceToHost, st()));
       });
@@ -314,9 +323,10 @@ class DeviceStepper final : public NewtonStepper {
         enqueue_trial();
         x = S_.xna.get();
       }
-      // Full coefficients of x into S.full, then the certificate.
-      HSI_CUDA_CHECK(cudaMemcpyAsync(S_.full.get(), S_.X0.get(), S_.full.bytes(), cudaMemcpyDeviceToDevice, st()));
-      HSI_CUDA_CHECK(cublasDgemv(c_.blas_, CUBLAS_OP_N, S_.M4, S_.dim, &kOneD, S_.X.get(), S_.M4, x, 1, &kOneD, S_.full.get(), 1));
+      // Full coefficients of x into S.full (X0 + X x), then the certificate.
+      kernels::TallOptions expand;
+      expand.y0 = S_.X0.get();
+      HSI_CUDA_CHECK(kernels::tall_times_one(S_.M4, S_.dim, S_.X.get(), x, S_.full.get(), st(), expand));
       CertificateOptions o;
       o.stop_at_first_failure = !full;
       c_.certifier_->enqueue(reinterpret_cast<const double2*>(S_.full.get()), o);
@@ -335,8 +345,7 @@ class DeviceStepper final : public NewtonStepper {
     if (trial) write_params([&] { S_.params[param(kStep)] = step; });
     S_.graphs.run(key(kAccept, std::uint64_t{trial} | std::uint64_t{rotation_} << 1), st(), [&] {
       if (trial) enqueue_trial();
-      HSI_CUDA_CHECK(cudaMemcpyAsync(S_.xa.get(), S_.xna.get(), sz(S_.dim) * sizeof(double), cudaMemcpyDeviceToDevice, st()));
-      set_coefficients();
+      set_coefficients(S_.xna.get());  // and x ← xna
     });
     if (trial) params_read();
     trial_step_ = std::numeric_limits<double>::quiet_NaN();
@@ -378,21 +387,28 @@ class DeviceStepper final : public NewtonStepper {
   }
 
   // The gradient g at x (m_ entries; with the rotation freed and fresh_rotation, u = R T x
-  // first, else the u already in Ta and Tca).
-  void enqueue_gradient(bool fresh_rotation = true) {
+  // first, else the u already in Ta and Tca); with `horizontal`, its horizontal part
+  // (g_T −= (g_dim/|u|²) a with a = tmp, then g_dim = 0; the kept system's frame).
+  void enqueue_gradient(bool fresh_rotation = true, bool horizontal = false) {
     const int n = c_.n_, dim = S_.dim;
-    if (rotation_ && fresh_rotation) {  // u = R T x in both layouts, as the last columns of Ta and Tca
-      HSI_CUDA_CHECK(cublasDgemv(c_.blas_, CUBLAS_OP_N, 4 * n, dim, &kOneD, S_.RT.get(), 4 * n, S_.xa.get(), 1, &kZeroD,
-                                 S_.Ta.get() + sz(4 * n) * sz(dim), 1));
-      HSI_CUDA_CHECK(cublasDgemv(c_.blas_, CUBLAS_OP_N, 4 * n, dim, &kOneD, S_.RTc.get(), 4 * n, S_.xa.get(), 1, &kZeroD,
-                                 S_.Tca.get() + sz(4 * n) * sz(dim), 1));
+    if (rotation_ && fresh_rotation) {  // u = R T x in both layouts, as the last columns of Ta and Tca: one launch
+      kernels::TallOptions o;
+      o.second_A = S_.RTc.get();
+      o.second_rows = 4 * n;
+      o.second_y = S_.Tca.get() + sz(4 * n) * sz(dim);
+      HSI_CUDA_CHECK(kernels::tall_times_one(4 * n, dim, S_.RT.get(), S_.xa.get(), S_.Ta.get() + sz(4 * n) * sz(dim), st(), o));
     }
-    // Gradient: [gφ | gψ] = Dᴴ [ga | gb], then g = Tcaᵀ (·) / |G| (+ Q x + c).
+    // Gradient: [gφ | gψ] = Dᴴ [ga | gb], then g = Tcaᵀ (·) / |G| in the same launch (+ Q x + c).
     HSI_CUDA_CHECK(kernels::gradient_samples(c_.G_, c_.g_.get(), c_.ab_.get(), c_.gab_.get(), st()));
-    HSI_CUDA_CHECK(kernels::tall_adjoint_times_two(c_.G_, n, c_.D_, c_.gab_.get(), c_.coef_.get(), st()));
-    const double inv_count = 1 / static_cast<double>(c_.G_);
-    HSI_CUDA_CHECK(cublasDgemv(c_.blas_, CUBLAS_OP_T, 4 * n, m_, &inv_count, S_.Tca.get(), 4 * n,
-                               reinterpret_cast<const double*>(c_.coef_.get()), 1, &kZeroD, S_.g.get(), 1));
+    kernels::ReducedGradient then;
+    then.T = S_.Tca.get();
+    then.m = m_;
+    then.scale = 1 / static_cast<double>(c_.G_);
+    then.g = S_.g.get();
+    then.a = horizontal ? S_.tmp.get() : nullptr;
+    then.dim = dim;
+    then.done = c_.done_.get();
+    HSI_CUDA_CHECK(kernels::tall_adjoint_times_two(c_.G_, n, c_.D_, c_.gab_.get(), c_.coef_.get(), st(), then));
     if (quad_) {
       HSI_CUDA_CHECK(cublasDgemv(c_.blas_, CUBLAS_OP_N, dim, dim, &kOneD, S_.Q.get(), dim, S_.xa.get(), 1, &kOneD, S_.g.get(), 1));
       HSI_CUDA_CHECK(cublasDaxpy(c_.blas_, dim, &kOneD, S_.c.get(), 1, S_.g.get(), 1));
@@ -417,12 +433,11 @@ class DeviceStepper final : public NewtonStepper {
       // system solves the dim one with d[dim] = 0, and solve() sets θ = −aᵀd/|u|².
       HSI_CUDA_CHECK(cublasDgemv(c_.blas_, CUBLAS_OP_T, 4 * n, m_, &kOneD, S_.Ta.get(), 4 * n, S_.Ta.get() + sz(4 * n) * sz(dim), 1,
                                  &kZeroD, S_.tmp.get(), 1));
-      HSI_CUDA_CHECK(kernels::horizontal_system(dim, S_.Hr0.get(), S_.tmp.get(), S_.g.get(), st()));
+      // (and max |diag| into kDiagMax and the cleared diagonal entry)
+      HSI_CUDA_CHECK(kernels::horizontal_system(dim, S_.Hr0.get(), S_.tmp.get(), S_.g.get(), S_.sc.get() + kDiagMax, st()));
+    } else {
+      HSI_CUDA_CHECK(kernels::diag_abs_max(m_, S_.Hr0.get(), S_.sc.get() + kDiagMax, st()));
     }
-    HSI_CUDA_CHECK(kernels::diag_abs_max(m_, S_.Hr0.get(), S_.sc.get() + kDiagMax, st()));
-    if (horizontal_)
-      HSI_CUDA_CHECK(cudaMemcpyAsync(S_.Hr0.get() + sz(dim) * sz(m_) + sz(dim), S_.sc.get() + kDiagMax, sizeof(double),
-                                     cudaMemcpyDeviceToDevice, st()));
     HSI_CUDA_CHECK(cudaMemcpyAsync(S_.sc_down.get() + kDiagMax, S_.sc.get() + kDiagMax, sizeof(double), cudaMemcpyDeviceToHost, st()));
   }
 
@@ -435,34 +450,32 @@ class DeviceStepper final : public NewtonStepper {
     // d = −g, solved in place: cuSOLVER's Cholesky, or with HSI_CUDA_CHOLESKY=own ours
     // (dense_cholesky.h) up to its preferred order.
     const bool own = own_factor_;
-    HSI_CUDA_CHECK(cudaMemcpyAsync(S_.d.get(), S_.g.get(), sz(m) * sizeof(double), cudaMemcpyDeviceToDevice, st()));
-    HSI_CUDA_CHECK(cublasDscal(c_.blas_, m, &kMinusOneD, S_.d.get(), 1));
+    int* info = reinterpret_cast<int*>(S_.sc.get() + kInfo);  // [factor, solves], copied down with the scalars
+    HSI_CUDA_CHECK(kernels::negate(m, S_.g.get(), S_.d.get(), info, st()));  // and both statuses 0
     // The triangular solves with a factor L (the kept one or potrf's): dense_cholesky.h's
     // cluster kernel where it applies (forward and back substitution in one kernel: 31.6
     // against potrs' 56.5 µs at m = 292 on an H200, bench_dense), else cuSOLVER's potrs.
     const bool own_solve = !S_.cusolver_solve && kernels::cholesky_solve_in_cluster(m);
     auto triangular_solves = [&](const double* L) {
       if (own_solve) {
-        HSI_CUDA_CHECK(kernels::cholesky_solve(m, L, m, S_.d.get(), st()));
-        HSI_CUDA_CHECK(cudaMemsetAsync(S_.info.get() + 1, 0, sizeof(int), st()));  // the solve has no status of its own
+        HSI_CUDA_CHECK(kernels::cholesky_solve(m, L, m, S_.d.get(), st()));  // no status of its own: info[1] stays 0
       } else {
-        HSI_CUDA_CHECK(cusolverDnDpotrs(c_.solver_, CUBLAS_FILL_MODE_LOWER, m, 1, L, m, S_.d.get(), m, S_.info.get() + 1));
+        HSI_CUDA_CHECK(cusolverDnDpotrs(c_.solver_, CUBLAS_FILL_MODE_LOWER, m, 1, L, m, S_.d.get(), m, info + 1));
       }
     };
-    if (kept_) {  // the kept factor (keep): the triangular solves only
-      HSI_CUDA_CHECK(cudaMemsetAsync(S_.info.get(), 0, sizeof(int), st()));
+    if (kept_) {  // the kept factor (keep): the triangular solves only (info[0] stays 0)
       triangular_solves(S_.Hk.get());
     } else if (own) {  // our factor (L in the lower triangle, as potrf leaves it: keep() may copy it)
-      HSI_CUDA_CHECK(kernels::cholesky_factor(m, S_.Hr.get(), m, S_.info.get(), st()));
+      HSI_CUDA_CHECK(kernels::cholesky_factor(m, S_.Hr.get(), m, info, st()));
       triangular_solves(S_.Hr.get());
     } else {
-      HSI_CUDA_CHECK(cusolverDnDpotrf(c_.solver_, CUBLAS_FILL_MODE_LOWER, m, S_.Hr.get(), m, S_.work.get(), S_.lwork, S_.info.get()));
+      HSI_CUDA_CHECK(cusolverDnDpotrf(c_.solver_, CUBLAS_FILL_MODE_LOWER, m, S_.Hr.get(), m, S_.work.get(), S_.lwork, info));
       triangular_solves(S_.Hr.get());
     }
-    if (horizontal_)  // θ = −aᵀd / |u|² into d[dim] (0 from the decoupled solve)
-      HSI_CUDA_CHECK(kernels::rotation_angle(dim, S_.tmp.get(), S_.d.get(), st()));
-    HSI_CUDA_CHECK(kernels::dot(m, S_.g.get(), S_.d.get(), S_.sc.get() + kSlope, st()));
-    HSI_CUDA_CHECK(kernels::dot(dim, S_.g.get(), S_.g.get(), S_.sc.get() + kGradNorm2, st()));
+    // With the system modulo the rotation θ = −aᵀd / |u|² into d[dim] (0 from the
+    // decoupled solve); then the slope gᵀd and |g|²: one launch.
+    HSI_CUDA_CHECK(kernels::step_scalars(dim, m, horizontal_, S_.tmp.get(), S_.g.get(), S_.d.get(), S_.sc.get() + kSlope,
+                                         S_.sc.get() + kGradNorm2, st()));
     if (quad_) {  // the quadratic term along d: q(x + s d) = q0 + s q1 + ½ s² q2
       HSI_CUDA_CHECK(cublasDgemv(c_.blas_, CUBLAS_OP_N, dim, dim, &kOneD, S_.Q.get(), dim, S_.xa.get(), 1, &kZeroD, S_.tmp.get(), 1));
       HSI_CUDA_CHECK(kernels::dot(dim, S_.xa.get(), S_.tmp.get(), S_.sc.get() + kQuad0, st()));
@@ -476,15 +489,18 @@ class DeviceStepper final : public NewtonStepper {
     HSI_CUDA_CHECK(cublasDgemv(c_.blas_, CUBLAS_OP_N, 4 * n, m, &kOneD, S_.Tca.get(), 4 * n, S_.d.get(), 1, &kZeroD,
                                reinterpret_cast<double*>(c_.coef_.get()), 1));
     HSI_CUDA_CHECK(kernels::tall_times_two(c_.G_, n, c_.D_, c_.coef_.get(), c_.dab_.get(), st()));
-    HSI_CUDA_CHECK(kernels::max_safe_step(c_.G_, c_.ab_.get(), c_.dab_.get(), c_.part_sum_.get(), S_.sc.get() + kSafeStep, st()));
+    HSI_CUDA_CHECK(kernels::max_safe_step(c_.G_, c_.ab_.get(), c_.dab_.get(), c_.part_sum_.get(), c_.done_.get(),
+                                          S_.sc.get() + kSafeStep, st()));
     HSI_CUDA_CHECK(cudaMemcpyAsync(S_.sc_down.get(), S_.sc.get(), kTrials * sizeof(double), cudaMemcpyDeviceToHost, st()));
-    HSI_CUDA_CHECK(cudaMemcpyAsync(S_.info_down.get(), S_.info.get(), 2 * sizeof(int), cudaMemcpyDeviceToHost, st()));
   }
 
-  // ab = D · (Tc x) at the device's current x.
-  void set_coefficients() {
-    HSI_CUDA_CHECK(cublasDgemv(c_.blas_, CUBLAS_OP_N, 4 * c_.n_, S_.dim, &kOneD, S_.Tca.get(), 4 * c_.n_, S_.xa.get(), 1, &kZeroD,
-                               reinterpret_cast<double*>(c_.coef_.get()), 1));
+  // ab = D · (Tc x) at the device's current x; with `from`, x ← from first (the same
+  // launch as Tc x).
+  void set_coefficients(const double* from = nullptr) {
+    kernels::TallOptions o;
+    o.x_copy = from ? S_.xa.get() : nullptr;
+    HSI_CUDA_CHECK(kernels::tall_times_one(4 * c_.n_, S_.dim, S_.Tca.get(), from ? from : S_.xa.get(),
+                                           reinterpret_cast<double*>(c_.coef_.get()), st(), o));
     HSI_CUDA_CHECK(kernels::tall_times_two(c_.G_, c_.n_, c_.D_, c_.coef_.get(), c_.ab_.get(), st()));
   }
 
@@ -497,13 +513,15 @@ class DeviceStepper final : public NewtonStepper {
       HSI_CUDA_CHECK(kernels::trial_point(dim, S_.xa.get(), S_.d.get(), S_.sc.get() + kStep, S_.xna.get(), st()));
     } else {
       const int n = c_.n_, m = dim + 1;
-      HSI_CUDA_CHECK(kernels::trial_point(m, S_.xa.get(), S_.d.get(), S_.sc.get() + kStep, S_.z.get(), st()));
-      HSI_CUDA_CHECK(cublasDgemv(c_.blas_, CUBLAS_OP_N, 4 * n, m, &kOneD, S_.Ta.get(), 4 * n, S_.z.get(), 1, &kZeroD, S_.v.get(), 1));
+      kernels::TallOptions o;  // v = Ta ([x; 0] + s d), the point formed in the same launch
+      o.dx = S_.d.get();
+      o.step = S_.sc.get() + kStep;
+      HSI_CUDA_CHECK(kernels::tall_times_one(4 * n, m, S_.Ta.get(), S_.xa.get(), S_.v.get(), st(), o));
       HSI_CUDA_CHECK(kernels::regauge(dim, n, S_.rotation_vertex, S_.primary.get(), S_.v.get(), S_.xna.get(), st()));
     }
   }
 
-  static constexpr double kOneD = 1, kZeroD = 0, kMinusOneD = -1;
+  static constexpr double kOneD = 1, kZeroD = 0;
   CudaNewtonCore& c_;
   DeviceSpace& S_;
   const QuadraticTerm* quad_;

@@ -58,6 +58,42 @@ __device__ void block_min(double& v) {
   }
 }
 
+// Called by every thread of a block after its thread 0 wrote the block's partial
+// results: true, in every thread, in the block that counted last, whose threads may
+// then read every block's partials; that block also sets the counter back to 0 for the
+// next launch (every block has counted by then). One launch instead of a partials pass
+// and a finishing pass: the partials are summed by one block in a fixed order, so the
+// result does not depend on which block came last. Partials are read with __ldcg (from
+// L2, where the other blocks' writes are, never a stale L1 line).
+__device__ bool last_block_done(unsigned* __restrict__ done) {
+  __shared__ bool last;
+  if (threadIdx.x == 0) {
+    __threadfence();  // this block's partials are visible device-wide before it counts
+    last = atomicAdd(done, 1u) == gridDim.x - 1;
+    if (last) {
+      *done = 0;
+      __threadfence();  // the other blocks' partials, counted before, are read after this
+    }
+  }
+  __syncthreads();
+  return last;
+}
+
+// The finishing pass of a mean: `parts` partials from `base` on, summed in thread
+// order then by block_sum_bad's tree (every thread of the block calls it): the mean,
+// or +inf if any sample was, into *out by thread 0.
+__device__ void finish_mean_block(int parts, const double* __restrict__ part_sum, const int* __restrict__ part_bad, size_t base,
+                                  double count, double* __restrict__ out) {
+  double sum = 0;
+  int bad = 0;
+  for (int i = static_cast<int>(threadIdx.x); i < parts; i += static_cast<int>(blockDim.x)) {
+    sum += __ldcg(part_sum + base + static_cast<size_t>(i));
+    bad |= __ldcg(part_bad + base + static_cast<size_t>(i));
+  }
+  block_sum_bad(sum, bad);
+  if (threadIdx.x == 0) *out = bad ? sample::infinity() : sum / count;
+}
+
 // Pass 1 of E(s) = mean_G e(g, a + s da, b + s db): this block's sum of the finite
 // sample energies and whether any sample was infinite (folded or degenerate), written
 // to part_sum / part_bad at `slot`.
@@ -86,36 +122,35 @@ __device__ void energy_partial(int G, const double* __restrict__ g, const double
   }
 }
 
-__global__ void __launch_bounds__(kBlock) energy_partials(int G, const double* __restrict__ g, const double2* __restrict__ ab,
-                                                          const double2* __restrict__ dab, double s,
-                                                          double* __restrict__ part_sum, int* __restrict__ part_bad) {
+// E(s) in one launch: each block's partial, then the last block sums them
+// (last_block_done) exactly as a separate finishing block would.
+__global__ void __launch_bounds__(kBlock) energy_mean_kernel(int G, const double* __restrict__ g, const double2* __restrict__ ab,
+                                                             const double2* __restrict__ dab, double s, double* __restrict__ part_sum,
+                                                             int* __restrict__ part_bad, unsigned* __restrict__ done,
+                                                             double* __restrict__ out) {
   energy_partial(G, g, ab, dab, s, part_sum, part_bad, blockIdx.x);
+  if (!last_block_done(done)) return;
+  finish_mean_block(static_cast<int>(gridDim.x), part_sum, part_bad, 0, static_cast<double>(G), out);
 }
 
-// Pass 1 for `count` steps read from device memory: step k's partials at k·gridDim.x +
-// block, each summed exactly as energy_partials sums it (same grid, same order).
-__global__ void __launch_bounds__(kBlock) energies_partials(int G, const double* __restrict__ g, const double2* __restrict__ ab,
-                                                            const double2* __restrict__ dab, const double* __restrict__ steps,
-                                                            int count, double* __restrict__ part_sum, int* __restrict__ part_bad) {
+// For `count` steps read from device memory: step k's partials at k·gridDim.x + block,
+// each summed exactly as energy_mean_kernel sums it (same grid, same order), then the
+// last block finishes every step's mean into out[k].
+__global__ void __launch_bounds__(kBlock) energies_mean_kernel(int G, const double* __restrict__ g, const double2* __restrict__ ab,
+                                                               const double2* __restrict__ dab, const double* __restrict__ steps,
+                                                               int count, double* __restrict__ part_sum, int* __restrict__ part_bad,
+                                                               unsigned* __restrict__ done, double* __restrict__ out) {
   for (int k = 0; k < count; ++k) {
     energy_partial(G, g, ab, dab, steps[k], part_sum, part_bad, static_cast<unsigned>(k) * gridDim.x + blockIdx.x);
     __syncthreads();  // block_sum_bad's shared slots are reused by the next step
   }
-}
-
-// Pass 2 (one block per step): the mean, or +inf if any sample was; block k reads the
-// partials at k·parts and writes out[k].
-__global__ void __launch_bounds__(kBlock) finish_mean(int parts, const double* __restrict__ part_sum, const int* __restrict__ part_bad,
-                                                      double count, double* __restrict__ out) {
-  const size_t base = static_cast<size_t>(blockIdx.x) * static_cast<size_t>(parts);
-  double sum = 0;
-  int bad = 0;
-  for (int i = static_cast<int>(threadIdx.x); i < parts; i += static_cast<int>(blockDim.x)) {
-    sum += part_sum[base + static_cast<size_t>(i)];
-    bad |= part_bad[base + static_cast<size_t>(i)];
+  if (!last_block_done(done)) return;
+  const int parts = static_cast<int>(gridDim.x);
+  for (int k = 0; k < count; ++k) {
+    finish_mean_block(parts, part_sum, part_bad, static_cast<size_t>(k) * static_cast<size_t>(parts), static_cast<double>(G),
+                      out + k);
+    __syncthreads();
   }
-  block_sum_bad(sum, bad);
-  if (threadIdx.x == 0) out[blockIdx.x] = bad ? sample::infinity() : sum / count;
 }
 
 // ∂e/∂(Re a, Im a, Re b, Im b) per sample of G, packed as complex ∂E/∂a, ∂E/∂b (zero
@@ -197,10 +232,11 @@ __global__ void real_hessian_kernel(int n, const double2* __restrict__ R, double
       Hv[static_cast<size_t>(c) * N + r] = (raw_hessian(n, R, count, r, c) + raw_hessian(n, R, count, c, r)) / 2;
 }
 
-// Pass 1 of the safe step: per-block minimum over samples of the first s > 0 with
-// |a + s da| = |b + s db|.
-__global__ void __launch_bounds__(kBlock) safe_step_partials(int G, const double2* __restrict__ ab, const double2* __restrict__ dab,
-                                                             double* __restrict__ part_min) {
+// The safe step in one launch: per-block minima over samples of the first s > 0 with
+// |a + s da| = |b + s db|, then the last block's minimum of them.
+__global__ void __launch_bounds__(kBlock) safe_step_kernel(int G, const double2* __restrict__ ab, const double2* __restrict__ dab,
+                                                           double* __restrict__ part_min, unsigned* __restrict__ done,
+                                                           double* __restrict__ out) {
   double t = sample::infinity();
   for (int i = static_cast<int>(blockIdx.x * blockDim.x + threadIdx.x); i < G; i += static_cast<int>(gridDim.x * blockDim.x)) {
     const double2 a = ab[i], b = ab[G + i], da = dab[i], db = dab[G + i];
@@ -208,11 +244,10 @@ __global__ void __launch_bounds__(kBlock) safe_step_partials(int G, const double
   }
   block_min(t);
   if (threadIdx.x == 0) part_min[blockIdx.x] = t;
-}
-
-__global__ void __launch_bounds__(kBlock) finish_min(int parts, const double* __restrict__ part_min, double* __restrict__ out) {
-  double t = sample::infinity();
-  for (int i = static_cast<int>(threadIdx.x); i < parts; i += static_cast<int>(blockDim.x)) t = fmin(t, part_min[i]);
+  if (!last_block_done(done)) return;
+  t = sample::infinity();
+  for (int i = static_cast<int>(threadIdx.x); i < static_cast<int>(gridDim.x); i += static_cast<int>(blockDim.x))
+    t = fmin(t, __ldcg(part_min + i));
   block_min(t);
   if (threadIdx.x == 0) *out = t;
 }
@@ -284,37 +319,6 @@ __global__ void horizontal_block_kernel(int dim, int m, double* __restrict__ A, 
   A[static_cast<size_t>(j) * M + static_cast<size_t>(i)] += -(ai * k[j] + k[i] * aj) / uu + c * ai * aj / (uu * uu);
 }
 
-// Then (one block): g_i −= (g_dim/uu) a_i, row and column dim of A and g_dim cleared.
-__global__ void horizontal_clear_kernel(int dim, int m, double* __restrict__ A, const double* __restrict__ a, double* __restrict__ g) {
-  const double f = g[dim] / a[dim];
-  __syncthreads();  // every thread has read g[dim] before it is cleared
-  const size_t M = static_cast<size_t>(m), D = static_cast<size_t>(dim);
-  for (int i = static_cast<int>(threadIdx.x); i < m; i += static_cast<int>(blockDim.x)) {
-    if (i < dim) g[i] -= f * a[i];
-    else g[i] = 0;
-    A[D * M + static_cast<size_t>(i)] = 0;                  // column dim
-    A[static_cast<size_t>(i) * M + D] = 0;                  // row dim
-  }
-}
-
-// One block: g_i −= (g_dim/uu) a_i, then g_dim = 0.
-__global__ void horizontal_gradient_kernel(int dim, const double* __restrict__ a, double* __restrict__ g) {
-  const double f = g[dim] / a[dim];
-  __syncthreads();  // every thread has read g[dim] before it is cleared
-  for (int i = static_cast<int>(threadIdx.x); i <= dim; i += static_cast<int>(blockDim.x)) {
-    if (i < dim) g[i] -= f * a[i];
-    else g[i] = 0;
-  }
-}
-
-// One block: d[dim] = −(Σ_{i<dim} a_i d_i) / a[dim].
-__global__ void __launch_bounds__(kBlock) rotation_angle_kernel(int dim, const double* __restrict__ a, double* __restrict__ d) {
-  double sum = 0;
-  int bad = 0;
-  for (int i = static_cast<int>(threadIdx.x); i < dim; i += static_cast<int>(blockDim.x)) sum += a[i] * d[i];
-  block_sum_bad(sum, bad);
-  if (threadIdx.x == 0) d[dim] = -sum / a[dim];
-}
 
 // C = A · B for a tall A (rows × k) and B (k × 2), all complex column-major: a block is
 // 32 rows × 8 slices of k; each thread sums its slice in order, then the block adds the
@@ -356,7 +360,8 @@ __global__ void __launch_bounds__(kTallRows* kTallSlices)
 // ncu_hsi_interpolate_bar_holes_h200.txt), against ~3 µs to read A once.
 constexpr int kAdjointThreads = 1024, kAdjointUnroll = 4;
 __global__ void __launch_bounds__(kAdjointThreads)
-    tall_adjoint_times_two_kernel(int rows, int k, const double2* __restrict__ A, const double2* __restrict__ B, double2* __restrict__ C) {
+    tall_adjoint_times_two_kernel(int rows, int k, const double2* __restrict__ A, const double2* __restrict__ B, double2* __restrict__ C,
+                                  ReducedGradient epi) {
   __shared__ double s[4][kAdjointThreads / 32];
   const int j = static_cast<int>(blockIdx.x);
   const double2* a_col = A + static_cast<size_t>(j) * static_cast<size_t>(rows);
@@ -404,6 +409,26 @@ __global__ void __launch_bounds__(kAdjointThreads)
       C[k + j] = make_double2(v[2], v[3]);
     }
   }
+  if (!epi.g || !last_block_done(epi.done)) return;
+  // The reduced gradient g = scale · Tᵀ c, c = C read as 4k reals: one warp per entry of
+  // g, its lanes over T's column (contiguous), then a fixed shuffle tree.
+  const double* c = reinterpret_cast<const double*>(C);
+  const int rows4 = 4 * k, warps = static_cast<int>(blockDim.x) / 32;
+  for (int col = warp; col < epi.m; col += warps) {
+    const double* t = epi.T + static_cast<size_t>(col) * static_cast<size_t>(rows4);
+    double sum = 0;
+    for (int r = lane; r < rows4; r += 32) sum += t[r] * __ldcg(c + r);
+    for (int o = 16; o > 0; o >>= 1) sum += __shfl_down_sync(0xffffffffu, sum, o);
+    if (lane == 0) epi.g[col] = sum * epi.scale;
+  }
+  if (!epi.a) return;
+  __syncthreads();  // every entry of g written
+  const double f = epi.g[epi.dim] / epi.a[epi.dim];  // then the horizontal part
+  __syncthreads();  // every thread has read g[dim] before it is cleared
+  for (int i = static_cast<int>(threadIdx.x); i <= epi.dim; i += static_cast<int>(blockDim.x)) {
+    if (i < epi.dim) epi.g[i] -= f * epi.a[i];
+    else epi.g[i] = 0;
+  }
 }
 
 // Per sample: m = Σ_j w_j keys_j (j with w_j ≠ 0, in order), with `exponential`
@@ -434,6 +459,110 @@ __global__ void blend_metrics_kernel(int G, int K, const double* __restrict__ ke
   out[0] = m[0];
   out[1] = m[1];
   out[2] = m[2];
+}
+
+// The solve's right-hand side: d = −g (m entries), and both status words (the factor's,
+// the triangular solves') cleared, in one launch.
+__global__ void negate_kernel(int m, const double* __restrict__ g, double* __restrict__ d, int* __restrict__ info) {
+  const int i = static_cast<int>(blockIdx.x * blockDim.x + threadIdx.x);
+  if (i < m) d[i] = -g[i];
+  if (i == 0) {
+    info[0] = 0;
+    info[1] = 0;
+  }
+}
+
+// One block: with the rotation freed d[dim] = −(Σ_{i<dim} a_i d_i)/a[dim] (rotation_angle),
+// then slope = Σ_{i<m} g_i d_i and gnorm2 = Σ_{i<dim} g_i², each summed as dot_kernel sums.
+__global__ void __launch_bounds__(kBlock) step_scalars_kernel(int dim, int m, bool rotation, const double* __restrict__ a,
+                                                              const double* __restrict__ g, double* __restrict__ d,
+                                                              double* __restrict__ slope, double* __restrict__ gnorm2) {
+  int bad = 0;
+  if (rotation) {
+    double sum = 0;
+    for (int i = static_cast<int>(threadIdx.x); i < dim; i += static_cast<int>(blockDim.x)) sum += a[i] * d[i];
+    block_sum_bad(sum, bad);
+    if (threadIdx.x == 0) d[dim] = -sum / a[dim];
+    __syncthreads();  // d[dim] written, block_sum_bad's slots free
+  }
+  double sum = 0;
+  for (int i = static_cast<int>(threadIdx.x); i < m; i += static_cast<int>(blockDim.x)) sum += g[i] * d[i];
+  block_sum_bad(sum, bad);
+  if (threadIdx.x == 0) *slope = sum;
+  __syncthreads();
+  sum = 0;
+  for (int i = static_cast<int>(threadIdx.x); i < dim; i += static_cast<int>(blockDim.x)) sum += g[i] * g[i];
+  block_sum_bad(sum, bad);
+  if (threadIdx.x == 0) *gnorm2 = sum;
+}
+
+// One block, after horizontal_block_kernel: g_i −= (g_dim/uu) a_i, row and column dim of
+// A and g_dim cleared (horizontal_clear_kernel), then max_i |A_ii| over the m × m system
+// (diag_max_kernel's order) into *diag and into A_dim,dim.
+__global__ void __launch_bounds__(kBlock) horizontal_clear_diag_kernel(int dim, int m, double* __restrict__ A,
+                                                                       const double* __restrict__ a, double* __restrict__ g,
+                                                                       double* __restrict__ diag) {
+  const double f = g[dim] / a[dim];
+  __syncthreads();  // every thread has read g[dim] before it is cleared
+  const size_t M = static_cast<size_t>(m), D = static_cast<size_t>(dim);
+  for (int i = static_cast<int>(threadIdx.x); i < m; i += static_cast<int>(blockDim.x)) {
+    if (i < dim) g[i] -= f * a[i];
+    else g[i] = 0;
+    A[D * M + static_cast<size_t>(i)] = 0;  // column dim
+    A[static_cast<size_t>(i) * M + D] = 0;  // row dim
+  }
+  __syncthreads();  // the cleared entries are read below
+  double v = 0;
+  for (int i = static_cast<int>(threadIdx.x); i < m; i += static_cast<int>(blockDim.x))
+    v = fmax(v, fabs(A[static_cast<size_t>(i) * M + static_cast<size_t>(i)]));
+  v = -v;
+  block_min(v);
+  if (threadIdx.x == 0) {
+    *diag = -v;
+    A[D * M + D] = -v;
+  }
+}
+
+// y = y0 + A x for real column-major A (rows × cols, leading dimension rows), with
+// x = x0 + (*step)·dx where dx is given (else x0); blockIdx.z picks one of two products
+// sharing x. A block is kTallRows rows × kTallSlices slices of the columns, each thread
+// summing its slice in order, then the block the slices in order (deterministic). Block
+// (0, 0) also writes x into x_copy where given.
+struct RealProduct {
+  const double* A;
+  const double* y0;  // null: 0
+  double* y;
+  int rows;
+};
+__global__ void __launch_bounds__(kTallRows* kTallSlices)
+    tall_times_one_kernel(RealProduct p0, RealProduct p1, int cols, const double* __restrict__ x0, const double* __restrict__ dx,
+                          const double* __restrict__ step, double* __restrict__ x_copy) {
+  __shared__ double part[kTallSlices][kTallRows];
+  const RealProduct& p = blockIdx.z == 0 ? p0 : p1;
+  const int tx = static_cast<int>(threadIdx.x), ty = static_cast<int>(threadIdx.y);
+  const int i = static_cast<int>(blockIdx.x) * kTallRows + tx;
+  const double s = dx ? *step : 0.0;
+  auto x_at = [&](int j) { return dx ? x0[j] + s * dx[j] : x0[j]; };
+  if (x_copy && blockIdx.x == 0 && blockIdx.z == 0)
+    for (int j = ty * kTallRows + tx; j < cols; j += kTallRows * kTallSlices) x_copy[j] = x_at(j);
+  if (static_cast<int>(blockIdx.x) * kTallRows >= p.rows) return;  // the shorter product's spare blocks (whole block)
+  double c = 0;
+  if (i < p.rows)
+    for (int j = ty; j < cols; j += kTallSlices) c += p.A[static_cast<size_t>(j) * static_cast<size_t>(p.rows) + static_cast<size_t>(i)] * x_at(j);
+  part[ty][tx] = c;
+  __syncthreads();
+  if (ty == 0 && i < p.rows) {
+    double y = 0;
+    for (int q = 0; q < kTallSlices; ++q) y += part[q][tx];
+    p.y[i] = p.y0 ? p.y0[i] + y : y;
+  }
+}
+
+// Up to four device-to-device copies in one launch (blockIdx.y picks one).
+__global__ void copy_kernel(CopyList list) {
+  const CopyList::Entry& e = list.entry[blockIdx.y];
+  for (size_t t = blockIdx.x * static_cast<size_t>(blockDim.x) + threadIdx.x; t < e.count; t += static_cast<size_t>(gridDim.x) * blockDim.x)
+    e.dst[t] = e.src[t];
 }
 
 // MapSpace::regauge on the device: rotate the image so that φ_r lies on the positive
@@ -472,7 +601,7 @@ unsigned reduction_blocks(int count) { return blocks_for(count, kBlock, kMaxPart
 
 cudaError_t loadable() {
   cudaFuncAttributes attr{};
-  return cudaFuncGetAttributes(&attr, energy_partials);
+  return cudaFuncGetAttributes(&attr, energy_mean_kernel);
 }
 
 cudaError_t gather_rows(int G, int h, int n, const double2* D, const int* H, double2* DH, cudaStream_t stream) {
@@ -482,22 +611,15 @@ cudaError_t gather_rows(int G, int h, int n, const double2* D, const int* H, dou
 }
 
 cudaError_t mean_energy(int G, const double* g, const double2* ab, const double2* dab, double s, double* part_sum,
-                        int* part_bad, double* out, cudaStream_t stream) {
-  const unsigned parts = reduction_blocks(G);
-  energy_partials<<<parts, kBlock, 0, stream>>>(G, g, ab, dab, s, part_sum, part_bad);
-  if (const cudaError_t e = cudaGetLastError(); e != cudaSuccess) return e;
-  finish_mean<<<1, kBlock, 0, stream>>>(static_cast<int>(parts), part_sum, part_bad, static_cast<double>(G), out);
+                        int* part_bad, unsigned* done, double* out, cudaStream_t stream) {
+  energy_mean_kernel<<<reduction_blocks(G), kBlock, 0, stream>>>(G, g, ab, dab, s, part_sum, part_bad, done, out);
   return cudaGetLastError();
 }
 
 cudaError_t mean_energies(int G, const double* g, const double2* ab, const double2* dab, const double* steps, int count,
-                          double* part_sum, int* part_bad, double* out, cudaStream_t stream) {
+                          double* part_sum, int* part_bad, unsigned* done, double* out, cudaStream_t stream) {
   if (count < 1 || count > kMaxSteps) return cudaErrorInvalidValue;
-  const unsigned parts = reduction_blocks(G);
-  energies_partials<<<parts, kBlock, 0, stream>>>(G, g, ab, dab, steps, count, part_sum, part_bad);
-  if (const cudaError_t e = cudaGetLastError(); e != cudaSuccess) return e;
-  finish_mean<<<static_cast<unsigned>(count), kBlock, 0, stream>>>(static_cast<int>(parts), part_sum, part_bad,
-                                                                   static_cast<double>(G), out);
+  energies_mean_kernel<<<reduction_blocks(G), kBlock, 0, stream>>>(G, g, ab, dab, steps, count, part_sum, part_bad, done, out);
   return cudaGetLastError();
 }
 
@@ -522,11 +644,9 @@ cudaError_t real_hessian(int n, const double2* R, double count, double* Hv, cuda
   return cudaGetLastError();
 }
 
-cudaError_t max_safe_step(int G, const double2* ab, const double2* dab, double* part_min, double* out, cudaStream_t stream) {
-  const unsigned parts = reduction_blocks(G);
-  safe_step_partials<<<parts, kBlock, 0, stream>>>(G, ab, dab, part_min);
-  if (const cudaError_t e = cudaGetLastError(); e != cudaSuccess) return e;
-  finish_min<<<1, kBlock, 0, stream>>>(static_cast<int>(parts), part_min, out);
+cudaError_t max_safe_step(int G, const double2* ab, const double2* dab, double* part_min, unsigned* done, double* out,
+                          cudaStream_t stream) {
+  safe_step_kernel<<<reduction_blocks(G), kBlock, 0, stream>>>(G, ab, dab, part_min, done, out);
   return cudaGetLastError();
 }
 
@@ -557,22 +677,42 @@ cudaError_t trial_point(int n, const double* x, const double* d, const double* s
   return cudaGetLastError();
 }
 
-cudaError_t horizontal_system(int dim, double* A, const double* a, double* g, cudaStream_t stream) {
+cudaError_t horizontal_system(int dim, double* A, const double* a, double* g, double* diag, cudaStream_t stream) {
   const int m = dim + 1;
   const dim3 block(32, 8), grid(blocks_for(dim, 32, 65535), blocks_for(dim, 8, 65535));
   horizontal_block_kernel<<<grid, block, 0, stream>>>(dim, m, A, a);
   if (const cudaError_t e = cudaGetLastError(); e != cudaSuccess) return e;
-  horizontal_clear_kernel<<<1, kBlock, 0, stream>>>(dim, m, A, a, g);
+  horizontal_clear_diag_kernel<<<1, kBlock, 0, stream>>>(dim, m, A, a, g, diag);
   return cudaGetLastError();
 }
 
-cudaError_t horizontal_gradient(int dim, const double* a, double* g, cudaStream_t stream) {
-  horizontal_gradient_kernel<<<1, kBlock, 0, stream>>>(dim, a, g);
+cudaError_t negate(int m, const double* g, double* d, int* info, cudaStream_t stream) {
+  negate_kernel<<<blocks_for(m, kBlock, 1LL << 30), kBlock, 0, stream>>>(m, g, d, info);
   return cudaGetLastError();
 }
 
-cudaError_t rotation_angle(int dim, const double* a, double* d, cudaStream_t stream) {
-  rotation_angle_kernel<<<1, kBlock, 0, stream>>>(dim, a, d);
+cudaError_t step_scalars(int dim, int m, bool rotation, const double* a, const double* g, double* d, double* slope, double* gnorm2,
+                         cudaStream_t stream) {
+  step_scalars_kernel<<<1, kBlock, 0, stream>>>(dim, m, rotation, a, g, d, slope, gnorm2);
+  return cudaGetLastError();
+}
+
+cudaError_t tall_times_one(int rows, int cols, const double* A, const double* x, double* y, cudaStream_t stream,
+                           const TallOptions& o) {
+  const int rows1 = o.second_A ? o.second_rows : 0;
+  const RealProduct p0{A, o.y0, y, rows}, p1{o.second_A ? o.second_A : A, nullptr, o.second_A ? o.second_y : y, rows1};
+  const dim3 block(kTallRows, kTallSlices);
+  const dim3 grid(blocks_for(std::max(rows, rows1), kTallRows, 1LL << 30), 1, o.second_A ? 2 : 1);
+  tall_times_one_kernel<<<grid, block, 0, stream>>>(p0, p1, cols, x, o.dx, o.step, o.x_copy);
+  return cudaGetLastError();
+}
+
+cudaError_t copy(const CopyList& list, int entries, cudaStream_t stream) {
+  if (entries < 1 || entries > CopyList::kMax) return cudaErrorInvalidValue;
+  size_t most = 0;
+  for (int e = 0; e < entries; ++e) most = std::max(most, list.entry[e].count);
+  const dim3 grid(blocks_for(static_cast<long long>(std::max<size_t>(most, 1)), kBlock, 1024), static_cast<unsigned>(entries));
+  copy_kernel<<<grid, kBlock, 0, stream>>>(list);
   return cudaGetLastError();
 }
 
@@ -582,9 +722,11 @@ cudaError_t tall_times_two(int rows, int k, const double2* A, const double2* B, 
   return cudaGetLastError();
 }
 
-cudaError_t tall_adjoint_times_two(int rows, int k, const double2* A, const double2* B, double2* C, cudaStream_t stream) {
+cudaError_t tall_adjoint_times_two(int rows, int k, const double2* A, const double2* B, double2* C, cudaStream_t stream,
+                                   const ReducedGradient& then) {
   if (k <= 0) return cudaSuccess;
-  tall_adjoint_times_two_kernel<<<static_cast<unsigned>(k), kAdjointThreads, 0, stream>>>(rows, k, A, B, C);
+  if (then.g && (!then.T || !then.done || then.m < 1)) return cudaErrorInvalidValue;
+  tall_adjoint_times_two_kernel<<<static_cast<unsigned>(k), kAdjointThreads, 0, stream>>>(rows, k, A, B, C, then);
   return cudaGetLastError();
 }
 

@@ -25,17 +25,22 @@ cudaError_t loadable();
 // D_H = the rows H of D (G × n), column-major |H| × n.
 cudaError_t gather_rows(int G, int h, int n, const double2* D, const int* H, double2* DH, cudaStream_t stream);
 
+// The reductions below are one launch each: every block writes its partial results,
+// and the block that finishes last (counted on `done`, a device counter that must be 0
+// before the launch and is 0 again after it) sums them in a fixed order, so the result
+// is deterministic. Launches that share a counter must not overlap (one stream).
+//
 // *out = mean over G of the sample energies at a + s·da, b + s·db (dab unread when
-// s = 0), +inf if any sample is folded or degenerate. Two passes through part_sum and
-// part_bad (reduction_blocks(G) entries each): deterministic.
+// s = 0), +inf if any sample is folded or degenerate. part_sum and part_bad:
+// reduction_blocks(G) entries each.
 cudaError_t mean_energy(int G, const double* g, const double2* ab, const double2* dab, double s, double* part_sum,
-                        int* part_bad, double* out, cudaStream_t stream);
+                        int* part_bad, unsigned* done, double* out, cudaStream_t stream);
 
 // out[k] = mean_energy at steps[k] for k < count ≤ kMaxSteps, the steps read from device
 // memory (so that a CUDA graph replays it with new steps); each value bit for bit what
 // mean_energy gives. part_sum and part_bad: count · reduction_blocks(G) entries.
 cudaError_t mean_energies(int G, const double* g, const double2* ab, const double2* dab, const double* steps, int count,
-                          double* part_sum, int* part_bad, double* out, cudaStream_t stream);
+                          double* part_sum, int* part_bad, unsigned* done, double* out, cudaStream_t stream);
 
 // gab = per-sample (∂e/∂Re a + i ∂e/∂Im a, ∂e/∂Re b + i ∂e/∂Im b); zero where e = +inf.
 cudaError_t gradient_samples(int G, const double* g, const double2* ab, double2* gab, cudaStream_t stream);
@@ -50,8 +55,9 @@ cudaError_t weighted_rows(int G, int h, int n, const int* H, const double* g, co
 cudaError_t real_hessian(int n, const double2* R, double count, double* Hv, cudaStream_t stream);
 
 // *out = min over G of the first s > 0 with |a + s da| = |b + s db| (+inf if none).
-// part_min: reduction_blocks(G) entries.
-cudaError_t max_safe_step(int G, const double2* ab, const double2* dab, double* part_min, double* out, cudaStream_t stream);
+// part_min: reduction_blocks(G) entries; done as above.
+cudaError_t max_safe_step(int G, const double2* ab, const double2* dab, double* part_min, unsigned* done, double* out,
+                          cudaStream_t stream);
 
 // The reduced system's small helpers (one block each, deterministic):
 // *out = Σ a_i b_i; *out = max_i |A_ii| (A n × n column-major); A = A0 + ridge·I.
@@ -62,7 +68,21 @@ cudaError_t add_ridge(int n, const double* A0, double ridge, double* A, cudaStre
 // ZGEMM computes them but not launch- and split-bound at these shapes: C = A·B (B k × 2,
 // C rows × 2) and C = Aᴴ·B (B rows × 2, C k × 2). Deterministic.
 cudaError_t tall_times_two(int rows, int k, const double2* A, const double2* B, double2* C, cudaStream_t stream);
-cudaError_t tall_adjoint_times_two(int rows, int k, const double2* A, const double2* B, double2* C, cudaStream_t stream);
+// With `then.g`, the same launch's last block (done: the counter of the one-launch
+// reductions above) goes on to the reduced gradient g = scale · Tᵀ c (c = C read as 4k
+// reals, T 4k × m column-major) and, with `then.a`, the gradient's part of
+// horizontal_system (a kept system's, chord steps): g_T −= (g_dim/|u|²) a, then g_dim = 0.
+struct ReducedGradient {
+  const double* T = nullptr;
+  int m = 0;
+  double scale = 1;
+  double* g = nullptr;
+  const double* a = nullptr;
+  int dim = 0;
+  unsigned* done = nullptr;
+};
+cudaError_t tall_adjoint_times_two(int rows, int k, const double2* A, const double2* B, double2* C, cudaStream_t stream,
+                                   const ReducedGradient& then = {});
 // g (G metrics) = Σ_j w_j keys_j, or metric_exp of it with `exponential` (K sets of G
 // metrics, w K weights on the device; zero weights skipped). NewtonCore::blend_targets.
 cudaError_t blend_metrics(int G, int K, const double* keys, const double* w, bool exponential, double* g, cudaStream_t stream);
@@ -72,13 +92,42 @@ cudaError_t trial_point(int n, const double* x, const double* d, const double* s
 // The exact system modulo the rotation in place (device_newton.cpp, linearize), A
 // (dim+1)² and g (dim+1), with a = Tᵀu (dim+1; a[dim] = |u|²): A_TT −= (a kᵀ + k aᵀ)/|u|²
 // − c a aᵀ/|u|⁴ (k = column dim of A, c = A_dim,dim), g_T −= (g_dim/|u|²) a, then row and
-// column dim of A and g_dim cleared.
-cudaError_t horizontal_system(int dim, double* A, const double* a, double* g, cudaStream_t stream);
-// The gradient's part of horizontal_system alone (a kept system's, chord steps):
-// g_T −= (g_dim/|u|²) a, then g_dim = 0.
-cudaError_t horizontal_gradient(int dim, const double* a, double* g, cudaStream_t stream);
-// d[dim] = −(Σ_{i<dim} a_i d_i) / a[dim]: the rotation's share of that system's step.
-cudaError_t rotation_angle(int dim, const double* a, double* d, cudaStream_t stream);
+// column dim of A and g_dim cleared; then *diag = max_i |A_ii| (diag_abs_max), also put
+// at A_dim,dim (so the (dim+1) system solves the dim one with d[dim] = 0).
+cudaError_t horizontal_system(int dim, double* A, const double* a, double* g, double* diag, cudaStream_t stream);
+// The solve's right-hand side d = −g (m entries), with info[0] = info[1] = 0.
+cudaError_t negate(int m, const double* g, double* d, int* info, cudaStream_t stream);
+// After the solve (one block): with `rotation`, d[dim] = −(Σ_{i<dim} a_i d_i) / a[dim] (the
+// rotation's share of the system modulo the rotation); then *slope = gᵀd over m entries
+// and *gnorm2 = |g|² over the first dim, each summed as dot() sums.
+cudaError_t step_scalars(int dim, int m, bool rotation, const double* a, const double* g, double* d, double* slope, double* gnorm2,
+                         cudaStream_t stream);
+// y = y0 + A x for a real column-major A (rows × cols) and x = x0 + (*step)·dx (x0 alone
+// without dx), deterministic (fixed slices of the columns summed in order). Options: a
+// second product with the same x in the same launch (second_A, second_rows × cols, into
+// second_y, no y0), and x written to x_copy (cols entries). One launch where cuBLAS's
+// GEMV plus the copies and point updates around it took two to four.
+struct TallOptions {
+  const double* y0 = nullptr;
+  const double* dx = nullptr;
+  const double* step = nullptr;  // device scalar, with dx
+  double* x_copy = nullptr;
+  const double* second_A = nullptr;
+  int second_rows = 0;
+  double* second_y = nullptr;
+};
+cudaError_t tall_times_one(int rows, int cols, const double* A, const double* x, double* y, cudaStream_t stream,
+                           const TallOptions& options = {});
+// Up to kMax device-to-device copies of doubles in one launch.
+struct CopyList {
+  static constexpr int kMax = 4;
+  struct Entry {
+    const double* src = nullptr;
+    double* dst = nullptr;
+    size_t count = 0;
+  } entry[kMax];
+};
+cudaError_t copy(const CopyList& list, int entries, cudaStream_t stream);
 // x = MapSpace::regauge(v) for v (4n, active coefficients) into x (dim).
 cudaError_t regauge(int dim, int n, int rotation_vertex, const int* primary_rows, const double* v, double* x,
                     cudaStream_t stream);
