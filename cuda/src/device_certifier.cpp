@@ -60,7 +60,6 @@ void DeviceCertifier::set_up(const Cage& cage, const CertificateSegments& seg, c
   abs_coef_ = DeviceArray<double>(2 * sz(M_));
   lip_ = DeviceArray<double>(2 * sz(S_));
   outcomes_ = DeviceArray<kernels::SegmentOutcome>(sz(S_));
-  summary_ = DeviceArray<kernels::CertifySummary>(1);
   partials_ = DeviceArray<unsigned char>(kernels::reduce_partials_bytes());
   stop_ = DeviceArray<int>(1);
   done_ = DeviceArray<unsigned>(1);
@@ -136,8 +135,8 @@ void DeviceCertifier::enqueue(const double2* coef, const CertificateOptions& opt
   HSI_CUDA_CHECK(kernels::certify_segments(cage_view(), segments_view(), coef, values_.get(), errs_.get(), lip_.get(),
                                            rows_->touches.get(), options.max_depth, options.max_pieces_per_segment, stop,
                                            outcomes_.get(), s));
-  HSI_CUDA_CHECK(kernels::reduce_certificate(S_, outcomes_.get(), values_.get(), partials_.get(), done_.get(), summary_.get(), s));
-  HSI_CUDA_CHECK(cudaMemcpyAsync(summary_down_.get(), summary_.get(), sizeof(kernels::CertifySummary), cudaMemcpyDeviceToHost, s));
+  // The summary straight into pinned host memory (mapped: no copy), read by fetch().
+  HSI_CUDA_CHECK(kernels::reduce_certificate(S_, outcomes_.get(), values_.get(), partials_.get(), done_.get(), summary_down_.get(), s));
 }
 
 CertificateResult DeviceCertifier::fetch() {

@@ -66,7 +66,6 @@ class DeviceCertifier {
   DeviceArray<double> abs_coef_;   // [|φ| | |ψ|], M × 2
   DeviceArray<double> lip_;        // S × 2
   DeviceArray<kernels::SegmentOutcome> outcomes_;
-  DeviceArray<kernels::CertifySummary> summary_;
   DeviceArray<unsigned char> partials_;  // the summary's first pass
   DeviceArray<int> stop_;
   DeviceArray<unsigned> done_;     // reduce_certificate's counter: 0 between launches

@@ -183,8 +183,7 @@ class DeviceStepper final : public NewtonStepper {
       HSI_CUDA_CHECK(cudaMemcpyAsync(S_.xa.get(), S_.x_up.get(), sz(dim) * sizeof(double), cudaMemcpyHostToDevice, st()));
       set_coefficients();
       HSI_CUDA_CHECK(kernels::mean_energy(c_.G_, c_.g_.get(), c_.ab_.get(), c_.dab_.get(), 0.0, c_.part_sum_.get(),
-                                          c_.part_bad_.get(), c_.done_.get(), S_.sc.get() + kEnergy0, st()));
-      HSI_CUDA_CHECK(cudaMemcpyAsync(S_.sc_down.get() + kEnergy0, S_.sc.get() + kEnergy0, sizeof(double), cudaMemcpyDeviceToHost, st()));
+                                          c_.part_bad_.get(), c_.done_.get(), down(kEnergy0), st()));
     });
     HSI_CUDA_CHECK(cudaStreamSynchronize(st()));  // also frees x_up
     trial_step_ = std::numeric_limits<double>::quiet_NaN();
@@ -298,10 +297,7 @@ class DeviceStepper final : public NewtonStepper {
       S_.graphs.run(key(kTrialEnergies, static_cast<std::uint64_t>(count)), st(), [&] {
         copy_params(kSteps, count);
         HSI_CUDA_CHECK(kernels::mean_energies(c_.G_, c_.g_.get(), c_.ab_.get(), c_.dab_.get(), S_.sc.get() + kSteps, count,
-                                              c_.part_sum_.get(), c_.part_bad_.get(), c_.done_.get(), S_.sc.get() + kTrials,
-                                              st()));
-        HSI_CUDA_CHECK(cudaMemcpyAsync(S_.sc_down.get() + kTrials, S_.sc.get() + kTrials, sz(count) * sizeof(double),
-                                       cudaMemcpyDeviceToHost, st()));
+                                              c_.part_sum_.get(), c_.part_bad_.get(), c_.done_.get(), down(kTrials), st()));
       });
       params_read();
       HSI_CUDA_CHECK(cudaStreamSynchronize(st()));
@@ -360,6 +356,10 @@ class DeviceStepper final : public NewtonStepper {
 
  private:
   cudaStream_t st() const { return c_.stream_; }
+  // A scalar slot's pinned host copy, written by the kernels themselves (pinned memory is
+  // mapped into the device's address space at the same address under unified
+  // addressing): no copy node per call; read after the call's synchronisation.
+  double* down(Slot s) const { return S_.sc_down.get() + s; }
 
   // The pinned parameter slots are written only once the graph that last copied from
   // them has run past that copy.
@@ -434,11 +434,10 @@ class DeviceStepper final : public NewtonStepper {
       HSI_CUDA_CHECK(cublasDgemv(c_.blas_, CUBLAS_OP_T, 4 * n, m_, &kOneD, S_.Ta.get(), 4 * n, S_.Ta.get() + sz(4 * n) * sz(dim), 1,
                                  &kZeroD, S_.tmp.get(), 1));
       // (and max |diag| into kDiagMax and the cleared diagonal entry)
-      HSI_CUDA_CHECK(kernels::horizontal_system(dim, S_.Hr0.get(), S_.tmp.get(), S_.g.get(), S_.sc.get() + kDiagMax, st()));
+      HSI_CUDA_CHECK(kernels::horizontal_system(dim, S_.Hr0.get(), S_.tmp.get(), S_.g.get(), down(kDiagMax), st()));
     } else {
-      HSI_CUDA_CHECK(kernels::diag_abs_max(m_, S_.Hr0.get(), S_.sc.get() + kDiagMax, st()));
+      HSI_CUDA_CHECK(kernels::diag_abs_max(m_, S_.Hr0.get(), down(kDiagMax), st()));
     }
-    HSI_CUDA_CHECK(cudaMemcpyAsync(S_.sc_down.get() + kDiagMax, S_.sc.get() + kDiagMax, sizeof(double), cudaMemcpyDeviceToHost, st()));
   }
 
   void enqueue_solve() {
@@ -474,24 +473,23 @@ class DeviceStepper final : public NewtonStepper {
     }
     // With the system modulo the rotation θ = −aᵀd / |u|² into d[dim] (0 from the
     // decoupled solve); then the slope gᵀd and |g|²: one launch.
-    HSI_CUDA_CHECK(kernels::step_scalars(dim, m, horizontal_, S_.tmp.get(), S_.g.get(), S_.d.get(), S_.sc.get() + kSlope,
-                                         S_.sc.get() + kGradNorm2, st()));
+    HSI_CUDA_CHECK(kernels::step_scalars(dim, m, horizontal_, S_.tmp.get(), S_.g.get(), S_.d.get(), down(kSlope), down(kGradNorm2),
+                                         info, reinterpret_cast<int*>(down(kInfo)), st()));
     if (quad_) {  // the quadratic term along d: q(x + s d) = q0 + s q1 + ½ s² q2
       HSI_CUDA_CHECK(cublasDgemv(c_.blas_, CUBLAS_OP_N, dim, dim, &kOneD, S_.Q.get(), dim, S_.xa.get(), 1, &kZeroD, S_.tmp.get(), 1));
-      HSI_CUDA_CHECK(kernels::dot(dim, S_.xa.get(), S_.tmp.get(), S_.sc.get() + kQuad0, st()));
-      HSI_CUDA_CHECK(kernels::dot(dim, S_.c.get(), S_.xa.get(), S_.sc.get() + kScratch, st()));
+      HSI_CUDA_CHECK(kernels::dot(dim, S_.xa.get(), S_.tmp.get(), down(kQuad0), st()));
+      HSI_CUDA_CHECK(kernels::dot(dim, S_.c.get(), S_.xa.get(), down(kScratch), st()));
       HSI_CUDA_CHECK(cublasDaxpy(c_.blas_, dim, &kOneD, S_.c.get(), 1, S_.tmp.get(), 1));
-      HSI_CUDA_CHECK(kernels::dot(dim, S_.tmp.get(), S_.d.get(), S_.sc.get() + kQuad1, st()));
+      HSI_CUDA_CHECK(kernels::dot(dim, S_.tmp.get(), S_.d.get(), down(kQuad1), st()));
       HSI_CUDA_CHECK(cublasDgemv(c_.blas_, CUBLAS_OP_N, dim, dim, &kOneD, S_.Q.get(), dim, S_.d.get(), 1, &kZeroD, S_.tmp.get(), 1));
-      HSI_CUDA_CHECK(kernels::dot(dim, S_.d.get(), S_.tmp.get(), S_.sc.get() + kQuad2, st()));
+      HSI_CUDA_CHECK(kernels::dot(dim, S_.d.get(), S_.tmp.get(), down(kQuad2), st()));
     }
     // Direction in the samples, [dφ | dψ] = Tca d, and the largest safe step along it.
     HSI_CUDA_CHECK(cublasDgemv(c_.blas_, CUBLAS_OP_N, 4 * n, m, &kOneD, S_.Tca.get(), 4 * n, S_.d.get(), 1, &kZeroD,
                                reinterpret_cast<double*>(c_.coef_.get()), 1));
     HSI_CUDA_CHECK(kernels::tall_times_two(c_.G_, n, c_.D_, c_.coef_.get(), c_.dab_.get(), st()));
     HSI_CUDA_CHECK(kernels::max_safe_step(c_.G_, c_.ab_.get(), c_.dab_.get(), c_.part_sum_.get(), c_.done_.get(),
-                                          S_.sc.get() + kSafeStep, st()));
-    HSI_CUDA_CHECK(cudaMemcpyAsync(S_.sc_down.get(), S_.sc.get(), kTrials * sizeof(double), cudaMemcpyDeviceToHost, st()));
+                                          down(kSafeStep), st()));
   }
 
   // ab = D · (Tc x) at the device's current x; with `from`, x ← from first (the same

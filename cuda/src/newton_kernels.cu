@@ -476,7 +476,9 @@ __global__ void negate_kernel(int m, const double* __restrict__ g, double* __res
 // then slope = Σ_{i<m} g_i d_i and gnorm2 = Σ_{i<dim} g_i², each summed as dot_kernel sums.
 __global__ void __launch_bounds__(kBlock) step_scalars_kernel(int dim, int m, bool rotation, const double* __restrict__ a,
                                                               const double* __restrict__ g, double* __restrict__ d,
-                                                              double* __restrict__ slope, double* __restrict__ gnorm2) {
+                                                              double* __restrict__ slope, double* __restrict__ gnorm2,
+                                                              const int* __restrict__ info, int* __restrict__ info_out) {
+  if (info_out && threadIdx.x < 2) info_out[threadIdx.x] = info[threadIdx.x];
   int bad = 0;
   if (rotation) {
     double sum = 0;
@@ -692,8 +694,8 @@ cudaError_t negate(int m, const double* g, double* d, int* info, cudaStream_t st
 }
 
 cudaError_t step_scalars(int dim, int m, bool rotation, const double* a, const double* g, double* d, double* slope, double* gnorm2,
-                         cudaStream_t stream) {
-  step_scalars_kernel<<<1, kBlock, 0, stream>>>(dim, m, rotation, a, g, d, slope, gnorm2);
+                         const int* info, int* info_out, cudaStream_t stream) {
+  step_scalars_kernel<<<1, kBlock, 0, stream>>>(dim, m, rotation, a, g, d, slope, gnorm2, info, info_out);
   return cudaGetLastError();
 }
 

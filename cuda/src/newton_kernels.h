@@ -64,6 +64,8 @@ cudaError_t max_safe_step(int G, const double2* ab, const double2* dab, double* 
 cudaError_t dot(int n, const double* a, const double* b, double* out, cudaStream_t stream);
 cudaError_t diag_abs_max(int n, const double* A, double* out, cudaStream_t stream);
 cudaError_t add_ridge(int n, const double* A0, double ridge, double* A, cudaStream_t stream);
+// Every scalar output above may be pinned host memory (mapped at the same address under
+// unified addressing): the result then needs no copy.
 // Products of a tall complex matrix A (rows × k, column-major) with two columns, as
 // ZGEMM computes them but not launch- and split-bound at these shapes: C = A·B (B k × 2,
 // C rows × 2) and C = Aᴴ·B (B rows × 2, C k × 2). Deterministic.
@@ -99,9 +101,10 @@ cudaError_t horizontal_system(int dim, double* A, const double* a, double* g, do
 cudaError_t negate(int m, const double* g, double* d, int* info, cudaStream_t stream);
 // After the solve (one block): with `rotation`, d[dim] = −(Σ_{i<dim} a_i d_i) / a[dim] (the
 // rotation's share of the system modulo the rotation); then *slope = gᵀd over m entries
-// and *gnorm2 = |g|² over the first dim, each summed as dot() sums.
+// and *gnorm2 = |g|² over the first dim, each summed as dot() sums; info_out[0..1] =
+// info[0..1] (the statuses, read after the solves) where info_out is given.
 cudaError_t step_scalars(int dim, int m, bool rotation, const double* a, const double* g, double* d, double* slope, double* gnorm2,
-                         cudaStream_t stream);
+                         const int* info, int* info_out, cudaStream_t stream);
 // y = y0 + A x for a real column-major A (rows × cols) and x = x0 + (*step)·dx (x0 alone
 // without dx), deterministic (fixed slices of the columns summed in order). Options: a
 // second product with the same x in the same launch (second_A, second_rows × cols, into
