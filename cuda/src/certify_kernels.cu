@@ -1,6 +1,7 @@
 // The certificate's kernels (see certify_kernels.h), line for line the arithmetic of
 // engine/src/certificate.cpp so that both backends reach the same verdicts.
 #include "certify_kernels.h"
+#include "one_launch.cuh"
 
 #include <algorithm>
 
@@ -317,18 +318,8 @@ __global__ void __launch_bounds__(kReduceThreads) reduce_kernel(int S, const Seg
     fold_combine(f, g);
   }
   const Fold block = block_fold(f);
-  __shared__ bool last;
-  if (threadIdx.x == 0) {
-    partials[blockIdx.x] = block;
-    __threadfence();  // the partial is visible device-wide before this block counts
-    last = atomicAdd(done, 1u) == gridDim.x - 1;
-    if (last) {
-      *done = 0;
-      __threadfence();
-    }
-  }
-  __syncthreads();
-  if (!last) return;
+  if (threadIdx.x == 0) partials[blockIdx.x] = block;
+  if (!last_block_done(done)) return;
   const int t = static_cast<int>(threadIdx.x), parts = static_cast<int>(gridDim.x);
   const Fold r = block_fold(t < parts ? load_fold(partials + t) : fold_identity(S));
   if (t == 0) {

@@ -2,6 +2,7 @@
 // projected Hessian weights and safe step from sample_math.cuh, block reductions with
 // fixed per-block partials (no atomics, deterministic), and the Hessian's layout maps.
 #include "newton_kernels.h"
+#include "one_launch.cuh"
 
 #include <algorithm>
 
@@ -56,27 +57,6 @@ __device__ void block_min(double& v) {
     v = lane < warps ? s_min[lane] : sample::infinity();
     for (int o = 16; o > 0; o >>= 1) v = fmin(v, __shfl_down_sync(0xffffffffu, v, o));
   }
-}
-
-// Called by every thread of a block after its thread 0 wrote the block's partial
-// results: true, in every thread, in the block that counted last, whose threads may
-// then read every block's partials; that block also sets the counter back to 0 for the
-// next launch (every block has counted by then). One launch instead of a partials pass
-// and a finishing pass: the partials are summed by one block in a fixed order, so the
-// result does not depend on which block came last. Partials are read with __ldcg (from
-// L2, where the other blocks' writes are, never a stale L1 line).
-__device__ bool last_block_done(unsigned* __restrict__ done) {
-  __shared__ bool last;
-  if (threadIdx.x == 0) {
-    __threadfence();  // this block's partials are visible device-wide before it counts
-    last = atomicAdd(done, 1u) == gridDim.x - 1;
-    if (last) {
-      *done = 0;
-      __threadfence();  // the other blocks' partials, counted before, are read after this
-    }
-  }
-  __syncthreads();
-  return last;
 }
 
 // The finishing pass of a mean: `parts` partials from `base` on, summed in thread
@@ -527,35 +507,38 @@ __global__ void __launch_bounds__(kBlock) horizontal_clear_diag_kernel(int dim, 
 
 // y = y0 + A x for real column-major A (rows × cols, leading dimension rows), with
 // x = x0 + (*step)·dx where dx is given (else x0); blockIdx.z picks one of two products
-// sharing x. A block is kTallRows rows × kTallSlices slices of the columns, each thread
+// sharing x. A block is kTallRows rows × kOneSlices slices of the columns, each thread
 // summing its slice in order, then the block the slices in order (deterministic). Block
-// (0, 0) also writes x into x_copy where given.
+// (0, 0) also writes x into x_copy where given. The products are short (a few hundred
+// rows: a few blocks), so each block splits the columns finely (32 slices of ~10) to keep
+// its chain of dependent loads short.
 struct RealProduct {
   const double* A;
   const double* y0;  // null: 0
   double* y;
   int rows;
 };
-__global__ void __launch_bounds__(kTallRows* kTallSlices)
+constexpr int kOneSlices = 32;
+__global__ void __launch_bounds__(kTallRows* kOneSlices)
     tall_times_one_kernel(RealProduct p0, RealProduct p1, int cols, const double* __restrict__ x0, const double* __restrict__ dx,
                           const double* __restrict__ step, double* __restrict__ x_copy) {
-  __shared__ double part[kTallSlices][kTallRows];
+  __shared__ double part[kOneSlices][kTallRows];
   const RealProduct& p = blockIdx.z == 0 ? p0 : p1;
   const int tx = static_cast<int>(threadIdx.x), ty = static_cast<int>(threadIdx.y);
   const int i = static_cast<int>(blockIdx.x) * kTallRows + tx;
   const double s = dx ? *step : 0.0;
   auto x_at = [&](int j) { return dx ? x0[j] + s * dx[j] : x0[j]; };
   if (x_copy && blockIdx.x == 0 && blockIdx.z == 0)
-    for (int j = ty * kTallRows + tx; j < cols; j += kTallRows * kTallSlices) x_copy[j] = x_at(j);
+    for (int j = ty * kTallRows + tx; j < cols; j += kTallRows * kOneSlices) x_copy[j] = x_at(j);
   if (static_cast<int>(blockIdx.x) * kTallRows >= p.rows) return;  // the shorter product's spare blocks (whole block)
   double c = 0;
   if (i < p.rows)
-    for (int j = ty; j < cols; j += kTallSlices) c += p.A[static_cast<size_t>(j) * static_cast<size_t>(p.rows) + static_cast<size_t>(i)] * x_at(j);
+    for (int j = ty; j < cols; j += kOneSlices) c += p.A[static_cast<size_t>(j) * static_cast<size_t>(p.rows) + static_cast<size_t>(i)] * x_at(j);
   part[ty][tx] = c;
   __syncthreads();
   if (ty == 0 && i < p.rows) {
     double y = 0;
-    for (int q = 0; q < kTallSlices; ++q) y += part[q][tx];
+    for (int q = 0; q < kOneSlices; ++q) y += part[q][tx];
     p.y[i] = p.y0 ? p.y0[i] + y : y;
   }
 }
@@ -703,7 +686,7 @@ cudaError_t tall_times_one(int rows, int cols, const double* A, const double* x,
                            const TallOptions& o) {
   const int rows1 = o.second_A ? o.second_rows : 0;
   const RealProduct p0{A, o.y0, y, rows}, p1{o.second_A ? o.second_A : A, nullptr, o.second_A ? o.second_y : y, rows1};
-  const dim3 block(kTallRows, kTallSlices);
+  const dim3 block(kTallRows, kOneSlices);
   const dim3 grid(blocks_for(std::max(rows, rows1), kTallRows, 1LL << 30), 1, o.second_A ? 2 : 1);
   tall_times_one_kernel<<<grid, block, 0, stream>>>(p0, p1, cols, x, o.dx, o.step, o.x_copy);
   return cudaGetLastError();
