@@ -1,6 +1,7 @@
 // The CUDA Newton core's kernels (see newton_kernels.h): per-sample energy, gradient,
 // projected Hessian weights and safe step from sample_math.cuh, block reductions with
-// fixed per-block partials (no atomics, deterministic), and the Hessian's layout maps.
+// fixed per-block partials summed in a fixed order (deterministic; one atomic counter
+// only picks the block that finishes them, one_launch.cuh), and the Hessian's layout maps.
 #include "newton_kernels.h"
 #include "one_launch.cuh"
 
@@ -452,7 +453,7 @@ __global__ void negate_kernel(int m, const double* __restrict__ g, double* __res
   }
 }
 
-// One block: with the rotation freed d[dim] = −(Σ_{i<dim} a_i d_i)/a[dim] (rotation_angle),
+// One block: with the rotation freed d[dim] = −(Σ_{i<dim} a_i d_i)/a[dim] (the rotation's share),
 // then slope = Σ_{i<m} g_i d_i and gnorm2 = Σ_{i<dim} g_i², each summed as dot_kernel sums.
 __global__ void __launch_bounds__(kBlock) step_scalars_kernel(int dim, int m, bool rotation, const double* __restrict__ a,
                                                               const double* __restrict__ g, double* __restrict__ d,
