@@ -22,7 +22,10 @@ namespace hsi::cuda {
 
 namespace {
 constexpr int kBatch = kernels::kMaxSteps;  // trial energies per download (NewtonStepper asks for up to this many)
-// Scalar slots of DeviceSpace::sc.
+// Scalar slots, one index space for DeviceSpace::sc (device) and sc_down (pinned host).
+// The results before kTrials + kBatch are written by the kernels straight into sc_down
+// (down()), except kInfo, which potrf and potrs write in sc and step_scalars copies down;
+// the per-call numbers from kRidge on are copied into sc from DeviceSpace::params.
 enum Slot {
   kSlope = 0,
   kGradNorm2 = 1,
@@ -33,7 +36,7 @@ enum Slot {
   kQuad1 = 6,  // (Q x + c)ᵀ d
   kQuad2 = 7,  // dᵀ Q d
   kScratch = 8,
-  kInfo = 9,  // two ints: the factor's and the triangular solves' status (copied down with the scalars)
+  kInfo = 9,  // two ints: the factor's and the triangular solves' status
   kTrials = 10,
   kRidge = kTrials + kBatch,  // the per-call numbers, copied in from DeviceSpace::params
   kStep = kRidge + 1,

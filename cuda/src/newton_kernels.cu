@@ -480,8 +480,8 @@ __global__ void __launch_bounds__(kBlock) step_scalars_kernel(int dim, int m, bo
 }
 
 // One block, after horizontal_block_kernel: g_i −= (g_dim/uu) a_i, row and column dim of
-// A and g_dim cleared (horizontal_clear_kernel), then max_i |A_ii| over the m × m system
-// (diag_max_kernel's order) into *diag and into A_dim,dim.
+// A and g_dim cleared, then max_i |A_ii| over the m × m system (diag_max_kernel's order)
+// into *diag and into A_dim,dim.
 __global__ void __launch_bounds__(kBlock) horizontal_clear_diag_kernel(int dim, int m, double* __restrict__ A,
                                                                        const double* __restrict__ a, double* __restrict__ g,
                                                                        double* __restrict__ diag) {
