@@ -242,6 +242,40 @@ __global__ void gather_rows_kernel(int G, int h, int n, const double2* __restric
     DH[static_cast<size_t>(j) * h + k] = D[static_cast<size_t>(j) * G + s];
 }
 
+// One block: Σ_{i<n} a_i b_i, each thread summing its entries in order, then
+// block_sum_bad's tree; valid in thread 0. Every thread of the block calls it; a second
+// call in the same kernel needs a __syncthreads() between (the tree's shared slots).
+__device__ double block_dot(int n, const double* __restrict__ a, const double* __restrict__ b) {
+  double sum = 0;
+  int bad = 0;
+  for (int i = static_cast<int>(threadIdx.x); i < n; i += static_cast<int>(blockDim.x)) sum += a[i] * b[i];
+  block_sum_bad(sum, bad);
+  return sum;
+}
+
+// One block: max_i |A_ii| over an n × n column-major matrix, valid in thread 0 (the
+// same contract as block_dot).
+__device__ double block_diag_abs_max(int n, const double* __restrict__ A) {
+  double v = 0;
+  for (int i = static_cast<int>(threadIdx.x); i < n; i += static_cast<int>(blockDim.x))
+    v = fmax(v, fabs(A[static_cast<size_t>(i) * static_cast<size_t>(n) + static_cast<size_t>(i)]));
+  v = -v;  // block_min of −|A_ii|
+  block_min(v);
+  return -v;
+}
+
+// One block: the gradient made horizontal, g_i −= (g_dim / a_dim) a_i for i < dim and
+// g_dim = 0 (dim + 1 entries). Every thread of the block calls it; g is fully written
+// once the caller's next __syncthreads() has passed.
+__device__ void block_horizontal_gradient(int dim, const double* __restrict__ a, double* __restrict__ g) {
+  const double f = g[dim] / a[dim];
+  __syncthreads();  // every thread has read g[dim] before it is cleared
+  for (int i = static_cast<int>(threadIdx.x); i <= dim; i += static_cast<int>(blockDim.x)) {
+    if (i < dim) g[i] -= f * a[i];
+    else g[i] = 0;
+  }
+}
+
 unsigned blocks_for(long long count, long long per_block, long long cap) {
   return static_cast<unsigned>(std::clamp((count + per_block - 1) / per_block, 1LL, cap));
 }
@@ -250,20 +284,13 @@ unsigned blocks_for(long long count, long long per_block, long long cap) {
 // One block: Σ a_i b_i over n entries (fixed order per thread, then block_sum_bad's tree).
 __global__ void __launch_bounds__(kBlock) dot_kernel(int n, const double* __restrict__ a, const double* __restrict__ b,
                                                      double* __restrict__ out) {
-  double sum = 0;
-  int bad = 0;
-  for (int i = static_cast<int>(threadIdx.x); i < n; i += static_cast<int>(blockDim.x)) sum += a[i] * b[i];
-  block_sum_bad(sum, bad);
+  const double sum = block_dot(n, a, b);
   if (threadIdx.x == 0) *out = sum;
 }
 
 __global__ void __launch_bounds__(kBlock) diag_max_kernel(int n, const double* __restrict__ A, double* __restrict__ out) {
-  double v = 0;
-  for (int i = static_cast<int>(threadIdx.x); i < n; i += static_cast<int>(blockDim.x))
-    v = fmax(v, fabs(A[static_cast<size_t>(i) * static_cast<size_t>(n) + static_cast<size_t>(i)]));
-  v = -v;  // block_min of −|A_ii|
-  block_min(v);
-  if (threadIdx.x == 0) *out = -v;
+  const double v = block_diag_abs_max(n, A);
+  if (threadIdx.x == 0) *out = v;
 }
 
 __global__ void add_ridge_kernel(int n, const double* __restrict__ A0, double ridge, double* __restrict__ A) {
@@ -404,12 +431,7 @@ __global__ void __launch_bounds__(kAdjointThreads)
   }
   if (!epi.a) return;
   __syncthreads();  // every entry of g written
-  const double f = epi.g[epi.dim] / epi.a[epi.dim];  // then the horizontal part
-  __syncthreads();  // every thread has read g[dim] before it is cleared
-  for (int i = static_cast<int>(threadIdx.x); i <= epi.dim; i += static_cast<int>(blockDim.x)) {
-    if (i < epi.dim) epi.g[i] -= f * epi.a[i];
-    else epi.g[i] = 0;
-  }
+  block_horizontal_gradient(epi.dim, epi.a, epi.g);  // then the horizontal part
 }
 
 // Per sample: m = Σ_j w_j keys_j (j with w_j ≠ 0, in order), with `exponential`
@@ -460,23 +482,16 @@ __global__ void __launch_bounds__(kBlock) step_scalars_kernel(int dim, int m, bo
                                                               double* __restrict__ slope, double* __restrict__ gnorm2,
                                                               const int* __restrict__ info, int* __restrict__ info_out) {
   if (info_out && threadIdx.x < 2) info_out[threadIdx.x] = info[threadIdx.x];
-  int bad = 0;
   if (rotation) {
-    double sum = 0;
-    for (int i = static_cast<int>(threadIdx.x); i < dim; i += static_cast<int>(blockDim.x)) sum += a[i] * d[i];
-    block_sum_bad(sum, bad);
-    if (threadIdx.x == 0) d[dim] = -sum / a[dim];
-    __syncthreads();  // d[dim] written, block_sum_bad's slots free
+    const double ad = block_dot(dim, a, d);
+    if (threadIdx.x == 0) d[dim] = -ad / a[dim];
+    __syncthreads();  // d[dim] written, block_dot's slots free
   }
-  double sum = 0;
-  for (int i = static_cast<int>(threadIdx.x); i < m; i += static_cast<int>(blockDim.x)) sum += g[i] * d[i];
-  block_sum_bad(sum, bad);
-  if (threadIdx.x == 0) *slope = sum;
+  const double gd = block_dot(m, g, d);
+  if (threadIdx.x == 0) *slope = gd;
   __syncthreads();
-  sum = 0;
-  for (int i = static_cast<int>(threadIdx.x); i < dim; i += static_cast<int>(blockDim.x)) sum += g[i] * g[i];
-  block_sum_bad(sum, bad);
-  if (threadIdx.x == 0) *gnorm2 = sum;
+  const double gg = block_dot(dim, g, g);
+  if (threadIdx.x == 0) *gnorm2 = gg;
 }
 
 // One block, after horizontal_block_kernel: g_i −= (g_dim/uu) a_i, row and column dim of
@@ -485,24 +500,17 @@ __global__ void __launch_bounds__(kBlock) step_scalars_kernel(int dim, int m, bo
 __global__ void __launch_bounds__(kBlock) horizontal_clear_diag_kernel(int dim, int m, double* __restrict__ A,
                                                                        const double* __restrict__ a, double* __restrict__ g,
                                                                        double* __restrict__ diag) {
-  const double f = g[dim] / a[dim];
-  __syncthreads();  // every thread has read g[dim] before it is cleared
+  block_horizontal_gradient(dim, a, g);  // (m = dim + 1 entries)
   const size_t M = static_cast<size_t>(m), D = static_cast<size_t>(dim);
   for (int i = static_cast<int>(threadIdx.x); i < m; i += static_cast<int>(blockDim.x)) {
-    if (i < dim) g[i] -= f * a[i];
-    else g[i] = 0;
     A[D * M + static_cast<size_t>(i)] = 0;  // column dim
     A[static_cast<size_t>(i) * M + D] = 0;  // row dim
   }
   __syncthreads();  // the cleared entries are read below
-  double v = 0;
-  for (int i = static_cast<int>(threadIdx.x); i < m; i += static_cast<int>(blockDim.x))
-    v = fmax(v, fabs(A[static_cast<size_t>(i) * M + static_cast<size_t>(i)]));
-  v = -v;
-  block_min(v);
+  const double v = block_diag_abs_max(m, A);
   if (threadIdx.x == 0) {
-    *diag = -v;
-    A[D * M + D] = -v;
+    *diag = v;
+    A[D * M + D] = v;
   }
 }
 
