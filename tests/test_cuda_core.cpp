@@ -24,6 +24,7 @@
 #include "hsi/cuda/mesh_evaluator.h"
 #include "hsi/cuda/newton_core.h"
 #include "device.h"
+#include "dense_cholesky.h"
 #include "newton_kernels.h"
 #include "sample_math.cuh"
 #include "hsi/interpolation.h"
@@ -31,6 +32,7 @@
 #include "hsi/newton.h"
 #include "hsi/shape_setup.h"
 #include "frame_compare.h"
+#include "split_solve.h"
 #include "test_shapes.h"
 
 using namespace hsi;
@@ -638,6 +640,35 @@ TEST_CASE("the GPU certificate finds a zero of f_z inside and a fold between bre
 }
 
 // Small enough for compute-sanitizer: the device loop on a few frames.
+// decrement() then direction() (the loop's exact systems: the forward substitution alone,
+// then the back one and the direction) against solve() on the device stepper.
+TEST_CASE("the device stepper's split solve gives solve()'s system", "[cuda][small]") {
+  HSI_REQUIRE_GPU();
+  for (const auto& p : test::asset_scenes()) {
+    if (p.filename() != "annulus.json" && p.filename() != "bar_holes.json") continue;
+    INFO(p.filename().string());
+    AssetCores a(p);
+    const Eigen::VectorXd id = a.space().reduce(identity_map(a.setup->cage)).x;
+    const Eigen::VectorXd x_star = a.perturbed_identity(30, 0.03);
+    const std::vector<Metric> targets = a.metrics_of(x_star);
+    auto make = [&] {
+      test::CoreStepper m;
+      m.core = hsi::cuda::make_newton_core(*a.setup);
+      m.core->set_targets(targets);
+      m.stepper = m.core->make_stepper(a.space(), &a.setup->certifier, nullptr);
+      REQUIRE(m.stepper);
+      return m;
+    };
+    // Near the map the targets come from: the exact systems are definite there.
+    const test::SplitCounts c = test::check_split_solve(make, x_star + 0.05 * (id - x_star));
+    CHECK(c.factored >= 3);
+    // Split wherever the triangular solves are the cluster kernel (sm_90 and up; not with
+    // HSI_CUDA_SPLIT_SOLVE=0 or HSI_CUDA_SOLVE=cusolver).
+    if (hsi::cuda::split_solve_enabled() && !hsi::cuda::cusolver_solve_forced() && hsi::cuda::kernels::cholesky_solve_in_cluster(200))
+      CHECK(c.split == c.factored);
+  }
+}
+
 TEST_CASE("a short sequence solved on the GPU matches the CPU", "[cuda][small]") {
   HSI_REQUIRE_GPU();
   for (const auto& p : test::asset_scenes())

@@ -379,6 +379,19 @@ TEST_CASE("dense Cholesky: the solve with a given factor (cuSOLVER's potrf) agre
       HSI_CUDA_CHECK(cudaStreamSynchronize(stream));
       const Eigen::VectorXd again = sys.solution();
       CHECK(std::memcmp(again.data(), x.data(), static_cast<size_t>(m) * sizeof(double)) == 0);
+      // The two substitutions apart (the Newton decrement ‖L⁻¹b‖² before the direction):
+      // the forward one gives L⁻¹ b, and the back one after it the whole solve's bits.
+      sys.upload(b);
+      HSI_CUDA_CHECK(hk::cholesky_solve(m, sys.A.get(), lda, sys.b.get(), stream, hk::Substitution::Forward));
+      HSI_CUDA_CHECK(cudaStreamSynchronize(stream));
+      const Eigen::VectorXd y = sys.solution(), y_want = L.triangularView<Eigen::Lower>().solve(b);
+      CHECK((y - y_want).cwiseAbs().maxCoeff() <= (ill ? 1e-6 : 1e-12) * y_want.cwiseAbs().maxCoeff());
+      CHECK(std::abs(y.squaredNorm() - b.dot(want)) <= (ill ? 1e-6 : 1e-11) * std::abs(b.dot(want)));
+      HSI_CUDA_CHECK(hk::cholesky_solve(m, sys.A.get(), lda, sys.b.get(), stream, hk::Substitution::Back));
+      HSI_CUDA_CHECK(cudaStreamSynchronize(stream));
+      CHECK(sys.outside_lower_untouched());
+      const Eigen::VectorXd parts = sys.solution();
+      CHECK(std::memcmp(parts.data(), x.data(), static_cast<size_t>(m) * sizeof(double)) == 0);
     }
   }
 }

@@ -8,6 +8,7 @@
 #include "dense_kernels.h"
 #include "hsi/newton.h"
 #include "hsi/shape_setup.h"
+#include "split_solve.h"
 #include "test_shapes.h"
 
 using namespace hsi;
@@ -290,4 +291,29 @@ TEST_CASE("Newton refuses to start from a folded map", "[newton]") {
   CHECK(r.iterations == 0);
   CHECK_FALSE(r.converged);
   CHECK_THAT(r.message, Catch::Matchers::Contains("folds") || Catch::Matchers::Contains("not certified"));
+}
+
+// NewtonStepper::decrement then direction() (the loop's exact systems) against solve():
+// the decrement to round-off, then the same direction, trial energies and point.
+TEST_CASE("the host stepper's split solve gives solve()'s system", "[newton]") {
+  for (const Shape& s : {test::annulus(), test::bar_with_holes()}) {
+    const ShapeSetup setup(s, build_cage(s), 1000, 0.3);
+    const MapSpace& space = setup.metric_space;
+    const Eigen::VectorXd id = space.reduce(identity_map(setup.cage)).x;
+    Fixture fx(s, 1000, 0.3);
+    const Eigen::VectorXd x_star = fx.perturbed_identity(30, 0.03);
+    const std::vector<Metric> targets = fx.metrics_of(x_star);
+    auto make = [&] {
+      test::CoreStepper m;
+      m.core = make_cpu_newton_core(setup.D_G, setup.H);
+      m.core->set_targets(targets);
+      m.stepper = make_host_stepper(*m.core, space, &setup.certifier, nullptr);
+      return m;
+    };
+    // Near the map the targets come from (5 % of the way to the identity): the exact
+    // system is definite there.
+    const test::SplitCounts c = test::check_split_solve(make, x_star + 0.05 * (id - x_star));
+    CHECK(c.factored >= 3);
+    CHECK(c.split == c.factored);  // the host stepper splits every solve but a kept factor's
+  }
 }

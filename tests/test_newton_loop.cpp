@@ -120,6 +120,24 @@ struct FakeStepper : NewtonStepper {
     s.max_safe_step = std::numeric_limits<double>::infinity();
     return s;
   }
+  // A split solve (NewtonStepper::decrement / direction): the decrement first, with no
+  // direction (a NaN safe step that would poison a line search reached without one).
+  bool split = false;
+  int decrements = 0, directions = 0;
+  NewtonSystem pending;
+  NewtonSystem decrement(double ridge) override {
+    NewtonSystem s = solve(ridge);
+    if (!split || !s.factored) return s;
+    ++decrements;
+    pending = s;
+    s.has_direction = false;
+    s.max_safe_step = std::numeric_limits<double>::quiet_NaN();
+    return s;
+  }
+  NewtonSystem direction() override {
+    ++directions;
+    return pending;
+  }
   void trial_energies(std::span<const double> steps, std::span<double> out) override {
     for (size_t j = 0; j < steps.size(); ++j) out[j] = energy(x_ + steps[j] * d_);
   }
@@ -154,6 +172,40 @@ TEST_CASE("newton_run: a quadratic converges in one full step, then stops on the
   CHECK(f.choices[0].free_rotation);
   CHECK(f.choices[1].exact);  // and at the minimum it finds no descent left
   CHECK(r.message.find("no descent direction") != std::string::npos);
+}
+
+TEST_CASE("newton_run: an exact system's solve is split: its direction is made only where the decrement does not stop the solve",
+          "[newton][loop]") {
+  // A slow second coordinate and a cubic term: several exact systems before the stop.
+  auto run = [](bool split) {
+    FakeStepper f;
+    f.split = split;
+    f.A << 1, 0, 0, 1e-2;
+    f.projected_scale = {4, 4};  // a stiff projection: a short full step, then the exact systems
+    f.energy = [&f](const Eigen::Vector2d& x) { return 2 + 0.5 * (x - f.a).dot(f.A * (x - f.a)) + 0.2 * std::pow((x - f.a).norm(), 3); };
+    NewtonOptions o;
+    o.expand_ratio = 0;  // (the fake's quadratic model: keep the steps plain)
+    const NewtonResult r = newton_run(f, true, true, Eigen::Vector2d(0, 0), o);
+    return std::tuple{r, f.decrements, f.directions};
+  };
+  const auto [whole, d0, n0] = run(false);
+  const auto [split, decrements, directions] = run(true);
+  CHECK(d0 == 0);
+  CHECK(n0 == 0);
+  REQUIRE(split.converged);
+  INFO(split.message);
+  // (stopped on the exact system's decrement: below the tolerance, or no descent left)
+  CHECK((split.message.find("Newton decrement below tolerance") != std::string::npos ||
+         split.message.find("no descent direction left") != std::string::npos));
+  // The same solve either way; the stopping exact system made no direction, every other one did.
+  CHECK(split.iterations == whole.iterations);
+  CHECK(split.x == whole.x);
+  CHECK(split.energy == whole.energy);
+  int exact_steps = 0;
+  for (const NewtonIteration& it : split.log) exact_steps += it.exact_hessian;
+  CHECK(exact_steps >= 1);
+  CHECK(decrements == exact_steps + 1);
+  CHECK(directions == exact_steps);
 }
 
 TEST_CASE("newton_run: an indefinite exact system falls back to the projection; Delete and non-invariant energies keep the gauge",

@@ -58,6 +58,7 @@ struct DeviceSpace {
   GraphCache graphs{graphs_enabled()};  // the stepper's calls, one graph per call shape
   bool own_cholesky = own_cholesky_enabled();  // dense_cholesky.h instead of cuSOLVER (device_newton.cpp, solve)
   bool cusolver_solve = cusolver_solve_forced();  // potrs instead of dense_cholesky.h's cholesky_solve
+  bool split_solve = split_solve_enabled();  // decrement() splits the exact system's solve (device_newton.cpp)
   int lwork = 0;
   // A factor kept for chord steps (NewtonStepper::keep): cuSOLVER's lower factor, order
   // kept_order; kept_count counts the keeps, a KeptSystem's generation names its own.

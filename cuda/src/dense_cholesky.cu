@@ -454,9 +454,11 @@ __device__ __forceinline__ double row_times_warp_vector(const double (&x)[kT], d
   return s0 + s1;
 }
 
-// forward = false: b already holds L⁻¹ b (cholesky_factor_solve), only back substitution.
+// Which substitutions run (Substitution): Back alone when b already holds L⁻¹ b
+// (cholesky_factor_solve, or a Forward call before).
 __global__ void __launch_bounds__(kSolveThreads)
-    solve_kernel(int m, const double* __restrict__ L, int lda, double* b, int T, bool forward) {
+    solve_kernel(int m, const double* __restrict__ L, int lda, double* b, int T, Substitution part) {
+  const bool forward = part != Substitution::Back, back = part != Substitution::Forward;
   extern __shared__ double y[];  // 32T entries (zero past m), then the forward and back flags
   int* const ready_fwd = reinterpret_cast<int*>(y + kT * T);
   int* const ready_bwd = ready_fwd + T;
@@ -492,7 +494,7 @@ __global__ void __launch_bounds__(kSolveThreads)
   // Back: x_i = L_ii⁻ᵀ (y_i − Σ_{s>i} L_siᵀ x_s), from the last tile row up; lane r holds
   // row r of L_iiᵀ (column 32i + r of L: strided across lanes, each 32-byte sector
   // serving 4 rows from L1).
-  if (warp < T) {
+  if (back && warp < T) {
     for (int i = warp + ((T - 1 - warp) / kSolveWarps) * kSolveWarps; i >= 0; i -= kSolveWarps) {
       const int row = i * kT + lane;
       const bool valid = row < m;
@@ -587,7 +589,8 @@ __device__ __forceinline__ void wait_flag(const int* flag) {
 }
 
 __global__ void __cluster_dims__(kClusterBlocks, 1, 1) __launch_bounds__(kSolveClusterThreads)
-    solve_cluster(int m, const double* __restrict__ L, int lda, double* b, int T) {
+    solve_cluster(int m, const double* __restrict__ L, int lda, double* b, int T, Substitution part) {
+  const bool forward = part != Substitution::Back, back = part != Substitution::Forward;
   extern __shared__ double smem[];
   const cg::cluster_group cluster = cg::this_cluster();
   const int rank = static_cast<int>(cluster.block_rank());
@@ -634,9 +637,9 @@ __global__ void __cluster_dims__(kClusterBlocks, 1, 1) __launch_bounds__(kSolveC
     const double* const inv = row + static_cast<size_t>(i) * kTileDoubles;
     double v[kT];
 
-    // Forward.
+    // Forward (else b holds y already).
     double acc = gr < m ? b[gr] : 0.0;
-    for (int s = 0; s < i; ++s) {
+    for (int s = 0; forward && s < i; ++s) {
       const double* const t = row + static_cast<size_t>(s) * kTileDoubles;
 #pragma unroll
       for (int c = 0; c < kT; ++c) v[c] = t[lane + c * kTileStride];  // row `lane` of L_is
@@ -652,25 +655,31 @@ __global__ void __cluster_dims__(kClusterBlocks, 1, 1) __launch_bounds__(kSolveC
       }
       acc -= (a0 + a1) + (a2 + a3);
     }
+    double y = acc;
+    if (forward) {
 #pragma unroll
-    for (int c = 0; c < kT; ++c) v[c] = inv[lane + c * kTileStride];  // row `lane` of L_ii⁻¹
-    const double y = row_times_warp_vector(v, acc);
-    for (int r = 0; r < kClusterBlocks; ++r) cluster.map_shared_rank(ycopy, r)[i * kT + lane] = y;
-    fence_cluster();
-    __syncwarp();
-    if (lane < kClusterBlocks) *static_cast<volatile int*>(cluster.map_shared_rank(yflag, lane) + i) = 1;
+      for (int c = 0; c < kT; ++c) v[c] = inv[lane + c * kTileStride];  // row `lane` of L_ii⁻¹
+      y = row_times_warp_vector(v, acc);
+      for (int r = 0; r < kClusterBlocks; ++r) cluster.map_shared_rank(ycopy, r)[i * kT + lane] = y;
+      fence_cluster();
+      __syncwarp();
+      if (lane < kClusterBlocks) *static_cast<volatile int*>(cluster.map_shared_rank(yflag, lane) + i) = 1;
+    }
+    if (!back) {  // y alone (each warp wrote its own rows only; b's other rows were read by their own warps)
+      if (gr < m) b[gr] = y;
+    }
 
     // Back.
     acc = y;
-    for (int j = T - 1; j > i; --j) {
+    for (int j = T - 1; back && j > i; --j) {
       wait_flag(sflag + q * T + j);
       acc -= slots[(q * T + j) * kT + lane];
     }
 #pragma unroll
     for (int c = 0; c < kT; ++c) v[c] = inv[c + lane * kTileStride];  // row `lane` of L_ii⁻ᵀ
-    const double x = row_times_warp_vector(v, acc);
-    if (gr < m) b[gr] = x;
-    for (int s = i - 1; s >= 0; --s) {  // L_isᵀ x_i to row s, the next row first
+    const double x = back ? row_times_warp_vector(v, acc) : 0.0;
+    if (back && gr < m) b[gr] = x;
+    for (int s = i - 1; back && s >= 0; --s) {  // L_isᵀ x_i to row s, the next row first
       const double* const t = row + static_cast<size_t>(s) * kTileDoubles;
 #pragma unroll
       for (int c = 0; c < kT; ++c) v[c] = t[c + lane * kTileStride];  // row `lane` of L_isᵀ
@@ -741,7 +750,7 @@ cudaError_t cholesky_factor(int m, double* A, int lda, int* info, cudaStream_t s
   return cudaSuccess;
 }
 
-cudaError_t cholesky_solve(int m, const double* L, int lda, double* b, cudaStream_t stream) {
+cudaError_t cholesky_solve(int m, const double* L, int lda, double* b, cudaStream_t stream, Substitution part) {
   if (m < 0 || lda < (m > 1 ? m : 1) || m > kCholeskySolveMaxOrder) return cudaErrorInvalidValue;
   if (m == 0) return cudaSuccess;
   const int T = tiles(m);
@@ -749,10 +758,10 @@ cudaError_t cholesky_solve(int m, const double* L, int lda, double* b, cudaStrea
   static_assert((kCholeskySolveMaxOrder / kT) * (kT * sizeof(double) + 2 * sizeof(int)) <= 48 * 1024,
                 "the solve's shared memory must fit the default 48 KiB");
   if (cholesky_solve_in_cluster(m)) {
-    solve_cluster<<<kClusterBlocks, kSolveClusterThreads, solve_cluster_shared_bytes(T), stream>>>(m, L, lda, b, T);
+    solve_cluster<<<kClusterBlocks, kSolveClusterThreads, solve_cluster_shared_bytes(T), stream>>>(m, L, lda, b, T, part);
     return cudaGetLastError();
   }
-  solve_kernel<<<1, kSolveThreads, solve_shared_bytes(T), stream>>>(m, L, lda, b, T, true);
+  solve_kernel<<<1, kSolveThreads, solve_shared_bytes(T), stream>>>(m, L, lda, b, T, part);
   return cudaGetLastError();
 }
 
@@ -769,7 +778,7 @@ cudaError_t cholesky_factor_solve(int m, double* A, int lda, double* b, int* inf
   const size_t bytes = cluster_shared_bytes(T);
   factor_cluster<<<kClusterBlocks, kClusterThreads, bytes, stream>>>(m, A, lda, b, info, T);
   if (const cudaError_t e = cudaGetLastError(); e != cudaSuccess) return e;
-  solve_kernel<<<1, kSolveThreads, solve_shared_bytes(tiles(m)), stream>>>(m, A, lda, b, tiles(m), false);
+  solve_kernel<<<1, kSolveThreads, solve_shared_bytes(tiles(m)), stream>>>(m, A, lda, b, tiles(m), Substitution::Back);
   return cudaGetLastError();
 }
 

@@ -44,12 +44,20 @@ cudaError_t cholesky_factor(int m, double* A, int lda, int* info, cudaStream_t s
 // substitution together; above it, one kernel of one block reading L from global memory.
 constexpr int kCholeskySolveClusterMaxOrder = 512;
 
+// Which substitutions cholesky_solve runs: both (b ← (L Lᵀ)⁻¹ b), the forward one alone
+// (b ← L⁻¹ b: its squared norm is bᵀ (L Lᵀ)⁻¹ b, a Newton decrement without the
+// direction), or the back one alone (b ← L⁻ᵀ b, finishing a Forward call's b). Forward
+// then Back gives Both's result bit for bit (the same sums in the same order).
+enum class Substitution { Both, Forward, Back };
+
 // b ← (L Lᵀ)⁻¹ b with L lower triangular (m × m, leading dimension lda; its strictly
-// upper triangle is not read): from cholesky_factor or from cuSOLVER's potrf (lower).
-// One kernel: a cluster of 8 blocks when cholesky_solve_in_cluster(m), else one block.
-// The result does not depend on timing (every sum in a fixed order). cudaErrorInvalidValue
-// for m < 0, lda < max(1, m) or m > kCholeskySolveMaxOrder; otherwise the launch status.
-cudaError_t cholesky_solve(int m, const double* L, int lda, double* b, cudaStream_t stream);
+// upper triangle is not read): from cholesky_factor or from cuSOLVER's potrf (lower); or
+// one of its two substitutions (`part`). One kernel: a cluster of 8 blocks when
+// cholesky_solve_in_cluster(m), else one block. The result does not depend on timing
+// (every sum in a fixed order). cudaErrorInvalidValue for m < 0, lda < max(1, m) or
+// m > kCholeskySolveMaxOrder; otherwise the launch status.
+cudaError_t cholesky_solve(int m, const double* L, int lda, double* b, cudaStream_t stream,
+                           Substitution part = Substitution::Both);
 
 // Whether cholesky_solve(m, …) runs as the cluster kernel on the current device (a host
 // query, asked of the device once; allowed while a stream is being captured).

@@ -472,4 +472,14 @@ inline bool cusolver_solve_forced() {
   return v && std::string(v) == "cusolver";
 }
 
+// Whether the exact system's solve is split (NewtonStepper::decrement: the factor and the
+// forward substitution first, the back substitution and the direction only where the
+// decrement does not stop the solve): on by default; HSI_CUDA_SPLIT_SOLVE=0 solves
+// whole every time (the reference the split is measured against, bench_cuda and
+// bench_batch in one binary).
+inline bool split_solve_enabled() {
+  const char* v = std::getenv("HSI_CUDA_SPLIT_SOLVE");
+  return !(v && std::string(v) == "0");
+}
+
 }  // namespace hsi::cuda

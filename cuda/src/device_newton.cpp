@@ -48,7 +48,7 @@ constexpr int kParams = kSlots - kRidge;
 constexpr int param(Slot s) { return s - kRidge; }
 
 // Graph keys: the call, then what changes its sequence of work.
-enum Call : std::uint64_t { kStart = 1, kLinearize, kSolve, kTrialEnergies, kCertify, kAccept, kLinearizeKept };
+enum Call : std::uint64_t { kStart = 1, kLinearize, kSolve, kTrialEnergies, kCertify, kAccept, kLinearizeKept, kDirection };
 std::uint64_t key(Call call, std::uint64_t shape) { return call | shape << 8; }
 
 // The rotation generator applied to rows: in v layout (Re φ, Im φ, Re ψ, Im ψ blocks of n)
@@ -263,33 +263,26 @@ class DeviceStepper final : public NewtonStepper {
     return true;
   }
 
-  NewtonSystem solve(double ridge) override {
-    factored_exact_ = false;
-    own_factor_ = !kept_ && S_.own_cholesky && m_ <= kernels::kCholeskyPreferredMaxOrder;
-    if (!kept_) write_params([&] { S_.params[param(kRidge)] = ridge; });
-    const std::uint64_t shape = std::uint64_t{rotation_} | std::uint64_t{horizontal_} << 1 | std::uint64_t{quad_ != nullptr} << 2 |
-                                std::uint64_t{kept_} << 3;
-    S_.graphs.run(key(kSolve, shape), st(), [&] { enqueue_solve(); });
-    if (!kept_) params_read();
+  NewtonSystem solve(double ridge) override { return run_solve(ridge, false); }
+
+  // Split where the triangular solves are our cluster kernel, which runs the forward
+  // substitution alone (dense_cholesky.h); elsewhere solve() itself.
+  NewtonSystem decrement(double ridge) override {
+    return run_solve(ridge, S_.split_solve && !kept_ && !S_.cusolver_solve && kernels::cholesky_solve_in_cluster(m_));
+  }
+
+  NewtonSystem direction() override {
+    if (!pending_.factored || pending_.has_direction) throw std::logic_error("hsi::cuda: direction() without a split decrement()");
+    const std::uint64_t shape = std::uint64_t{rotation_} | std::uint64_t{horizontal_} << 1 | std::uint64_t{quad_ != nullptr} << 2;
+    S_.graphs.run(key(kDirection, shape), st(), [&] {
+      HSI_CUDA_CHECK(kernels::cholesky_solve(m_, S_.Hr.get(), m_, S_.d.get(), st(), kernels::Substitution::Back));
+      enqueue_direction();
+    });
     HSI_CUDA_CHECK(cudaStreamSynchronize(st()));
-    trial_step_ = std::numeric_limits<double>::quiet_NaN();
-    NewtonSystem sys;
-    sys.diagonal_max = kept_ ? S_.kept_diagonal_max : S_.sc_down[kDiagMax];
-    if (!kept_) diagonal_max_ = sys.diagonal_max;
-    sys.gradient_norm = std::sqrt(S_.sc_down[kGradNorm2]);
-    sys.slope = S_.sc_down[kSlope];
-    sys.max_safe_step = S_.sc_down[kSafeStep];
-    // The factorisation's and the solve's own status: potrs after a failed potrf reads
-    // an unfinished factor, whose numbers may well be finite.
-    int info[2];
-    std::memcpy(info, S_.sc_down.get() + kInfo, sizeof info);
-    sys.factored = info[0] == 0 && info[1] == 0 && std::isfinite(sys.slope);
-    factored_exact_ = sys.factored && exact_ && !kept_;
-    if (quad_) {
-      q0_ = 0.5 * S_.sc_down[kQuad0] + S_.sc_down[kScratch] + quad_->k;
-      q1_ = S_.sc_down[kQuad1];
-      q2_ = S_.sc_down[kQuad2];
-    }
+    NewtonSystem sys = pending_;
+    pending_.has_direction = true;
+    sys.has_direction = true;
+    read_direction(sys);
     return sys;
   }
 
@@ -443,8 +436,54 @@ class DeviceStepper final : public NewtonStepper {
     }
   }
 
-  void enqueue_solve() {
-    const int n = c_.n_, dim = S_.dim, m = m_;
+  // solve(), or with `split` decrement(): the factor and the forward substitution alone.
+  NewtonSystem run_solve(double ridge, bool split) {
+    factored_exact_ = false;
+    own_factor_ = !kept_ && S_.own_cholesky && m_ <= kernels::kCholeskyPreferredMaxOrder;
+    if (!kept_) write_params([&] { S_.params[param(kRidge)] = ridge; });
+    const std::uint64_t shape = std::uint64_t{rotation_} | std::uint64_t{horizontal_} << 1 | std::uint64_t{quad_ != nullptr} << 2 |
+                                std::uint64_t{kept_} << 3 | std::uint64_t{split} << 4;
+    S_.graphs.run(key(kSolve, shape), st(), [&] { enqueue_solve(split); });
+    if (!kept_) params_read();
+    HSI_CUDA_CHECK(cudaStreamSynchronize(st()));
+    trial_step_ = std::numeric_limits<double>::quiet_NaN();
+    NewtonSystem sys;
+    sys.diagonal_max = kept_ ? S_.kept_diagonal_max : S_.sc_down[kDiagMax];
+    if (!kept_) diagonal_max_ = sys.diagonal_max;
+    sys.gradient_norm = std::sqrt(S_.sc_down[kGradNorm2]);
+    sys.slope = S_.sc_down[kSlope];
+    // The factorisation's and the solve's own status: potrs after a failed potrf reads
+    // an unfinished factor, whose numbers may well be finite.
+    int info[2];
+    std::memcpy(info, S_.sc_down.get() + kInfo, sizeof info);
+    sys.factored = info[0] == 0 && info[1] == 0 && std::isfinite(sys.slope);
+    factored_exact_ = sys.factored && exact_ && !kept_;
+    if (split) {
+      sys.max_safe_step = std::numeric_limits<double>::quiet_NaN();
+      sys.has_direction = false;
+    } else {
+      read_direction(sys);
+    }
+    pending_ = sys;
+    return sys;
+  }
+
+  // A system's direction scalars once its direction is made (solve(), direction()).
+  void read_direction(NewtonSystem& sys) {
+    sys.slope = S_.sc_down[kSlope];
+    sys.max_safe_step = S_.sc_down[kSafeStep];
+    sys.factored = sys.factored && std::isfinite(sys.slope);
+    if (quad_) {
+      q0_ = 0.5 * S_.sc_down[kQuad0] + S_.sc_down[kScratch] + quad_->k;
+      q1_ = S_.sc_down[kQuad1];
+      q2_ = S_.sc_down[kQuad2];
+    }
+  }
+
+  // With `split` (decrement()): the factor and y = −L⁻¹g in d, then the decrement
+  // −‖y‖² as the slope; direction() does the rest.
+  void enqueue_solve(bool split) {
+    const int dim = S_.dim, m = m_;
     if (!kept_) {
       copy_params(kRidge, 1);
       HSI_CUDA_CHECK(kernels::add_ridge(m, S_.Hr0.get(), S_.sc.get() + kRidge, S_.Hr.get(), st()));
@@ -459,7 +498,9 @@ class DeviceStepper final : public NewtonStepper {
     // against potrs' 56.5 µs at m = 292 on an H200, bench_dense), else cuSOLVER's potrs.
     const bool own_solve = !S_.cusolver_solve && kernels::cholesky_solve_in_cluster(m);
     auto triangular_solves = [&](const double* L) {
-      if (own_solve) {
+      if (split) {  // (decrement() splits only where own_solve holds)
+        HSI_CUDA_CHECK(kernels::cholesky_solve(m, L, m, S_.d.get(), st(), kernels::Substitution::Forward));
+      } else if (own_solve) {
         HSI_CUDA_CHECK(kernels::cholesky_solve(m, L, m, S_.d.get(), st()));  // no status of its own: info[1] stays 0
       } else {
         HSI_CUDA_CHECK(cusolverDnDpotrs(c_.solver_, CUBLAS_FILL_MODE_LOWER, m, 1, L, m, S_.d.get(), m, info + 1));
@@ -474,10 +515,22 @@ class DeviceStepper final : public NewtonStepper {
       HSI_CUDA_CHECK(cusolverDnDpotrf(c_.solver_, CUBLAS_FILL_MODE_LOWER, m, S_.Hr.get(), m, S_.work.get(), S_.lwork, info));
       triangular_solves(S_.Hr.get());
     }
-    // With the system modulo the rotation θ = −aᵀd / |u|² into d[dim] (0 from the
-    // decoupled solve); then the slope gᵀd and |g|²: one launch.
+    if (split) {
+      HSI_CUDA_CHECK(kernels::decrement_scalars(dim, m, S_.g.get(), S_.d.get(), down(kSlope), down(kGradNorm2), info,
+                                                reinterpret_cast<int*>(down(kInfo)), st()));
+      return;
+    }
+    enqueue_direction(info);
+  }
+
+  // After the triangular solves: with the system modulo the rotation θ = −aᵀd / |u|²
+  // into d[dim] (0 from the decoupled solve); then the slope gᵀd and |g|² (one launch;
+  // with `info`, the statuses copied down too), the quadratic term along d, d in the
+  // samples and the safe step along it.
+  void enqueue_direction(const int* info = nullptr) {
+    const int n = c_.n_, dim = S_.dim, m = m_;
     HSI_CUDA_CHECK(kernels::step_scalars(dim, m, horizontal_, S_.tmp.get(), S_.g.get(), S_.d.get(), down(kSlope), down(kGradNorm2),
-                                         info, reinterpret_cast<int*>(down(kInfo)), st()));
+                                         info, info ? reinterpret_cast<int*>(down(kInfo)) : nullptr, st()));
     if (quad_) {  // the quadratic term along d: q(x + s d) = q0 + s q1 + ½ s² q2
       HSI_CUDA_CHECK(cublasDgemv(c_.blas_, CUBLAS_OP_N, dim, dim, &kOneD, S_.Q.get(), dim, S_.xa.get(), 1, &kZeroD, S_.tmp.get(), 1));
       HSI_CUDA_CHECK(kernels::dot(dim, S_.xa.get(), S_.tmp.get(), down(kQuad0), st()));
@@ -535,6 +588,7 @@ class DeviceStepper final : public NewtonStepper {
   bool factored_exact_ = false;  // the last solve() factored it (keep() may copy S_.Hr)
   bool own_factor_ = false;      // … with dense_cholesky.h's kernel
   double diagonal_max_ = 0;      // the last linearize()'s max |diag|
+  NewtonSystem pending_;         // the last solve's system (decrement(): direction() finishes it)
   double trial_step_ = std::numeric_limits<double>::quiet_NaN();  // the step xna holds
   double q0_ = 0, q1_ = 0, q2_ = 0;
 };

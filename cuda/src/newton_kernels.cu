@@ -494,6 +494,18 @@ __global__ void __launch_bounds__(kBlock) step_scalars_kernel(int dim, int m, bo
   if (threadIdx.x == 0) *gnorm2 = gg;
 }
 
+__global__ void __launch_bounds__(kBlock) decrement_scalars_kernel(int dim, int m, const double* __restrict__ g,
+                                                                   const double* __restrict__ y, double* __restrict__ slope,
+                                                                   double* __restrict__ gnorm2, const int* __restrict__ info,
+                                                                   int* __restrict__ info_out) {
+  if (threadIdx.x < 2) info_out[threadIdx.x] = info[threadIdx.x];
+  const double yy = block_dot(m, y, y);
+  if (threadIdx.x == 0) *slope = -yy;
+  __syncthreads();
+  const double gg = block_dot(dim, g, g);
+  if (threadIdx.x == 0) *gnorm2 = gg;
+}
+
 // One block, after horizontal_block_kernel: g_i −= (g_dim/uu) a_i, row and column dim of
 // A and g_dim cleared, then max_i |A_ii| over the m × m system (diag_max_kernel's order)
 // into *diag and into A_dim,dim.
@@ -688,6 +700,12 @@ cudaError_t negate(int m, const double* g, double* d, int* info, cudaStream_t st
 cudaError_t step_scalars(int dim, int m, bool rotation, const double* a, const double* g, double* d, double* slope, double* gnorm2,
                          const int* info, int* info_out, cudaStream_t stream) {
   step_scalars_kernel<<<1, kBlock, 0, stream>>>(dim, m, rotation, a, g, d, slope, gnorm2, info, info_out);
+  return cudaGetLastError();
+}
+
+cudaError_t decrement_scalars(int dim, int m, const double* g, const double* y, double* slope, double* gnorm2, const int* info,
+                              int* info_out, cudaStream_t stream) {
+  decrement_scalars_kernel<<<1, kBlock, 0, stream>>>(dim, m, g, y, slope, gnorm2, info, info_out);
   return cudaGetLastError();
 }
 

@@ -105,6 +105,12 @@ cudaError_t negate(int m, const double* g, double* d, int* info, cudaStream_t st
 // info[0..1] (the statuses, read after the solves) where info_out is given.
 cudaError_t step_scalars(int dim, int m, bool rotation, const double* a, const double* g, double* d, double* slope, double* gnorm2,
                          const int* info, int* info_out, cudaStream_t stream);
+// One block, after the forward substitution y = −L⁻¹ g (m entries, the solve's d): the
+// squared Newton decrement as a slope, −Σ_{i<m} y_i² (gᵀd in exact arithmetic, before d
+// exists), |g|² over dim entries (each summed as dot() sums), and info[0..1] copied to
+// info_out.
+cudaError_t decrement_scalars(int dim, int m, const double* g, const double* y, double* slope, double* gnorm2, const int* info,
+                              int* info_out, cudaStream_t stream);
 // y = y0 + A x for a real column-major A (rows × cols) and x = x0 + (*step)·dx (x0 alone
 // without dx), deterministic (fixed slices of the columns summed in order). Options: a
 // second product with the same x in the same launch (second_A, second_rows × cols, into

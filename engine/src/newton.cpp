@@ -311,33 +311,34 @@ class HostStepper final : public NewtonStepper {
   }
 
   NewtonSystem solve(double ridge) override {
-    NewtonSystem sys;
-    factored_exact_ = false;
-    sys.diagonal_max = kept_ ? kept_->diagonal_max : H_.diagonal().cwiseAbs().maxCoeff();
-    sys.gradient_norm = horizontal_ ? gh_.norm() : g_.head(space_.dim()).norm();
-    const Eigen::VectorXd rhs = horizontal_ ? Eigen::VectorXd(-gh_) : Eigen::VectorXd(-g_);
-    Eigen::VectorXd sol(rhs.size());
-    if (kept_) {
-      detail::cholesky_solve_factored(kept_->L.data(), kept_->L.rows(), rhs.data(), sol.data());
-    } else {
-      L_.resize(H_.rows(), H_.cols());
-      if (!detail::cholesky_factor(H_.data(), H_.rows(), ridge, L_.data())) return sys;
-      detail::cholesky_solve_factored(L_.data(), L_.rows(), rhs.data(), sol.data());
-    }
-    if (horizontal_) {
-      d_.resize(sol.size() + 1);
-      d_ << sol, -a_.dot(sol) / uu_;
-    } else {
-      d_ = std::move(sol);
-    }
-    if (!d_.allFinite()) return sys;
-    sys.factored = true;
-    factored_exact_ = exact_ && !kept_;
+    const NewtonSystem sys = factor_and_solve(ridge);
+    return sys.factored ? direction() : sys;
+  }
+
+  // d is made here too (the host's back substitution costs little); direction() sets
+  // it in the samples and finds the safe step. The decrement is ‖L⁻¹g‖² from a forward
+  // substitution of its own, as on the GPU, so both backends stop on the same number.
+  NewtonSystem decrement(double ridge) override {
+    NewtonSystem sys = factor_and_solve(ridge);
+    if (!sys.factored || kept_) return sys.factored ? direction() : sys;
+    const Eigen::Index m = L_.rows();
+    const Eigen::VectorXd y =
+        Eigen::Map<const Eigen::MatrixXd>(L_.data(), m, m).triangularView<Eigen::Lower>().solve(horizontal_ ? gh_ : g_);
+    sys.slope = -y.squaredNorm();
+    if (!std::isfinite(sys.slope)) sys.factored = factored_exact_ = false;
+    sys.has_direction = false;
+    return sys;
+  }
+
+  NewtonSystem direction() override {
+    NewtonSystem sys = pending_;
+    if (!sys.factored) throw std::logic_error("newton: direction() without a factored system");
     sys.slope = g_.dot(d_);
     dv_ = T_ * d_.head(space_.dim());
     if (rotation_) dv_ += d_(space_.dim()) * u_;
     core_.set_direction(dv_);
     sys.max_safe_step = core_.max_safe_step();
+    sys.has_direction = true;
     return sys;
   }
 
@@ -364,6 +365,36 @@ class HostStepper final : public NewtonStepper {
   Eigen::VectorXd x() override { return x_; }
 
  private:
+  // The factor (or the kept one) and d; the system's scalars but the slope and the safe
+  // step, kept as pending_ for direction().
+  NewtonSystem factor_and_solve(double ridge) {
+    NewtonSystem sys;
+    factored_exact_ = false;
+    pending_ = NewtonSystem{};
+    sys.diagonal_max = kept_ ? kept_->diagonal_max : H_.diagonal().cwiseAbs().maxCoeff();
+    sys.gradient_norm = horizontal_ ? gh_.norm() : g_.head(space_.dim()).norm();
+    const Eigen::VectorXd rhs = horizontal_ ? Eigen::VectorXd(-gh_) : Eigen::VectorXd(-g_);
+    Eigen::VectorXd sol(rhs.size());
+    if (kept_) {
+      detail::cholesky_solve_factored(kept_->L.data(), kept_->L.rows(), rhs.data(), sol.data());
+    } else {
+      L_.resize(H_.rows(), H_.cols());
+      if (!detail::cholesky_factor(H_.data(), H_.rows(), ridge, L_.data())) return sys;
+      detail::cholesky_solve_factored(L_.data(), L_.rows(), rhs.data(), sol.data());
+    }
+    if (horizontal_) {
+      d_.resize(sol.size() + 1);
+      d_ << sol, -a_.dot(sol) / uu_;
+    } else {
+      d_ = std::move(sol);
+    }
+    if (!d_.allFinite()) return sys;
+    sys.factored = true;
+    factored_exact_ = exact_ && !kept_;
+    pending_ = sys;
+    return sys;
+  }
+
   // A factor kept past its solve (keep, KeptSystem::data).
   struct Kept {
     Eigen::MatrixXd L;
@@ -397,6 +428,7 @@ class HostStepper final : public NewtonStepper {
   std::shared_ptr<const Kept> kept_;  // linearize_kept's: the next solve() solves with it
   bool exact_ = false;           // the last linearize() built the exact Hessian
   bool factored_exact_ = false;  // the last solve() factored it (keep() may take L_)
+  NewtonSystem pending_;         // the last factor_and_solve()'s system, for direction()
   bool rotation_ = false;
   bool gradient_valid_ = false;  // gv_ is the core's gradient at x_
 };
@@ -515,6 +547,18 @@ NewtonResult newton_run(NewtonStepper& st, bool certify, bool rotation_invariant
       sys = st.solve(ridge);
       res.timing.solve += ms_since(t0);
     };
+    // The stopping tests on a system's slope (−gᵀd, or the decrement alone: NewtonSystem::
+    // has_direction), asked where the exact system is factored and again below.
+    const double stop_tol = opt.tolerance * std::max(std::abs(E), 1e-300);
+    const auto no_descent = [&](const NewtonSystem& s) { return !(s.slope < -opt.descent_slope * scale); };
+    const auto decrement_below = [&](const NewtonSystem& s) { return -s.slope / 2 < stop_tol; };
+    // The exact system: its factor and decrement first; d only where the solve goes on.
+    auto factor_exact = [&](double ridge) {
+      t0 = Clock::now();
+      sys = st.decrement(ridge);
+      if (sys.factored && !sys.has_direction && !no_descent(sys) && !decrement_below(sys)) sys = st.direction();
+      res.timing.solve += ms_since(t0);
+    };
     // The exact Hessian is tried once Newton takes full steps (near the solution, where
     // it is definite and converges quadratically; a first iteration seldom gets there),
     // and after a projected step that Armijo cut (the projection's model overshot; with
@@ -556,11 +600,11 @@ NewtonResult newton_run(NewtonStepper& st, bool certify, bool rotation_invariant
       const bool exact_modulo = rotation_invariant && opt.exact_modulo_rotation;
       exact_on_all = all_samples || opt.exact_samples == ExactSamples::All;
       double diagonal_max = build({true, projection, exact_modulo, exact_on_all});
-      factor(opt.exact_ridge * diagonal_max);
+      factor_exact(opt.exact_ridge * diagonal_max);
       if (!sys.factored && !exact_on_all && opt.exact_samples == ExactSamples::SubsetThenAll) {
         exact_on_all = true;
         diagonal_max = build({true, projection, exact_modulo, true});
-        factor(opt.exact_ridge * diagonal_max);
+        factor_exact(opt.exact_ridge * diagonal_max);
       }
       log.exact_hessian = sys.factored;
       if (sys.factored && kept) st.keep(*kept);  // the next solve's chord steps start from it
@@ -591,10 +635,7 @@ NewtonResult newton_run(NewtonStepper& st, bool certify, bool rotation_invariant
       break;
     }
     log.gradient_norm = sys.gradient_norm;
-    log.decrement2 = -sys.slope;
-    log.max_safe_step = sys.max_safe_step;
-    const double slope = sys.slope;
-    if (!(slope < -opt.descent_slope * scale)) {
+    if (no_descent(sys)) {
       res.stop = NewtonStop::Converged;
       res.message = "converged (no descent direction left: gradient at round-off level)";
       break;
@@ -602,11 +643,16 @@ NewtonResult newton_run(NewtonStepper& st, bool certify, bool rotation_invariant
     // With the exact Hessian the Newton decrement is the decrease a full step would
     // bring (−gᵀd / 2): below the tolerance there is nothing left to take. (A projected
     // Hessian overestimates curvature, so its decrement can understate what is left.)
-    if (log.exact_hessian && !log.shifted && -slope / 2 < opt.tolerance * std::max(std::abs(E), 1e-300)) {
+    if (log.exact_hessian && !log.shifted && decrement_below(sys)) {
       res.stop = NewtonStop::Converged;
       res.message = "converged (Newton decrement below tolerance)";
       break;
     }
+    // (factor_exact made d wherever neither test stops: a system without one is a bug.)
+    if (!sys.has_direction) throw std::logic_error("newton: a system without a direction reached the line search");
+    log.decrement2 = -sys.slope;
+    log.max_safe_step = sys.max_safe_step;
+    const double slope = sys.slope;
     if (!log.exact_hessian && !log.chord && opt.projected_decrement_stop > 0 &&
         -slope / 2 < opt.projected_decrement_stop * opt.tolerance * std::max(std::abs(E), 1e-300)) {
       res.stop = NewtonStop::Converged;

@@ -21,6 +21,7 @@
 #include <memory>
 #include <optional>
 #include <span>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -171,6 +172,9 @@ struct NewtonSystem {
   double gradient_norm = 0;    // |g| in the reduced variables
   double diagonal_max = 0;     // max |diagonal of H|: the scale of a ridge
   double max_safe_step = 0;    // first s > 0 at which a sample reaches |a| = |b| along d
+  // false: from decrement(), which factored and found the decrement but made no d yet:
+  // slope is −‖L⁻¹g‖² (gᵀd in exact arithmetic), max_safe_step unknown; direction() makes d.
+  bool has_direction = true;
 };
 
 // One solve's work in the reduced space. Vectors stay where the stepper keeps them;
@@ -186,6 +190,15 @@ class NewtonStepper {
   virtual double linearize(const HessianChoice& choice) = 0;
   // d from (H + ridge I) d = −g of the last linearize(), and the safe step along it.
   virtual NewtonSystem solve(double ridge) = 0;
+  // The factor and the Newton decrement alone, for a solve that may stop on it (the exact
+  // system near the solution): solve()'s system with slope = −‖L⁻¹g‖² (the forward
+  // substitution only; has_direction false), or, where the stepper does not split the
+  // solve, solve() itself. direction() then makes d, the slope gᵀd and the safe step
+  // along it, as solve() gives them (only after a decrement() that factored; keep() may
+  // come between). The GPU stepper saves the back substitution, the direction's
+  // products and the safe step on a solve that stops.
+  virtual NewtonSystem decrement(double ridge) { return solve(ridge); }
+  virtual NewtonSystem direction() { throw std::logic_error("NewtonStepper::direction without a split decrement()"); }
   // Total energies at x ⊕ steps[j]·d.
   virtual void trial_energies(std::span<const double> steps, std::span<double> energies) = 0;
   // The certificate of x ⊕ step·d (step 0: of x). Full: every segment, with bounds;
