@@ -622,6 +622,9 @@ void CudaNewtonCore::warm_up() {
     // at the identity): the direction stays finite, so every later call sees numbers.
     const double ridge = 1e-3 * std::max(st.linearize(exact), 1.0);
     (void)st.solve(ridge);
+    // The same system as newton_run asks for an exact one: the decrement, then the direction.
+    const NewtonSystem decrement = st.decrement(ridge);
+    if (decrement.factored && !decrement.has_direction) (void)st.direction();
     KeptSystem kept;  // chord steps' calls (NewtonOptions::kept_system)
     if (st.keep(kept) && st.linearize_kept(kept)) (void)st.solve(0);
     HessianChoice projected;
