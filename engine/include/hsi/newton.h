@@ -248,7 +248,8 @@ struct NewtonOptions {
   // ρ = ΔE_k / ΔE_{k−1} (0 for the first step), the decrease still to come, ΔE ρ/(1 − ρ),
   // counts too. 5e-8 is the paper's absolute 1e-7 at E = 2, the
   // isometric energy's minimum. Also converged: an exact system whose Newton decrement
-  // (the decrease of a full step, −gᵀd/2) is below it. A cut step's small decrease
+  // (the decrease of a full step, −gᵀd/2, taken as ‖L⁻¹g‖²/2 before d is made:
+  // NewtonStepper::decrement) is below it. A cut step's small decrease
   // says nothing about what is left (issue #20: a first Delete step cut to 1/2048
   // lowered the energy by 4e-8 with a decrement of 3e-4 left, and the frame was called
   // converged).
