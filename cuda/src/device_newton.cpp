@@ -268,7 +268,7 @@ class DeviceStepper final : public NewtonStepper {
   // Split where the triangular solves are our cluster kernel, which runs the forward
   // substitution alone (dense_cholesky.h); elsewhere solve() itself.
   NewtonSystem decrement(double ridge) override {
-    return run_solve(ridge, S_.split_solve && !kept_ && !S_.cusolver_solve && kernels::cholesky_solve_in_cluster(m_));
+    return run_solve(ridge, S_.split_solve && !kept_ && own_solve());
   }
 
   NewtonSystem direction() override {
@@ -436,6 +436,10 @@ class DeviceStepper final : public NewtonStepper {
     }
   }
 
+  // Whether the triangular solves are dense_cholesky.h's cluster kernel (not cuSOLVER's
+  // potrs): it also runs either substitution alone, which decrement() needs.
+  bool own_solve() const { return !S_.cusolver_solve && kernels::cholesky_solve_in_cluster(m_); }
+
   // solve(), or with `split` decrement(): the factor and the forward substitution alone.
   NewtonSystem run_solve(double ridge, bool split) {
     factored_exact_ = false;
@@ -496,11 +500,10 @@ class DeviceStepper final : public NewtonStepper {
     // The triangular solves with a factor L (the kept one or potrf's): dense_cholesky.h's
     // cluster kernel where it applies (forward and back substitution in one kernel: 31.6
     // against potrs' 56.5 µs at m = 292 on an H200, bench_dense), else cuSOLVER's potrs.
-    const bool own_solve = !S_.cusolver_solve && kernels::cholesky_solve_in_cluster(m);
     auto triangular_solves = [&](const double* L) {
-      if (split) {  // (decrement() splits only where own_solve holds)
+      if (split) {  // (decrement() splits only where own_solve() holds)
         HSI_CUDA_CHECK(kernels::cholesky_solve(m, L, m, S_.d.get(), st(), kernels::Substitution::Forward));
-      } else if (own_solve) {
+      } else if (own_solve()) {
         HSI_CUDA_CHECK(kernels::cholesky_solve(m, L, m, S_.d.get(), st()));  // no status of its own: info[1] stays 0
       } else {
         HSI_CUDA_CHECK(cusolverDnDpotrs(c_.solver_, CUBLAS_FILL_MODE_LOWER, m, 1, L, m, S_.d.get(), m, info + 1));

@@ -320,7 +320,8 @@ class HostStepper final : public NewtonStepper {
   // substitution of its own, as on the GPU, so both backends stop on the same number.
   NewtonSystem decrement(double ridge) override {
     NewtonSystem sys = factor_and_solve(ridge);
-    if (!sys.factored || kept_) return sys.factored ? direction() : sys;
+    if (!sys.factored) return sys;
+    if (kept_) return direction();  // (a kept factor's solve is a chord step's: never split)
     const Eigen::Index m = L_.rows();
     const Eigen::VectorXd y =
         Eigen::Map<const Eigen::MatrixXd>(L_.data(), m, m).triangularView<Eigen::Lower>().solve(horizontal_ ? gh_ : g_);
@@ -665,7 +666,7 @@ NewtonResult newton_run(NewtonStepper& st, bool certify, bool rotation_invariant
     if (!log.exact_hessian && !log.chord && opt.checked_decrement_stop && prev && prev->step == 1.0 && prev->backtracks == 0 &&
         prev->decrement2 > 0 && dE_prev > 0) {
       const double r = std::max(1.0, dE_prev / (prev->decrement2 / 2));
-      if (r < 2 && -slope / 2 / (2 - r) < opt.tolerance * std::max(std::abs(E), 1e-300)) {
+      if (r < 2 && -slope / 2 / (2 - r) < stop_tol) {
         res.stop = NewtonStop::Converged;
         res.message = "converged (projected Newton decrement, scaled by the last step's model error, below tolerance)";
         break;
