@@ -408,16 +408,28 @@ __global__ void __cluster_dims__(kClusterBlocks, 1, 1) __launch_bounds__(kCluste
   cluster.sync();
 }
 
-// Ready flags between the solve's warps (shared memory, one block).
+// Ready flags between the solve's warps (shared memory, one block). The hand-off is
+// PTX's release/acquire pattern: every lane of the publishing warp writes its values,
+// the warp barrier orders those writes before lane 0's release store of the flag
+// (release is cumulative over what the barrier ordered before it), and a waiting lane's
+// acquire load that sees the flag orders every read after it. A fence in each writing
+// lane before the barrier would order that lane's own writes only before its own later
+// stores, not before lane 0's flag.
+__device__ __forceinline__ int load_acquire_cta(const int* flag) {
+  int v;
+  asm volatile("ld.acquire.cta.u32 %0, [%1];" : "=r"(v) : "l"(flag) : "memory");
+  return v;
+}
+__device__ __forceinline__ void store_release_cta(int* flag, int v) {
+  asm volatile("st.release.cta.u32 [%0], %1;" ::"l"(flag), "r"(v) : "memory");
+}
 __device__ __forceinline__ void wait_ready(const int* flag) {
-  while (*static_cast<const volatile int*>(flag) == 0) {
+  while (load_acquire_cta(flag) == 0) {
   }
-  __threadfence_block();  // the tile's values are read after the flag (and not cached from before)
 }
 __device__ __forceinline__ void publish_ready(int* flag) {
-  __threadfence_block();  // this lane's values before the flag
-  __syncwarp();
-  if ((threadIdx.x & 31) == 0) *static_cast<volatile int*>(flag) = 1;
+  __syncwarp();  // every lane's values written
+  if ((threadIdx.x & 31) == 0) store_release_cta(flag, 1);
 }
 
 // x = row `lane` of the inverse of a 32 × 32 triangular tile T whose row `lane` this lane
@@ -536,9 +548,10 @@ __global__ void __launch_bounds__(kSolveThreads)
 //    each L_jiᵀ x_j (i = j − 1 first: the next row waits for it) and pushes it into a
 //    slot of row i's block; row i sums its slots in order of j once each has arrived.
 // Every sum runs in a fixed order, so the result does not depend on timing. A flag is
-// raised after the data it guards (a cluster-scope fence between), read before it
-// (a fence after); flags are cleared and the cluster synchronised before any push, and
-// again before any block exits (no block's shared memory may go while others write it).
+// raised by a release store after the warp's barrier that follows the data it guards,
+// and read by an acquire load before the data (wait_flag); flags are cleared and the
+// cluster synchronised before any push, and again before any block exits (no block's
+// shared memory may go while others write it).
 constexpr int kSolveClusterThreads = 256;  // all load L; warps 0..(own rows − 1) substitute
 constexpr int kSolveClusterMaxTiles = kCholeskySolveClusterMaxOrder / kT;
 constexpr int kTileStride = kT + 1;        // column stride of a tile in shared memory
@@ -578,14 +591,25 @@ __host__ __device__ constexpr size_t solve_cluster_shared_bytes(int T) {
 }
 static_assert(solve_cluster_shared_bytes(kSolveClusterMaxTiles) <= 227 * 1024, "sm_90's shared memory per block (opt-in)");
 
-__device__ __forceinline__ void fence_cluster() { asm volatile("fence.acq_rel.cluster;" ::: "memory"); }
+// The flags between the cluster's warps, release/acquire at cluster scope as
+// wait_ready/publish_ready above: a publishing warp's lanes write their values (into
+// this or another block's shared memory), __syncwarp, and then the lane that raises a
+// flag does so with a release store, which covers every lane's writes the barrier
+// ordered before it; a waiter's acquire load that sees the flag orders its reads after.
+__device__ __forceinline__ int load_acquire_cluster(const int* flag) {
+  int v;
+  asm volatile("ld.acquire.cluster.u32 %0, [%1];" : "=r"(v) : "l"(flag) : "memory");
+  return v;
+}
+__device__ __forceinline__ void store_release_cluster(int* flag, int v) {
+  asm volatile("st.release.cluster.u32 [%0], %1;" ::"l"(flag), "r"(v) : "memory");
+}
 // Waits for a flag another warp of the cluster raises. A flag that never comes is a bug
 // of this file; the kernel then traps (a launch error at the next synchronisation)
 // after 2^27 polls (about a second) instead of hanging the device.
 __device__ __forceinline__ void wait_flag(const int* flag) {
-  for (long long polls = 0; *static_cast<const volatile int*>(flag) == 0; ++polls)
+  for (long long polls = 0; load_acquire_cluster(flag) == 0; ++polls)
     if (polls > (1LL << 27)) __trap();
-  fence_cluster();  // what the flag guards is read after it
 }
 
 __global__ void __cluster_dims__(kClusterBlocks, 1, 1) __launch_bounds__(kSolveClusterThreads)
@@ -661,9 +685,8 @@ __global__ void __cluster_dims__(kClusterBlocks, 1, 1) __launch_bounds__(kSolveC
       for (int c = 0; c < kT; ++c) v[c] = inv[lane + c * kTileStride];  // row `lane` of L_ii⁻¹
       y = row_times_warp_vector(v, acc);
       for (int r = 0; r < kClusterBlocks; ++r) cluster.map_shared_rank(ycopy, r)[i * kT + lane] = y;
-      fence_cluster();
-      __syncwarp();
-      if (lane < kClusterBlocks) *static_cast<volatile int*>(cluster.map_shared_rank(yflag, lane) + i) = 1;
+      __syncwarp();  // every lane's y_i pushed before any flag
+      if (lane < kClusterBlocks) store_release_cluster(cluster.map_shared_rank(yflag, lane) + i, 1);
     }
     if (!back) {  // y alone (each warp wrote its own rows only; b's other rows were read by their own warps)
       if (gr < m) b[gr] = y;
@@ -686,9 +709,8 @@ __global__ void __cluster_dims__(kClusterBlocks, 1, 1) __launch_bounds__(kSolveC
       const double contribution = row_times_warp_vector(v, x);
       const int owner = s % kClusterBlocks, qs = s / kClusterBlocks;
       cluster.map_shared_rank(slots, owner)[(qs * T + i) * kT + lane] = contribution;
-      fence_cluster();
-      __syncwarp();
-      if (lane == 0) *static_cast<volatile int*>(cluster.map_shared_rank(sflag, owner) + qs * T + i) = 1;
+      __syncwarp();  // every lane's entry pushed before the flag
+      if (lane == 0) store_release_cluster(cluster.map_shared_rank(sflag, owner) + qs * T + i, 1);
     }
   }
   cluster.sync();  // no block leaves while another may still write its shared memory
