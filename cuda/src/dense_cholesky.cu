@@ -408,28 +408,41 @@ __global__ void __cluster_dims__(kClusterBlocks, 1, 1) __launch_bounds__(kCluste
   cluster.sync();
 }
 
-// Ready flags between the solve's warps (shared memory, one block). The hand-off is
-// PTX's release/acquire pattern: every lane of the publishing warp writes its values,
-// the warp barrier orders those writes before lane 0's release store of the flag
-// (release is cumulative over what the barrier ordered before it), and a waiting lane's
-// acquire load that sees the flag orders every read after it. A fence in each writing
-// lane before the barrier would order that lane's own writes only before its own later
-// stores, not before lane 0's flag.
-__device__ __forceinline__ int load_acquire_cta(const int* flag) {
+// Flags between warps, of one block (the one-block solve) or of a cluster (the cluster
+// solve). The hand-off is PTX's release/acquire pattern: every lane of the publishing warp
+// writes its values, the warp barrier orders those writes before the flag lane's release
+// store (release is cumulative over what the barrier ordered before it), and a waiting
+// lane's acquire load that sees the flag orders every read after it. A fence in each
+// writing lane before the barrier would order that lane's own writes only before its own
+// later stores, not before another lane's flag.
+enum class Scope { Cta, Cluster };
+template <Scope S>
+__device__ __forceinline__ int load_acquire(const int* flag) {
   int v;
-  asm volatile("ld.acquire.cta.u32 %0, [%1];" : "=r"(v) : "l"(flag) : "memory");
+  if constexpr (S == Scope::Cta)
+    asm volatile("ld.acquire.cta.u32 %0, [%1];" : "=r"(v) : "l"(flag) : "memory");
+  else
+    asm volatile("ld.acquire.cluster.u32 %0, [%1];" : "=r"(v) : "l"(flag) : "memory");
   return v;
 }
-__device__ __forceinline__ void store_release_cta(int* flag, int v) {
-  asm volatile("st.release.cta.u32 [%0], %1;" ::"l"(flag), "r"(v) : "memory");
+template <Scope S>
+__device__ __forceinline__ void store_release(int* flag, int v) {
+  if constexpr (S == Scope::Cta)
+    asm volatile("st.release.cta.u32 [%0], %1;" ::"l"(flag), "r"(v) : "memory");
+  else
+    asm volatile("st.release.cluster.u32 [%0], %1;" ::"l"(flag), "r"(v) : "memory");
 }
-__device__ __forceinline__ void wait_ready(const int* flag) {
-  while (load_acquire_cta(flag) == 0) {
-  }
+// Waits for a flag another warp raises. A flag that never comes is a bug of this file;
+// the kernel then traps (a launch error at the next synchronisation) after 2^27 polls
+// (about a second) instead of hanging the device.
+template <Scope S>
+__device__ __forceinline__ void wait_flag(const int* flag) {
+  for (long long polls = 0; load_acquire<S>(flag) == 0; ++polls)
+    if (polls > (1LL << 27)) __trap();
 }
 __device__ __forceinline__ void publish_ready(int* flag) {
   __syncwarp();  // every lane's values written
-  if ((threadIdx.x & 31) == 0) store_release_cta(flag, 1);
+  if ((threadIdx.x & 31) == 0) store_release<Scope::Cta>(flag, 1);
 }
 
 // x = row `lane` of the inverse of a 32 × 32 triangular tile T whose row `lane` this lane
@@ -493,7 +506,7 @@ __global__ void __launch_bounds__(kSolveThreads)
     for (int s = 0; s < i; ++s) {
 #pragma unroll
       for (int c = 0; c < kT; ++c) l[c] = valid ? __ldg(L + row + static_cast<size_t>(s * kT + c) * lda) : 0.0;  // coalesced
-      wait_ready(ready_fwd + s);
+      wait_flag<Scope::Cta>(ready_fwd + s);
 #pragma unroll
       for (int c = 0; c < kT; ++c) acc -= l[c] * y[s * kT + c];  // broadcast reads
     }
@@ -519,7 +532,7 @@ __global__ void __launch_bounds__(kSolveThreads)
 #pragma unroll
         for (int c = 0; c < kT; ++c)
           l[c] = valid && s * kT + c < m ? __ldg(L + (s * kT + c) + static_cast<size_t>(row) * lda) : 0.0;
-        wait_ready(ready_bwd + s);
+        wait_flag<Scope::Cta>(ready_bwd + s);
 #pragma unroll
         for (int c = 0; c < kT; ++c) acc -= l[c] * y[s * kT + c];
       }
@@ -591,26 +604,10 @@ __host__ __device__ constexpr size_t solve_cluster_shared_bytes(int T) {
 }
 static_assert(solve_cluster_shared_bytes(kSolveClusterMaxTiles) <= 227 * 1024, "sm_90's shared memory per block (opt-in)");
 
-// The flags between the cluster's warps, release/acquire at cluster scope as
-// wait_ready/publish_ready above: a publishing warp's lanes write their values (into
-// this or another block's shared memory), __syncwarp, and then the lane that raises a
-// flag does so with a release store, which covers every lane's writes the barrier
-// ordered before it; a waiter's acquire load that sees the flag orders its reads after.
-__device__ __forceinline__ int load_acquire_cluster(const int* flag) {
-  int v;
-  asm volatile("ld.acquire.cluster.u32 %0, [%1];" : "=r"(v) : "l"(flag) : "memory");
-  return v;
-}
-__device__ __forceinline__ void store_release_cluster(int* flag, int v) {
-  asm volatile("st.release.cluster.u32 [%0], %1;" ::"l"(flag), "r"(v) : "memory");
-}
-// Waits for a flag another warp of the cluster raises. A flag that never comes is a bug
-// of this file; the kernel then traps (a launch error at the next synchronisation)
-// after 2^27 polls (about a second) instead of hanging the device.
-__device__ __forceinline__ void wait_flag(const int* flag) {
-  for (long long polls = 0; load_acquire_cluster(flag) == 0; ++polls)
-    if (polls > (1LL << 27)) __trap();
-}
+// The flags between the cluster's warps: load_acquire / store_release / wait_flag above
+// at cluster scope. A publishing warp's lanes write their values (into this or another
+// block's shared memory), __syncwarp, and then the lane that raises a flag does so with a
+// release store, which covers every lane's writes the barrier ordered before it.
 
 __global__ void __cluster_dims__(kClusterBlocks, 1, 1) __launch_bounds__(kSolveClusterThreads)
     solve_cluster(int m, const double* __restrict__ L, int lda, double* b, int T, Substitution part) {
@@ -667,7 +664,7 @@ __global__ void __cluster_dims__(kClusterBlocks, 1, 1) __launch_bounds__(kSolveC
       const double* const t = row + static_cast<size_t>(s) * kTileDoubles;
 #pragma unroll
       for (int c = 0; c < kT; ++c) v[c] = t[lane + c * kTileStride];  // row `lane` of L_is
-      wait_flag(yflag + s);
+      wait_flag<Scope::Cluster>(yflag + s);
       const double* const ys = ycopy + s * kT;
       double a0 = 0.0, a1 = 0.0, a2 = 0.0, a3 = 0.0;
 #pragma unroll
@@ -686,7 +683,7 @@ __global__ void __cluster_dims__(kClusterBlocks, 1, 1) __launch_bounds__(kSolveC
       y = row_times_warp_vector(v, acc);
       for (int r = 0; r < kClusterBlocks; ++r) cluster.map_shared_rank(ycopy, r)[i * kT + lane] = y;
       __syncwarp();  // every lane's y_i pushed before any flag
-      if (lane < kClusterBlocks) store_release_cluster(cluster.map_shared_rank(yflag, lane) + i, 1);
+      if (lane < kClusterBlocks) store_release<Scope::Cluster>(cluster.map_shared_rank(yflag, lane) + i, 1);
     }
     if (!back) {  // y alone (each warp wrote its own rows only; b's other rows were read by their own warps)
       if (gr < m) b[gr] = y;
@@ -695,7 +692,7 @@ __global__ void __cluster_dims__(kClusterBlocks, 1, 1) __launch_bounds__(kSolveC
     // Back.
     acc = y;
     for (int j = T - 1; back && j > i; --j) {
-      wait_flag(sflag + q * T + j);
+      wait_flag<Scope::Cluster>(sflag + q * T + j);
       acc -= slots[(q * T + j) * kT + lane];
     }
 #pragma unroll
@@ -710,7 +707,7 @@ __global__ void __cluster_dims__(kClusterBlocks, 1, 1) __launch_bounds__(kSolveC
       const int owner = s % kClusterBlocks, qs = s / kClusterBlocks;
       cluster.map_shared_rank(slots, owner)[(qs * T + i) * kT + lane] = contribution;
       __syncwarp();  // every lane's entry pushed before the flag
-      if (lane == 0) store_release_cluster(cluster.map_shared_rank(sflag, owner) + qs * T + i, 1);
+      if (lane == 0) store_release<Scope::Cluster>(cluster.map_shared_rank(sflag, owner) + qs * T + i, 1);
     }
   }
   cluster.sync();  // no block leaves while another may still write its shared memory
