@@ -130,8 +130,8 @@ int main(int argc, char** argv) {
         w.stepper = w.core->make_stepper(setup.metric_space, &setup.certifier, nullptr);
         if (!w.stepper) w.stepper = make_host_stepper(*w.core, setup.metric_space, &setup.certifier, nullptr);
         w.stepper->start(w.x);
-        const double dmax = w.stepper->linearize({true, HessianProjection::FullProj, true, true});
-        w.factored = w.stepper->solve(1e-15 * dmax).factored;
+        w.stepper->linearize({true, HessianProjection::FullProj, true, true});
+        w.factored = w.stepper->solve(1e-15).factored;  // (NewtonOptions::exact_ridge, relative)
         if (w.factored) {
           w.stepper->keep(w.kept);
           w.scene = L.name;
@@ -160,13 +160,13 @@ int main(int argc, char** argv) {
   // One pass of a variant's stages on worker w.
   auto run_stages = [](Worker& w, const Variant& v) {
     NewtonStepper& st = *w.stepper;
-    double dmax = 0;
     for (Stage s : v.stages) {
       switch (s) {
         case Stage::Start: st.start(w.x); break;
-        case Stage::ExactG: dmax = st.linearize({true, HessianProjection::FullProj, true, true}); break;
-        case Stage::ExactH: dmax = st.linearize({true, HessianProjection::FullProj, true, false}); break;
-        case Stage::Factor: st.solve(1e-15 * dmax); break;
+        // (a linearize the GPU stepper does not wait for is waited for by the next pass's start)
+        case Stage::ExactG: st.linearize({true, HessianProjection::FullProj, true, true}); break;
+        case Stage::ExactH: st.linearize({true, HessianProjection::FullProj, true, false}); break;
+        case Stage::Factor: st.solve(1e-15); break;
         case Stage::Chord:
           if (!st.linearize_kept(w.kept)) throw InputError("bench_stages: the kept factor is not this stepper's");
           st.solve(0);

@@ -669,6 +669,81 @@ TEST_CASE("the device stepper's split solve gives solve()'s system", "[cuda][sma
   }
 }
 
+// The device stepper's calls that save a wait (NewtonStepper::start_deferred,
+// certify_ahead; x() after a solve): each must give what its waiting form gives, and a
+// certificate asked ahead must never answer for another direction's step.
+TEST_CASE("the device stepper's deferred start, certificate asked ahead and x() give what the waiting calls give", "[cuda][small]") {
+  HSI_REQUIRE_GPU();
+  for (const auto& p : test::asset_scenes()) {
+    if (p.filename() != "annulus.json") continue;
+    AssetCores a(p);
+    const Eigen::VectorXd id = a.space().reduce(identity_map(a.setup->cage)).x;
+    const Eigen::VectorXd x_star = a.perturbed_identity(30, 0.03);
+    const Eigen::VectorXd x0 = x_star + 0.05 * (id - x_star);
+    auto core = hsi::cuda::make_newton_core(*a.setup);
+    core->set_targets(a.metrics_of(x_star));
+    auto make = [&] {
+      auto st = core->make_stepper(a.space(), &a.setup->certifier, nullptr);
+      REQUIRE(st);
+      return st;
+    };
+    HessianChoice exact;
+    exact.exact = true;
+    exact.free_rotation = true;
+    HessianChoice projected;
+    projected.free_rotation = true;
+    projected.projection = HessianProjection::FullProj;
+
+    // The energy at the start, deferred past a solve, and x() after the solve.
+    auto w = make();
+    const double e0 = w->start(x0);
+    w->linearize(projected);
+    const NewtonSystem ws = w->solve(0);
+    REQUIRE(ws.factored);
+    auto d = make();
+    d->start_deferred(x0);
+    d->linearize(projected);
+    const NewtonSystem ds = d->solve(0);
+    CHECK(d->start_energy() == e0);
+    CHECK(ds.slope == ws.slope);
+    CHECK(d->x() == x0);
+
+    // A certificate asked ahead of the trial energies is the one asked after them.
+    const double step = std::min(1.0, 0.5 * ws.max_safe_step);
+    double e_w = 0, e_d = 0;
+    w->trial_energies(std::span<const double>(&step, 1), std::span<double>(&e_w, 1));
+    const CertificateResult cw = w->certify(step, false);
+    d->certify_ahead(step);
+    d->trial_energies(std::span<const double>(&step, 1), std::span<double>(&e_d, 1));
+    CHECK(e_d == e_w);
+    const CertificateResult cd = d->certify(step, false);
+    CHECK(cd.certified == cw.certified);
+    CHECK(cd.min_margin == cw.min_margin);
+    CHECK(cd.sigma1_max == cw.sigma1_max);
+    w->accept(step);
+    d->accept(step);
+    CHECK(d->x() == w->x());
+
+    // Asked ahead along the projected system's direction, then a new direction (the
+    // exact system): certify(step) must look at the new direction's point, not answer
+    // with the old one's (the same step value, a different map).
+    d->linearize(projected);
+    REQUIRE(d->solve(0).factored);
+    const CertificateResult along_old = d->certify(step, false);
+    d->certify_ahead(step);  // along the projected direction: along_old's point
+    w->linearize(exact);
+    d->linearize(exact);
+    const NewtonSystem we = w->solve(1e-15), de = d->solve(1e-15);
+    REQUIRE(we.factored == de.factored);
+    if (!we.factored) continue;
+    const CertificateResult cw2 = w->certify(step, false);
+    const CertificateResult cd2 = d->certify(step, false);
+    CHECK(cd2.certified == cw2.certified);
+    CHECK(cd2.min_margin == cw2.min_margin);
+    CHECK(cd2.min_margin != along_old.min_margin);  // (the two points differ: the check above can fail)
+  }
+}
+
 TEST_CASE("a short sequence solved on the GPU matches the CPU", "[cuda][small]") {
   HSI_REQUIRE_GPU();
   for (const auto& p : test::asset_scenes())

@@ -403,7 +403,7 @@ class RefusingCore final : public ForwardingCore {
   struct Stepper final : NewtonStepper {
     Stepper(std::unique_ptr<NewtonStepper> in, bool start, bool all) : inner(std::move(in)), refuse_start(start), refuse_all(all) {}
     double start(const Eigen::VectorXd& x0) override { return inner->start(x0); }
-    double linearize(const HessianChoice& c) override { return inner->linearize(c); }
+    void linearize(const HessianChoice& c) override { inner->linearize(c); }
     NewtonSystem solve(double ridge) override { return inner->solve(ridge); }
     void trial_energies(std::span<const double> s, std::span<double> e) override { inner->trial_energies(s, e); }
     CertificateResult certify(double step, bool full) override {

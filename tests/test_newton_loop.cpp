@@ -82,18 +82,18 @@ struct FakeStepper : NewtonStepper {
     exact_now = false;
     return true;
   }
-  double linearize(const HessianChoice& c) override {
+  void linearize(const HessianChoice& c) override {
     kept_now = false;
     choices.push_back(c);
     exact_now = c.exact;
     all_now = c.all_samples;
     projection_now = c.projection;
-    return A.diagonal().cwiseAbs().maxCoeff();
   }
-  NewtonSystem solve(double ridge) override {
-    ridges.push_back(ridge);
+  NewtonSystem solve(double relative_ridge) override {
     NewtonSystem s;
     s.diagonal_max = A.diagonal().cwiseAbs().maxCoeff();
+    const double ridge = relative_ridge * std::max(s.diagonal_max, 1e-300);  // (NewtonStepper::solve)
+    ridges.push_back(ridge);
     if (kept_now) {
       const Eigen::Vector2d g = A * (x_ - a);
       d_ = -(kept_scale * K).inverse() * g;
@@ -1041,6 +1041,74 @@ TEST_CASE("newton_run: a solve's first step is a chord step with the kept system
   CHECK(f.keeps >= 1);
   CHECK(slot.generation == static_cast<std::uint64_t>(f.keeps));
   CHECK((r.x - f.a).norm() < 1e-3);
+}
+
+TEST_CASE("newton_run: a warm solve asks its start, the chord's gradient and solve before it reads the start's energy",
+          "[newton][loop][chord]") {
+  // A stepper recording its calls: the deferred start (NewtonStepper::start_deferred)
+  // must come before linearize_kept and the solve, start_energy after them; the chord's
+  // first trial step is certified ahead (certify_ahead) and then asked for. Without a
+  // start certificate the start is certified itself, so start() waits at once.
+  struct Recorder final : FakeStepper {
+    std::vector<std::string> calls;
+    double start(const Eigen::VectorXd& x0) override {
+      calls.push_back("start");
+      return FakeStepper::start(x0);
+    }
+    void start_deferred(const Eigen::VectorXd& x0) override {
+      calls.push_back("start_deferred");
+      deferred = FakeStepper::start(x0);
+    }
+    double start_energy() override {
+      calls.push_back("start_energy");
+      return deferred;
+    }
+    bool linearize_kept(const KeptSystem& slot) override {
+      calls.push_back("linearize_kept");
+      return FakeStepper::linearize_kept(slot);
+    }
+    NewtonSystem solve(double ridge) override {
+      calls.push_back("solve");
+      return FakeStepper::solve(ridge);
+    }
+    void certify_ahead(double step) override { calls.push_back("certify_ahead " + std::to_string(step)); }
+    CertificateResult certify(double step, bool full) override {
+      calls.push_back("certify " + std::to_string(step));
+      return FakeStepper::certify(step, full);
+    }
+    double deferred = 0;
+  };
+  for (const bool with_certificate : {true, false}) {
+    INFO("start certificate given: " << with_certificate);
+    Recorder f;
+    f.A << 2, 0.3, 0.3, 1;
+    f.K = f.A;
+    f.kept_scale = 1.1;
+    KeptSystem slot;
+    slot.owner = &f;
+    CertificateResult start_certificate;
+    start_certificate.certified = true;
+    NewtonOptions o;
+    o.kept_system = &slot;
+    if (with_certificate) o.start_certificate = &start_certificate;
+    const NewtonResult r = newton_run(f, true, true, Eigen::Vector2d(0, 0), o);
+    CHECK(r.converged);
+    REQUIRE(r.iterations >= 1);
+    CHECK(r.log[0].chord);
+    REQUIRE(f.calls.size() >= 5);
+    if (with_certificate) {
+      CHECK(f.calls[0] == "start_deferred");
+      CHECK(f.calls[1] == "linearize_kept");
+      CHECK(f.calls[2] == "solve");
+      CHECK(f.calls[3] == "start_energy");
+      CHECK(f.calls[4] == "certify_ahead " + std::to_string(1.0));
+      CHECK(f.calls[5] == "certify " + std::to_string(1.0));
+    } else {
+      CHECK(f.calls[0] == "start");
+      CHECK(f.calls[1] == "certify " + std::to_string(0.0));
+      CHECK(f.calls[2] == "linearize_kept");
+    }
+  }
 }
 
 TEST_CASE("newton_run: a chord step that fails Armijo in full is never taken: the iteration builds its system at x",

@@ -52,9 +52,13 @@ struct DeviceSpace {
   DeviceArray<double> sc;     // the stepper's scalar slots (device_newton.cpp)
   PinnedArray<double> sc_down;
   PinnedArray<double> x_up;
+  PinnedArray<double> x_down;  // x as the last solve's graph left it (DeviceStepper::x without a wait)
   PinnedArray<double> params;  // per-call numbers (ridge, steps) the graphs copy into sc
-  Event params_done;           // recorded after the last graph that copied from params
-  bool params_pending = false;
+  // Per group of parameter slots (the ridge; the step; the trial steps): recorded after
+  // the last graph that copied from that group, so that filling one group never waits
+  // for a graph that reads another (a certificate asked ahead, then trial energies).
+  Event params_done[3];
+  bool params_pending[3] = {false, false, false};
   GraphCache graphs{graphs_enabled()};  // the stepper's calls, one graph per call shape
   bool own_cholesky = own_cholesky_enabled();  // dense_cholesky.h instead of cuSOLVER (device_newton.cpp, solve)
   bool cusolver_solve = cusolver_solve_forced();  // potrs instead of dense_cholesky.h's cholesky_solve

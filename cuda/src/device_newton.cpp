@@ -24,8 +24,9 @@ namespace {
 constexpr int kBatch = kernels::kMaxSteps;  // trial energies per download (NewtonStepper asks for up to this many)
 // Scalar slots, one index space for DeviceSpace::sc (device) and sc_down (pinned host).
 // The results before kTrials + kBatch are written by the kernels straight into sc_down
-// (down()), except kInfo, which potrf and potrs write in sc and step_scalars copies down;
-// the per-call numbers from kRidge on are copied into sc from DeviceSpace::params.
+// (down()), except kInfo, which potrf and potrs write in sc and step_scalars copies down,
+// and kDiagMax, which linearize writes in sc and the solve's ridge kernel copies down; the
+// per-call numbers from kRidge on are copied into sc from DeviceSpace::params.
 enum Slot {
   kSlope = 0,
   kGradNorm2 = 1,
@@ -150,6 +151,7 @@ DeviceSpace& CudaNewtonCore::device_space(const MapSpace& space) {
   ds->sc_down = PinnedArray<double>(kSlots);
   ds->params = PinnedArray<double>(kParams);
   ds->x_up = PinnedArray<double>(D);
+  ds->x_down = PinnedArray<double>(D);
   HSI_CUDA_CHECK(cudaMemsetAsync(ds->xa.get(), 0, ds->xa.bytes(), stream_));
   HSI_CUDA_CHECK(cudaMemsetAsync(ds->xna.get(), 0, ds->xna.bytes(), stream_));
   HSI_CUDA_CHECK(cusolverDnDpotrf_bufferSize(solver_, CUBLAS_FILL_MODE_LOWER, m, ds->Hr.get(), m, &ds->lwork));
@@ -179,6 +181,13 @@ class DeviceStepper final : public NewtonStepper {
   }
 
   double start(const Eigen::VectorXd& x0) override {
+    start_deferred(x0);
+    return start_energy();
+  }
+
+  // The start's graph, not waited for: start_energy() reads its energy after the next
+  // wait (the chord's solve, in newton_run), or waits itself.
+  void start_deferred(const Eigen::VectorXd& x0) override {
     const int dim = S_.dim;
     if (x0.size() != dim) throw InputError("hsi::cuda: the start vector has " + std::to_string(x0.size()) + " entries, the space " + std::to_string(dim));
     std::copy(x0.data(), x0.data() + dim, S_.x_up.get());
@@ -188,12 +197,20 @@ class DeviceStepper final : public NewtonStepper {
       HSI_CUDA_CHECK(kernels::mean_energy(c_.G_, c_.g_.get(), c_.ab_.get(), c_.dab_.get(), 0.0, c_.part_sum_.get(),
                                           c_.part_bad_.get(), c_.done_.get(), down(kEnergy0), st()));
     });
-    HSI_CUDA_CHECK(cudaStreamSynchronize(st()));  // also frees x_up
-    trial_step_ = std::numeric_limits<double>::quiet_NaN();
-    return S_.sc_down[kEnergy0] + (quad_ ? quad_->value(x0) : 0.0);
+    trial_step_ = ahead_step_ = std::numeric_limits<double>::quiet_NaN();
+    x_down_valid_ = false;
+    start_quad_ = quad_ ? quad_->value(x0) : 0.0;
+    start_pending_ = true;
   }
 
-  double linearize(const HessianChoice& choice) override {
+  double start_energy() override {
+    // x_up is free again once the start's graph has run: the next start writes it.
+    if (start_pending_) HSI_CUDA_CHECK(cudaStreamSynchronize(st()));
+    start_pending_ = false;
+    return S_.sc_down[kEnergy0] + start_quad_;
+  }
+
+  void linearize(const HessianChoice& choice) override {
     const int dim = S_.dim;
     kept_ = false;
     exact_ = choice.exact;
@@ -204,9 +221,9 @@ class DeviceStepper final : public NewtonStepper {
     const std::uint64_t shape = static_cast<std::uint64_t>(choice.projection) | std::uint64_t{choice.exact} << 2 |
                                 std::uint64_t{choice.all_samples} << 3 | std::uint64_t{rotation_} << 4 |
                                 std::uint64_t{quad_ != nullptr} << 5;
+    // Not waited for: the solve that follows reads max |diag H| on the device (its
+    // relative ridge), so the host's timing counts this work in that call.
     S_.graphs.run(key(kLinearize, shape), st(), [&] { enqueue_linearize(choice); });
-    HSI_CUDA_CHECK(cudaStreamSynchronize(st()));  // also attributes the work to this call in the host's timing
-    return S_.sc_down[kDiagMax];
   }
 
   bool linearize_kept(const KeptSystem& slot) override {
@@ -289,13 +306,13 @@ class DeviceStepper final : public NewtonStepper {
   void trial_energies(std::span<const double> steps, std::span<double> energies) override {
     for (size_t begin = 0; begin < steps.size(); begin += kBatch) {
       const int count = static_cast<int>(std::min<size_t>(kBatch, steps.size() - begin));
-      write_params([&] { std::copy_n(steps.begin() + static_cast<std::ptrdiff_t>(begin), count, S_.params.get() + param(kSteps)); });
+      write_params(kSteps, [&] { std::copy_n(steps.begin() + static_cast<std::ptrdiff_t>(begin), count, S_.params.get() + param(kSteps)); });
       S_.graphs.run(key(kTrialEnergies, static_cast<std::uint64_t>(count)), st(), [&] {
         copy_params(kSteps, count);
         HSI_CUDA_CHECK(kernels::mean_energies(c_.G_, c_.g_.get(), c_.ab_.get(), c_.dab_.get(), S_.sc.get() + kSteps, count,
                                               c_.part_sum_.get(), c_.part_bad_.get(), c_.done_.get(), down(kTrials), st()));
       });
-      params_read();
+      params_read(kSteps);
       HSI_CUDA_CHECK(cudaStreamSynchronize(st()));
       for (int j = 0; j < count; ++j) {
         const double s = steps[begin + sz(j)];
@@ -304,10 +321,25 @@ class DeviceStepper final : public NewtonStepper {
     }
   }
 
+  // Enqueued now, fetched by the certify(step, false) that follows (NewtonStepper::
+  // certify_ahead): the trial energies the loop asks for next wait for both.
+  void certify_ahead(double step) override {
+    if (!certify_ || step == 0) return;
+    enqueue_certificate(step, false);
+    ahead_step_ = step;
+  }
+
   CertificateResult certify(double step, bool full) override {
     if (!certify_) throw InputError("hsi::cuda: no certifier to certify with");
+    const bool ahead = !full && step == ahead_step_;
+    ahead_step_ = std::numeric_limits<double>::quiet_NaN();
+    if (!ahead) enqueue_certificate(step, full);
+    return c_.certifier_->fetch();
+  }
+
+  void enqueue_certificate(double step, bool full) {
     const bool trial = step != 0;
-    if (trial) write_params([&] { S_.params[param(kStep)] = step; });
+    if (trial) write_params(kStep, [&] { S_.params[param(kStep)] = step; });
     const std::uint64_t shape = std::uint64_t{trial} | std::uint64_t{full} << 1 | std::uint64_t{rotation_} << 2;
     S_.graphs.run(key(kCertify, shape), st(), [&] {
       const double* x = S_.xa.get();
@@ -324,27 +356,31 @@ class DeviceStepper final : public NewtonStepper {
       c_.certifier_->enqueue(reinterpret_cast<const double2*>(S_.full.get()), o);
     });
     if (trial) {
-      params_read();
+      params_read(kStep);
       trial_step_ = step;
     }
-    return c_.certifier_->fetch();
   }
 
   void accept(double step) override {
     // x ← the very point certify() looked at, else one made alike; copied (not swapped),
     // since the graphs keep the buffers' addresses.
     const bool trial = !(step == trial_step_);
-    if (trial) write_params([&] { S_.params[param(kStep)] = step; });
+    ahead_step_ = std::numeric_limits<double>::quiet_NaN();
+    if (trial) write_params(kStep, [&] { S_.params[param(kStep)] = step; });
     S_.graphs.run(key(kAccept, std::uint64_t{trial} | std::uint64_t{rotation_} << 1), st(), [&] {
       if (trial) enqueue_trial();
       set_coefficients(S_.xna.get());  // and x ← xna
     });
-    if (trial) params_read();
+    if (trial) params_read(kStep);
     trial_step_ = std::numeric_limits<double>::quiet_NaN();
+    x_down_valid_ = false;
   }
 
   Eigen::VectorXd x() override {
     const int dim = S_.dim;
+    // A solve since x last moved copied it down: a solve that ends on its decrement
+    // (newton_run's usual last call) needs no wait of its own for x.
+    if (x_down_valid_) return Eigen::Map<const Eigen::VectorXd>(S_.x_down.get(), dim);
     HSI_CUDA_CHECK(cudaMemcpyAsync(S_.x_up.get(), S_.xa.get(), sz(dim) * sizeof(double), cudaMemcpyDeviceToHost, st()));
     HSI_CUDA_CHECK(cudaStreamSynchronize(st()));
     return Eigen::Map<const Eigen::VectorXd>(S_.x_up.get(), dim);
@@ -359,15 +395,19 @@ class DeviceStepper final : public NewtonStepper {
 
   // The pinned parameter slots are written only once the graph that last copied from
   // them has run past that copy.
+  // The slot group of a parameter slot (DeviceSpace::params_done).
+  static int group(Slot s) { return s == kRidge ? 0 : s == kStep ? 1 : 2; }
   template <class Fill>
-  void write_params(Fill&& fill) {
-    if (S_.params_pending) HSI_CUDA_CHECK(cudaEventSynchronize(S_.params_done));
-    S_.params_pending = false;
+  void write_params(Slot slot, Fill&& fill) {
+    const int g = group(slot);
+    if (S_.params_pending[g]) HSI_CUDA_CHECK(cudaEventSynchronize(S_.params_done[g]));
+    S_.params_pending[g] = false;
     fill();
   }
-  void params_read() {
-    HSI_CUDA_CHECK(cudaEventRecord(S_.params_done, st()));
-    S_.params_pending = true;
+  void params_read(Slot slot) {
+    const int g = group(slot);
+    HSI_CUDA_CHECK(cudaEventRecord(S_.params_done[g], st()));
+    S_.params_pending[g] = true;
   }
   // Inside a graph: the parameter slots [first, first + count) into sc.
   void copy_params(Slot first, int count) {
@@ -429,10 +469,10 @@ class DeviceStepper final : public NewtonStepper {
       // system solves the dim one with d[dim] = 0, and solve() sets θ = −aᵀd/|u|².
       HSI_CUDA_CHECK(cublasDgemv(c_.blas_, CUBLAS_OP_T, 4 * n, m_, &kOneD, S_.Ta.get(), 4 * n, S_.Ta.get() + sz(4 * n) * sz(dim), 1,
                                  &kZeroD, S_.tmp.get(), 1));
-      // (and max |diag| into kDiagMax and the cleared diagonal entry)
-      HSI_CUDA_CHECK(kernels::horizontal_system(dim, S_.Hr0.get(), S_.tmp.get(), S_.g.get(), down(kDiagMax), st()));
+      // (and max |diag| into sc's kDiagMax, for the solve's ridge, and the cleared diagonal entry)
+      HSI_CUDA_CHECK(kernels::horizontal_system(dim, S_.Hr0.get(), S_.tmp.get(), S_.g.get(), S_.sc.get() + kDiagMax, st()));
     } else {
-      HSI_CUDA_CHECK(kernels::diag_abs_max(m_, S_.Hr0.get(), down(kDiagMax), st()));
+      HSI_CUDA_CHECK(kernels::diag_abs_max(m_, S_.Hr0.get(), S_.sc.get() + kDiagMax, st()));
     }
   }
 
@@ -444,13 +484,16 @@ class DeviceStepper final : public NewtonStepper {
   NewtonSystem run_solve(double ridge, bool split) {
     factored_exact_ = false;
     own_factor_ = !kept_ && S_.own_cholesky && m_ <= kernels::kCholeskyPreferredMaxOrder;
-    if (!kept_) write_params([&] { S_.params[param(kRidge)] = ridge; });
+    if (!kept_) write_params(kRidge, [&] { S_.params[param(kRidge)] = ridge; });
     const std::uint64_t shape = std::uint64_t{rotation_} | std::uint64_t{horizontal_} << 1 | std::uint64_t{quad_ != nullptr} << 2 |
                                 std::uint64_t{kept_} << 3 | std::uint64_t{split} << 4;
     S_.graphs.run(key(kSolve, shape), st(), [&] { enqueue_solve(split); });
-    if (!kept_) params_read();
+    if (!kept_) params_read(kRidge);
     HSI_CUDA_CHECK(cudaStreamSynchronize(st()));
-    trial_step_ = std::numeric_limits<double>::quiet_NaN();
+    // A new direction: no trial point or certificate asked ahead is along it.
+    trial_step_ = ahead_step_ = std::numeric_limits<double>::quiet_NaN();
+    x_down_valid_ = true;
+    start_pending_ = false;  // (the start's graph ran before this one)
     NewtonSystem sys;
     sys.diagonal_max = kept_ ? S_.kept_diagonal_max : S_.sc_down[kDiagMax];
     if (!kept_) diagonal_max_ = sys.diagonal_max;
@@ -488,9 +531,15 @@ class DeviceStepper final : public NewtonStepper {
   // −‖y‖² as the slope; direction() does the rest.
   void enqueue_solve(bool split) {
     const int dim = S_.dim, m = m_;
+    {  // x into x_down (mapped pinned memory), for x() (x_down_valid_)
+      kernels::CopyList copies;
+      copies.entry[0] = {S_.xa.get(), S_.x_down.get(), sz(dim)};
+      HSI_CUDA_CHECK(kernels::copy(copies, 1, st()));
+    }
     if (!kept_) {
       copy_params(kRidge, 1);
-      HSI_CUDA_CHECK(kernels::add_ridge(m, S_.Hr0.get(), S_.sc.get() + kRidge, S_.Hr.get(), st()));
+      HSI_CUDA_CHECK(kernels::add_relative_ridge(m, S_.Hr0.get(), S_.sc.get() + kRidge, S_.sc.get() + kDiagMax, down(kDiagMax),
+                                                 S_.Hr.get(), st()));
     }
     // d = −g, solved in place: cuSOLVER's Cholesky, or with HSI_CUDA_CHOLESKY=own ours
     // (dense_cholesky.h) up to its preferred order.
@@ -591,6 +640,10 @@ class DeviceStepper final : public NewtonStepper {
   bool factored_exact_ = false;  // the last solve() factored it (keep() may copy S_.Hr)
   bool own_factor_ = false;      // … with dense_cholesky.h's kernel
   double diagonal_max_ = 0;      // the last linearize()'s max |diag|
+  bool x_down_valid_ = false;    // S_.x_down holds x (a solve's graph copied it since x last moved)
+  bool start_pending_ = false;   // start_deferred's graph not yet waited for (start_energy)
+  double start_quad_ = 0;        // the quadratic term at the start
+  double ahead_step_ = std::numeric_limits<double>::quiet_NaN();  // certify_ahead's step (NaN: none)
   NewtonSystem pending_;         // the last solve's system (decrement(): direction() finishes it)
   double trial_step_ = std::numeric_limits<double>::quiet_NaN();  // the step xna holds
   double q0_ = 0, q1_ = 0, q2_ = 0;
@@ -623,7 +676,8 @@ void CudaNewtonCore::warm_up() {
     exact.free_rotation = free_rotation;  // the interpolation's exact system modulo the rotation
     // A ridge that keeps every system definite (the freed rotation is a null direction
     // at the identity): the direction stays finite, so every later call sees numbers.
-    const double ridge = 1e-3 * std::max(st.linearize(exact), 1.0);
+    st.linearize(exact);
+    const double ridge = 1e-3;  // (relative to max |diag H|: NewtonStepper::solve)
     (void)st.solve(ridge);
     // The same system as newton_run asks for an exact one: the decrement, then the direction.
     const NewtonSystem decrement = st.decrement(ridge);
@@ -632,7 +686,7 @@ void CudaNewtonCore::warm_up() {
     if (st.keep(kept) && st.linearize_kept(kept)) (void)st.solve(0);
     HessianChoice projected;
     projected.free_rotation = free_rotation;
-    (void)st.linearize(projected);
+    st.linearize(projected);
     (void)st.solve(ridge);
     st.trial_energies(kSteps, energies);
     (void)st.certify(0, true);

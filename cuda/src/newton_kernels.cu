@@ -293,15 +293,10 @@ __global__ void __launch_bounds__(kBlock) diag_max_kernel(int n, const double* _
   if (threadIdx.x == 0) *out = v;
 }
 
-__global__ void add_ridge_kernel(int n, const double* __restrict__ A0, double ridge, double* __restrict__ A) {
-  const size_t total = static_cast<size_t>(n) * static_cast<size_t>(n);
-  for (size_t t = blockIdx.x * static_cast<size_t>(blockDim.x) + threadIdx.x; t < total;
-       t += static_cast<size_t>(gridDim.x) * blockDim.x)
-    A[t] = A0[t] + (t % (static_cast<size_t>(n) + 1) == 0 ? ridge : 0.0);
-}
-
-__global__ void add_ridge_at_kernel(int n, const double* __restrict__ A0, const double* __restrict__ ridge, double* __restrict__ A) {
-  const double r = *ridge;
+__global__ void add_relative_ridge_kernel(int n, const double* __restrict__ A0, const double* __restrict__ relative,
+                                          const double* __restrict__ diag, double* __restrict__ diag_down, double* __restrict__ A) {
+  const double r = *relative * fmax(*diag, 1e-300);
+  if (blockIdx.x == 0 && threadIdx.x == 0) *diag_down = *diag;
   const size_t total = static_cast<size_t>(n) * static_cast<size_t>(n);
   for (size_t t = blockIdx.x * static_cast<size_t>(blockDim.x) + threadIdx.x; t < total;
        t += static_cast<size_t>(gridDim.x) * blockDim.x)
@@ -666,15 +661,11 @@ cudaError_t diag_abs_max(int n, const double* A, double* out, cudaStream_t strea
   return cudaGetLastError();
 }
 
-cudaError_t add_ridge(int n, const double* A0, double ridge, double* A, cudaStream_t stream) {
+cudaError_t add_relative_ridge(int n, const double* A0, const double* relative, const double* diag, double* diag_down, double* A,
+                               cudaStream_t stream) {
   const long long total = static_cast<long long>(n) * n;
-  add_ridge_kernel<<<static_cast<unsigned>(std::min<long long>((total + 255) / 256, 4096)), 256, 0, stream>>>(n, A0, ridge, A);
-  return cudaGetLastError();
-}
-
-cudaError_t add_ridge(int n, const double* A0, const double* ridge, double* A, cudaStream_t stream) {
-  const long long total = static_cast<long long>(n) * n;
-  add_ridge_at_kernel<<<static_cast<unsigned>(std::min<long long>((total + 255) / 256, 4096)), 256, 0, stream>>>(n, A0, ridge, A);
+  add_relative_ridge_kernel<<<static_cast<unsigned>(std::min<long long>((total + 255) / 256, 4096)), 256, 0, stream>>>(
+      n, A0, relative, diag, diag_down, A);
   return cudaGetLastError();
 }
 

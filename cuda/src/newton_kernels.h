@@ -63,7 +63,6 @@ cudaError_t max_safe_step(int G, const double2* ab, const double2* dab, double* 
 // *out = Σ a_i b_i; *out = max_i |A_ii| (A n × n column-major); A = A0 + ridge·I.
 cudaError_t dot(int n, const double* a, const double* b, double* out, cudaStream_t stream);
 cudaError_t diag_abs_max(int n, const double* A, double* out, cudaStream_t stream);
-cudaError_t add_ridge(int n, const double* A0, double ridge, double* A, cudaStream_t stream);
 // Every scalar output above may be pinned host memory (mapped at the same address under
 // unified addressing): the result then needs no copy.
 // Products of a tall complex matrix A (rows × k, column-major) with two columns, as
@@ -88,8 +87,11 @@ cudaError_t tall_adjoint_times_two(int rows, int k, const double2* A, const doub
 // g (G metrics) = Σ_j w_j keys_j, or metric_exp of it with `exponential` (K sets of G
 // metrics, w K weights on the device; zero weights skipped). NewtonCore::blend_targets.
 cudaError_t blend_metrics(int G, int K, const double* keys, const double* w, bool exponential, double* g, cudaStream_t stream);
-// Device-scalar forms for graph replays: A = A0 + (*ridge)·I; out = x + (*step)·d (n).
-cudaError_t add_ridge(int n, const double* A0, const double* ridge, double* A, cudaStream_t stream);
+// Device-scalar forms for graph replays: A = A0 + (*relative)·max(*diag, 1e-300)·I, and
+// *diag copied to *diag_down (NewtonStepper::solve's relative ridge, diag from
+// diag_abs_max or horizontal_system); out = x + (*step)·d (n).
+cudaError_t add_relative_ridge(int n, const double* A0, const double* relative, const double* diag, double* diag_down, double* A,
+                               cudaStream_t stream);
 cudaError_t trial_point(int n, const double* x, const double* d, const double* step, double* out, cudaStream_t stream);
 // The exact system modulo the rotation in place (device_newton.cpp, linearize), A
 // (dim+1)² and g (dim+1), with a = Tᵀu (dim+1; a[dim] = |u|²): A_TT −= (a kᵀ + k aᵀ)/|u|²

@@ -11,6 +11,7 @@
 #include <array>
 #include <cstdio>
 #include <limits>
+#include <optional>
 #include <omp.h>
 
 namespace hsi {
@@ -215,7 +216,7 @@ class HostStepper final : public NewtonStepper {
     return core_.energy() + quad_value(x_);
   }
 
-  double linearize(const HessianChoice& choice) override {
+  void linearize(const HessianChoice& choice) override {
     kept_.reset();
     exact_ = choice.exact;
     const Eigen::VectorXd& gv = gradient_at_x();
@@ -258,7 +259,6 @@ class HostStepper final : public NewtonStepper {
     }
     g_ = std::move(g);
     H_ = std::move(H);
-    return H_.diagonal().cwiseAbs().maxCoeff();
   }
 
   bool linearize_kept(const KeptSystem& slot) override {
@@ -380,7 +380,7 @@ class HostStepper final : public NewtonStepper {
       detail::cholesky_solve_factored(kept_->L.data(), kept_->L.rows(), rhs.data(), sol.data());
     } else {
       L_.resize(H_.rows(), H_.cols());
-      if (!detail::cholesky_factor(H_.data(), H_.rows(), ridge, L_.data())) return sys;
+      if (!detail::cholesky_factor(H_.data(), H_.rows(), ridge * std::max(sys.diagonal_max, 1e-300), L_.data())) return sys;
       detail::cholesky_solve_factored(L_.data(), L_.rows(), rhs.data(), sol.data());
     }
     if (horizontal_) {
@@ -468,8 +468,25 @@ NewtonResult newton_run(NewtonStepper& st, bool certify, bool rotation_invariant
     return res;
   };
   auto t0 = Clock::now();
-  double E = st.start(x0);
-  res.timing.energy_gradient += ms_since(t0);
+  KeptSystem* const kept = opt.kept_system;  // chord steps (NewtonOptions::kept_system)
+  // A solve that begins with a chord step from a start that needs no certificate of its
+  // own (a warm frame): the start, the chord's gradient and its solve asked together,
+  // so that the device is waited for once (NewtonStepper::start_deferred); a start that
+  // folds is still stopped below, the chord's numbers unused.
+  std::optional<NewtonSystem> chord_first;
+  double E = 0;
+  if (kept && !kept->empty() && opt.chord_from_start && (!certify || opt.start_certificate)) {
+    st.start_deferred(x0);
+    const bool solvable = st.linearize_kept(*kept);
+    res.timing.energy_gradient += ms_since(t0);
+    t0 = Clock::now();
+    chord_first = solvable ? st.solve(0) : NewtonSystem{};
+    E = st.start_energy();
+    res.timing.solve += ms_since(t0);
+  } else {
+    E = st.start(x0);
+    res.timing.energy_gradient += ms_since(t0);
+  }
   if (!std::isfinite(E)) {
     res.stop = NewtonStop::StartFolds;
     res.message = "the starting map folds or degenerates at a sample (infinite energy)";
@@ -517,7 +534,6 @@ NewtonResult newton_run(NewtonStepper& st, bool certify, bool rotation_invariant
   // on the accepted step is the final map's full certificate: res.certificate follows x.
   double dE_prev = -1;  // the previous step's decrease (none yet)
   int crawling = 0;     // accepted steps in a row at a linear rate ≥ stagnation_rate
-  KeptSystem* const kept = opt.kept_system;  // chord steps (NewtonOptions::kept_system)
   // The subset H's model failed (in this solve, or in an earlier one of the sequence:
   // NewtonOptions::carry_all_samples): Hessians over all of G from now on.
   KeptSystem* const carry = kept && opt.carry_all_samples == AllSamplesCarry::On ? kept : nullptr;
@@ -539,9 +555,8 @@ NewtonResult newton_run(NewtonStepper& st, bool certify, bool rotation_invariant
     NewtonSystem sys;
     auto build = [&](const HessianChoice& choice) {
       t0 = Clock::now();
-      const double diagonal_max = st.linearize(choice);
+      st.linearize(choice);
       res.timing.hessian += ms_since(t0);
-      return diagonal_max;
     };
     auto factor = [&](double ridge) {
       t0 = Clock::now();
@@ -572,15 +587,20 @@ NewtonResult newton_run(NewtonStepper& st, bool certify, bool rotation_invariant
     std::array<double, kTrialBatch> steps{}, energies{};
     int batch_begin = 0, batch_size = 0;  // the line search's trial batch (its first one asked here for a chord)
     if (kept && !kept->empty() && !prev && opt.chord_from_start) {
-      t0 = Clock::now();
-      const bool solvable = st.linearize_kept(*kept);
-      res.timing.energy_gradient += ms_since(t0);
-      if (solvable) factor(0);
+      if (chord_first) {
+        sys = *chord_first;  // (asked with the start)
+      } else {
+        t0 = Clock::now();
+        const bool solvable = st.linearize_kept(*kept);
+        res.timing.energy_gradient += ms_since(t0);
+        if (solvable) factor(0);
+      }
       if (sys.factored && sys.slope < -opt.descent_slope * scale) {
         t0 = Clock::now();
         batch_size = std::min(kTrialBatch, opt.max_backtracks + 1);
         double sj = std::min(1.0, opt.safe_fraction * sys.max_safe_step);
         for (int j = 0; j < batch_size; ++j, sj *= opt.shrink) steps[static_cast<size_t>(j)] = sj;
+        if (certify) st.certify_ahead(steps[0]);  // the step the line search certifies first
         st.trial_energies(std::span<const double>(steps.data(), static_cast<size_t>(batch_size)),
                           std::span<double>(energies.data(), static_cast<size_t>(batch_size)));
         res.timing.line_search += ms_since(t0);
@@ -600,19 +620,19 @@ NewtonResult newton_run(NewtonStepper& st, bool certify, bool rotation_invariant
       // Over H or over all of G (NewtonOptions::exact_samples).
       const bool exact_modulo = rotation_invariant && opt.exact_modulo_rotation;
       exact_on_all = all_samples || opt.exact_samples == ExactSamples::All;
-      double diagonal_max = build({true, projection, exact_modulo, exact_on_all});
-      factor_exact(opt.exact_ridge * diagonal_max);
+      build({true, projection, exact_modulo, exact_on_all});
+      factor_exact(opt.exact_ridge);
       if (!sys.factored && !exact_on_all && opt.exact_samples == ExactSamples::SubsetThenAll) {
         exact_on_all = true;
-        diagonal_max = build({true, projection, exact_modulo, true});
-        factor_exact(opt.exact_ridge * diagonal_max);
+        build({true, projection, exact_modulo, true});
+        factor_exact(opt.exact_ridge);
       }
       log.exact_hessian = sys.factored;
       if (sys.factored && kept) st.keep(*kept);  // the next solve's chord steps start from it
       // Indefinite, and the projections have not converged in shift_after iterations: the
       // exact system shifted past its lowest eigenvalue (NewtonOptions::shift_after).
       if (!sys.factored && opt.shift_after > 0 && it >= opt.shift_after) {
-        double shift = 1e-9 * std::max(diagonal_max, 1e-300);
+        double shift = 1e-9;  // (relative to max |diag H|, as every ridge)
         for (int attempt = 0; attempt < 9; ++attempt, shift *= 10) {
           factor(shift);
           if (sys.factored) break;
@@ -627,7 +647,7 @@ NewtonResult newton_run(NewtonStepper& st, bool certify, bool rotation_invariant
       for (int attempt = 0; attempt < opt.max_ridge_attempts; ++attempt) {
         factor(ridge);
         if (sys.factored) break;
-        ridge = ridge == 0 ? 1e-12 * std::max(sys.diagonal_max, 1e-300) : ridge * 10;
+        ridge = ridge == 0 ? 1e-12 : ridge * 10;
       }
     }
     if (!sys.factored) {
@@ -687,6 +707,7 @@ NewtonResult newton_run(NewtonStepper& st, bool certify, bool rotation_invariant
         batch_size = std::min(kTrialBatch, opt.max_backtracks + 1 - bt);
         double sj = s;
         for (int j = 0; j < batch_size; ++j, sj *= opt.shrink) steps[static_cast<size_t>(j)] = sj;
+        if (certify && bt == 0) st.certify_ahead(s);  // the step the line search certifies first
         st.trial_energies(std::span<const double>(steps.data(), static_cast<size_t>(batch_size)),
                           std::span<double>(energies.data(), static_cast<size_t>(batch_size)));
       }

@@ -185,10 +185,19 @@ class NewtonStepper {
   virtual ~NewtonStepper() = default;
   // x ← x0; the total energy there (mean over G plus the quadratic term), +inf if it folds.
   virtual double start(const Eigen::VectorXd& x0) = 0;
-  // The gradient and the chosen Hessian at x (the quadratic term's added); returns
-  // max |diagonal of H|, the scale of a ridge.
-  virtual double linearize(const HessianChoice& choice) = 0;
-  // d from (H + ridge I) d = −g of the last linearize(), and the safe step along it.
+  // start() whose energy may come later: start_energy() gives it, and the GPU stepper
+  // waits for the device only at its next call that waits anyway (newton_run begins a
+  // chord step with it: the chord's solve brings the energy along). Default: start().
+  virtual void start_deferred(const Eigen::VectorXd& x0) { deferred_energy_ = start(x0); }
+  virtual double start_energy() { return deferred_energy_; }
+  // The gradient and the chosen Hessian at x (the quadratic term's added). A stepper
+  // may return before they are made (the GPU's: solve() waits for them).
+  virtual void linearize(const HessianChoice& choice) = 0;
+  // d from (H + ridge · max|diag H| · I) d = −g of the last linearize() (the ridge
+  // relative to the system's scale, NewtonSystem::diagonal_max; max|diag H| taken as at
+  // least 1e-300), and the safe step along it. Relative, so that the loop needs no
+  // number from linearize() before it asks for the factor: the GPU stepper runs both
+  // without waiting between them.
   virtual NewtonSystem solve(double ridge) = 0;
   // The factor and the Newton decrement alone, for a solve that may stop on it (the exact
   // system near the solution): solve()'s system with slope = −‖L⁻¹g‖² (the forward
@@ -204,6 +213,11 @@ class NewtonStepper {
   // The certificate of x ⊕ step·d (step 0: of x). Full: every segment, with bounds;
   // otherwise it may stop at the first failure (a pass has looked at every segment).
   virtual CertificateResult certify(double step, bool full) = 0;
+  // A certify(step, false) the loop will likely ask for next, asked ahead: a stepper may
+  // start it now and hand its result to that call (the GPU stepper enqueues it before the
+  // trial energies the loop asks for first, so one wait brings both). Any other call of
+  // certify() or accept() drops it. Default: nothing.
+  virtual void certify_ahead(double /*step*/) {}
   // x ← x ⊕ step·d: exactly the point certify(step, ·) looked at.
   virtual void accept(double step) = 0;
   virtual Eigen::VectorXd x() = 0;
@@ -215,6 +229,9 @@ class NewtonStepper {
   // stepper's to solve with.
   virtual bool keep(KeptSystem& /*slot*/) { return false; }
   virtual bool linearize_kept(const KeptSystem& /*slot*/) { return false; }
+
+ private:
+  double deferred_energy_ = 0;  // start_deferred's, by default
 };
 
 // The host stepper: reduced-space algebra with Eigen over the core's per-call interface.
