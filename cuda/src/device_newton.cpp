@@ -394,8 +394,8 @@ class DeviceStepper final : public NewtonStepper {
   double* down(Slot s) const { return S_.sc_down.get() + s; }
 
   // The pinned parameter slots are written only once the graph that last copied from
-  // them has run past that copy.
-  // The slot group of a parameter slot (DeviceSpace::params_done).
+  // them has run past that copy, tracked per group of slots (DeviceSpace::params_done):
+  // the ridge, the step, the trial steps.
   static int group(Slot s) { return s == kRidge ? 0 : s == kStep ? 1 : 2; }
   template <class Fill>
   void write_params(Slot slot, Fill&& fill) {
