@@ -639,7 +639,7 @@ class DeviceStepper final : public NewtonStepper {
   bool exact_ = false;           // the last linearize() built the exact Hessian
   bool factored_exact_ = false;  // the last solve() factored it (keep() may copy S_.Hr)
   bool own_factor_ = false;      // … with dense_cholesky.h's kernel
-  double diagonal_max_ = 0;      // the last linearize()'s max |diag|
+  double diagonal_max_ = 0;      // max |diag| of the last system solve() factored (its ridge kernel's copy)
   bool x_down_valid_ = false;    // S_.x_down holds x (a solve's graph copied it since x last moved)
   bool start_pending_ = false;   // start_deferred's graph not yet waited for (start_energy)
   double start_quad_ = 0;        // the quadratic term at the start

@@ -60,7 +60,7 @@ cudaError_t max_safe_step(int G, const double2* ab, const double2* dab, double* 
                           cudaStream_t stream);
 
 // The reduced system's small helpers (one block each, deterministic):
-// *out = Σ a_i b_i; *out = max_i |A_ii| (A n × n column-major); A = A0 + ridge·I.
+// *out = Σ a_i b_i; *out = max_i |A_ii| (A n × n column-major; the ridge: add_relative_ridge below).
 cudaError_t dot(int n, const double* a, const double* b, double* out, cudaStream_t stream);
 cudaError_t diag_abs_max(int n, const double* A, double* out, cudaStream_t stream);
 // Every scalar output above may be pinned host memory (mapped at the same address under
