@@ -24,6 +24,7 @@
 #include "hsi/keyframes.h"
 #include "hsi/mesh_evaluator.h"
 #include "hsi/triangulate.h"
+#include "trace_range.h"
 
 using namespace hsi;
 namespace hc = hsi::cuda;
@@ -168,7 +169,7 @@ struct SequenceStats {
 // the frames' images too. chord: InterpolationOptions::chord_steps; exact:
 // InterpolationOptions::exact_samples.
 template <class MakeCore>
-SequenceStats run_sequence(const Loaded& L, MakeCore&& make_core, int frames, bool gpu_boundary, bool pipelined = true,
+SequenceStats run_sequence(const std::string& label, const Loaded& L, MakeCore&& make_core, int frames, bool gpu_boundary, bool pipelined = true,
                            int crossing_reps = 0, bool chord = true, ExactSamples exact = InterpolationOptions{}.exact_samples) {
   SequenceStats s;
   auto t0 = Clock::now();
@@ -185,7 +186,10 @@ SequenceStats run_sequence(const Loaded& L, MakeCore&& make_core, int frames, bo
   s.interpolator_ms = ms_since(t0);
   t0 = Clock::now();
   const long launches0 = hc::graph_counts().launches.load(), nodes0 = hc::graph_counts().nodes.load();
-  const auto seq = interp.sequence(frames);
+  const auto seq = [&] {
+    const bench::TraceRange range("sequence " + label);  // (bench/cuda_trace)
+    return interp.sequence(frames);
+  }();
   s.parts = bench::frame_parts(seq, ms_since(t0));
   {
     int solved_frames = 0;
@@ -442,15 +446,15 @@ int main(int argc, char** argv) {
       gpu.reset();
       SequenceStats sc, sh, sg, ss, sgn, scn, sga, sgt, sca, sct;
       std::fprintf(stderr, "  sequence (CUDA, device loop)\n");
-      sg = run_sequence(L, [&] { return hc::make_newton_core(*L.setup); }, frames, true, true, std::max(reps, 1));
+      sg = run_sequence("cuda", L, [&] { return hc::make_newton_core(*L.setup); }, frames, true, true, std::max(reps, 1));
       std::fprintf(stderr, "  sequence (CUDA, device loop, crossing search in series)\n");
-      ss = run_sequence(L, [&] { return hc::make_newton_core(*L.setup); }, frames, true, false);
+      ss = run_sequence("cuda-series", L, [&] { return hc::make_newton_core(*L.setup); }, frames, true, false);
       std::fprintf(stderr, "  sequence (CUDA, device loop, no chord steps)\n");
-      sgn = run_sequence(L, [&] { return hc::make_newton_core(*L.setup); }, frames, true, true, 0, false);
+      sgn = run_sequence("cuda-nochord", L, [&] { return hc::make_newton_core(*L.setup); }, frames, true, true, 0, false);
       std::fprintf(stderr, "  sequence (CUDA, device loop, exact systems over H)\n");
-      sga = run_sequence(L, [&] { return hc::make_newton_core(*L.setup); }, frames, true, true, 0, true, ExactSamples::Subset);
+      sga = run_sequence("cuda-exact-subset", L, [&] { return hc::make_newton_core(*L.setup); }, frames, true, true, 0, true, ExactSamples::Subset);
       std::fprintf(stderr, "  sequence (CUDA, device loop, exact systems over H, then G where indefinite)\n");
-      sgt = run_sequence(L, [&] { return hc::make_newton_core(*L.setup); }, frames, true, true, 0, true, ExactSamples::SubsetThenAll);
+      sgt = run_sequence("cuda-exact-then-all", L, [&] { return hc::make_newton_core(*L.setup); }, frames, true, true, 0, true, ExactSamples::SubsetThenAll);
       {
         const bench::CrossingSearchTimes& c = sg.crossing;
         std::snprintf(row, sizeof row, "| %s | %d | %d | %d (%d) | %.3f | %.3f | %.1f | %s |\n", L.name.c_str(), G, c.points,
@@ -460,15 +464,15 @@ int main(int argc, char** argv) {
       }
       if (samples <= cpu_sequence_max) {
         std::fprintf(stderr, "  sequence (CUDA, host loop)\n");
-        sh = run_sequence(L, [&] { return hc::make_newton_core(L.setup->D_G, L.setup->H); }, frames, false);
+        sh = run_sequence("cuda-host", L, [&] { return hc::make_newton_core(L.setup->D_G, L.setup->H); }, frames, false);
         std::fprintf(stderr, "  sequence (CPU)\n");
-        sc = run_sequence(L, [&] { return make_cpu_newton_core(L.setup->D_G, L.setup->H); }, frames, false);
+        sc = run_sequence("cpu", L, [&] { return make_cpu_newton_core(L.setup->D_G, L.setup->H); }, frames, false);
         std::fprintf(stderr, "  sequence (CPU, no chord steps)\n");
-        scn = run_sequence(L, [&] { return make_cpu_newton_core(L.setup->D_G, L.setup->H); }, frames, false, true, 0, false);
+        scn = run_sequence("cpu-nochord", L, [&] { return make_cpu_newton_core(L.setup->D_G, L.setup->H); }, frames, false, true, 0, false);
         std::fprintf(stderr, "  sequence (CPU, exact systems over all of G)\n");
-        sca = run_sequence(L, [&] { return make_cpu_newton_core(L.setup->D_G, L.setup->H); }, frames, false, true, 0, true, ExactSamples::All);
+        sca = run_sequence("cpu-exact-all", L, [&] { return make_cpu_newton_core(L.setup->D_G, L.setup->H); }, frames, false, true, 0, true, ExactSamples::All);
         std::fprintf(stderr, "  sequence (CPU, exact systems over H, then G where indefinite)\n");
-        sct = run_sequence(L, [&] { return make_cpu_newton_core(L.setup->D_G, L.setup->H); }, frames, false, true, 0, true, ExactSamples::SubsetThenAll);
+        sct = run_sequence("cpu-exact-then-all", L, [&] { return make_cpu_newton_core(L.setup->D_G, L.setup->H); }, frames, false, true, 0, true, ExactSamples::SubsetThenAll);
       }
       const std::pair<const char*, const SequenceStats*> rows[] = {
           {"cpu", &sc}, {"cpu-nochord", &scn}, {"cpu-exact-all", &sca}, {"cpu-exact-then-all", &sct}, {"cuda-host", &sh},
