@@ -162,7 +162,8 @@ struct SequenceStats {
   double graph_launches = 0, graph_nodes = 0;
 };
 
-// gpu_boundary: the overlap check's image (f at its breakpoints) by the CUDA mesh
+// label: the row's backend label, also the name of the NVTX range around the sequence
+// ("sequence <label>", for bench/cuda_trace). gpu_boundary: the overlap check's image (f at its breakpoints) by the CUDA mesh
 // evaluator, as runtime's make_newton_core gives with the CUDA core; else the setup's CPU
 // one. pipelined: InterpolationOptions::pipelined_overlap (the crossing search beside the
 // next solve; off: in series). crossing_reps > 0: the crossing search alone timed on
