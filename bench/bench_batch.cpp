@@ -16,7 +16,6 @@
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
-#include <optional>
 #include <set>
 
 #include <sys/resource.h>
@@ -277,14 +276,14 @@ int main(int argc, char** argv) {
           o.make_core = factories.make_core;
           o.make_boundary = image == "host" ? nullptr : factories.make_boundary;
           const double c0 = process_cpu_s();
-          std::optional<bench::TraceRange> range(std::in_place, "batch W=" + std::to_string(W) + " wait " + wait + " exact " + exact +
-                                                                    " image " + image);  // (bench/cuda_trace)
-          const BatchResult r = solve_batch(batch, o, [&](const FrameResult&, int, int, size_t done, size_t all) {
-            if (done % 100 == 0 || done == all) std::fprintf(stderr, "\r[batch W = %d, wait %s, exact %s, image %s] %zu/%zu frames   ", W, wait.c_str(), exact.c_str(),
-                                                     image.c_str(), done, all);
-            return true;
-          });
-          range.reset();
+          const BatchResult r = [&] {
+            const bench::TraceRange range("batch W=" + std::to_string(W) + " wait " + wait + " exact " + exact + " image " + image);  // (bench/cuda_trace)
+            return solve_batch(batch, o, [&](const FrameResult&, int, int, size_t done, size_t all) {
+              if (done % 100 == 0 || done == all) std::fprintf(stderr, "\r[batch W = %d, wait %s, exact %s, image %s] %zu/%zu frames   ", W, wait.c_str(), exact.c_str(),
+                                                       image.c_str(), done, all);
+              return true;
+            });
+          }();
           std::fprintf(stderr, "\n");
           Row row;
           row.path = "batch";

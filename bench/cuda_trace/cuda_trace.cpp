@@ -20,13 +20,13 @@
 #include <cupti.h>
 #include <cxxabi.h>
 
-#include <atomic>
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <mutex>
 #include <string>
+#include <string_view>
 #include <unordered_map>
 #include <vector>
 
@@ -49,7 +49,7 @@ struct Trace {
   std::vector<Record> records;
   std::unordered_map<std::string, std::string> demangled;
   size_t max_records = 4000000;
-  std::atomic<std::uint64_t> dropped{0};
+  std::uint64_t dropped = 0;  // records past max_records (under mutex, as all of this)
   std::string out = "hsi_trace.tsv";
   bool written = false;
 };
@@ -67,7 +67,8 @@ const std::string& demangle(Trace& t, const char* name) {
   std::string s = status == 0 && d ? d : name;
   std::free(d);
   // Keep the function's qualified name: drop the parameter list (the last top-level
-  // parentheses; "(anonymous namespace)" stays), template arguments and the return type.
+  // parentheses, not "(anonymous namespace)"), template arguments, the anonymous
+  // namespace and a template's return type.
   if (!s.empty() && s.back() == ')') {
     int depth = 0;
     for (size_t q = s.size(); q-- > 0;) {
@@ -87,9 +88,9 @@ const std::string& demangle(Trace& t, const char* name) {
     }
     s.erase(p, q - p + 1);
   }
-  if (auto p = s.rfind(' '); p != std::string::npos && s.find('(') == std::string::npos) s.erase(0, p + 1);  // "void f" -> "f"
-  for (const char* anon : {"(anonymous namespace)::"})
-    for (auto p = s.find(anon); p != std::string::npos; p = s.find(anon)) s.erase(p, std::strlen(anon));
+  constexpr std::string_view anon = "(anonymous namespace)::";
+  for (auto p = s.find(anon); p != std::string::npos; p = s.find(anon)) s.erase(p, anon.size());
+  if (auto p = s.rfind(' '); p != std::string::npos) s.erase(0, p + 1);  // a template's return type: "void f" -> "f"
   for (char& c : s)
     if (c == '\t' || c == '\n') c = ' ';
   return t.demangled.emplace(name, s).first->second;
@@ -112,7 +113,7 @@ void CUPTIAPI buffer_completed(CUcontext, std::uint32_t, std::uint8_t* buffer, s
   CUpti_Activity* a = nullptr;
   while (cuptiActivityGetNextRecord(buffer, valid, &a) == CUPTI_SUCCESS) {
     if (t.records.size() >= t.max_records) {
-      t.dropped.fetch_add(1);
+      ++t.dropped;
       continue;
     }
     Record r{};
@@ -176,7 +177,7 @@ void write_trace() {
     return;
   }
   std::fprintf(f, "# hsi_cuda_trace: kind start_ns end_ns stream_or_thread graph node extra name; dropped %llu\n",
-               static_cast<unsigned long long>(t.dropped.load()));
+               static_cast<unsigned long long>(t.dropped));
   for (const Record& r : t.records) {
     const std::string& name = r.kind == 'e' ? range_names[r.extra] : r.name;
     std::fprintf(f, "%c\t%llu\t%llu\t%u\t%u\t%llu\t%llu\t%s\n", r.kind, static_cast<unsigned long long>(r.start),
@@ -185,7 +186,7 @@ void write_trace() {
   }
   std::fclose(f);
   std::fprintf(stderr, "hsi_cuda_trace: %zu records (%llu dropped) in %s\n", t.records.size(),
-               static_cast<unsigned long long>(t.dropped.load()), t.out.c_str());
+               static_cast<unsigned long long>(t.dropped), t.out.c_str());
 }
 
 bool check(CUptiResult r, const char* what) {

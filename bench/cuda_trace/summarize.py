@@ -34,10 +34,10 @@ def load(path):
 
 
 def ranges_of(recs):
-    """NVTX push/pop pairs per thread, in order."""
+    """NVTX push/pop pairs (a start and an end share CUPTI's range id), by start time."""
     open_ = collections.defaultdict(list)
     out = []
-    for kind, start, _end, thread, _g, _n, rid, name in sorted((r for r in recs if r[0] in "re"), key=lambda r: r[1]):
+    for kind, start, _end, _thread, _g, _n, rid, name in sorted((r for r in recs if r[0] in "re"), key=lambda r: r[1]):
         if kind == "r":
             open_[rid].append((start, name))
         elif open_[rid]:
