@@ -22,14 +22,17 @@ def load(path):
     recs = []
     header = ""
     with open(path) as f:
-        for line in f:
+        for number, line in enumerate(f, 1):
             if line.startswith("#"):
                 header = line.strip()
                 continue
-            p = line.rstrip("\n").split("\t")
-            if len(p) < 8:
-                continue
-            recs.append((p[0], int(p[1]), int(p[2]), int(p[3]), int(p[4]), int(p[5]), int(p[6]), p[7]))
+            p = line.rstrip("\n").split("\t", 7)
+            try:
+                if len(p) != 8 or p[0] not in "kcsare" or len(p[0]) != 1:
+                    raise ValueError("expected 8 tab-separated fields, the first one of k c s a r e")
+                recs.append((p[0], int(p[1]), int(p[2]), int(p[3]), int(p[4]), int(p[5]), int(p[6]), p[7]))
+            except ValueError as e:
+                raise ValueError(f"{path}, line {number}: not a libhsi_cuda_trace.so record ({e})") from None
     return header, recs
 
 
@@ -145,7 +148,11 @@ def main():
     ap.add_argument("--per", type=float, default=0, help="also divide by this (e.g. the solved frames)")
     ap.add_argument("--top", type=int, default=25)
     a = ap.parse_args()
-    header, recs = load(a.trace)
+    try:
+        header, recs = load(a.trace)
+    except (OSError, ValueError) as e:
+        print(f"summarize.py: {e}", file=sys.stderr)
+        return 2
     print(f"trace {a.trace}: {len(recs)} records; {header}")
     rs = [r for r in ranges_of(recs) if a.range in r[0]]
     if not rs:

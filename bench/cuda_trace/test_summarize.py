@@ -2,6 +2,7 @@
 """summarize.py's arithmetic on a made-up trace (CTest: cuda_trace_summary)."""
 import os
 import sys
+import tempfile
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import summarize  # noqa: E402
@@ -37,4 +38,14 @@ assert st["calls"]["cudaStreamSynchronize_v3020"] == 1 and st["calls"]["cudaGrap
 assert st["by_name"]["kernA"] == [2, 4.0]
 # A record that only starts inside the range is not counted in it.
 assert summarize.analyze(4500, 20000, recs)["kernels"] == 1.0
+# A file that is not a trace: an error naming the file and line, not a silent skip.
+with tempfile.NamedTemporaryFile("w", suffix=".tsv", delete=False) as f:
+    f.write("# hsi_cuda_trace\nk\t1\t2\t3\t0\t0\t1\tkern\nk\t1\tnot-a-number\t3\t0\t0\t1\tkern\n")
+try:
+    summarize.load(f.name)
+    raise AssertionError("a malformed record was accepted")
+except ValueError as e:
+    assert "line 3" in str(e) and f.name in str(e), e
+finally:
+    os.unlink(f.name)
 print("summarize.py: ok")
