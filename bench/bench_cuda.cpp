@@ -168,10 +168,11 @@ struct SequenceStats {
 // one. pipelined: InterpolationOptions::pipelined_overlap (the crossing search beside the
 // next solve; off: in series). crossing_reps > 0: the crossing search alone timed on
 // the frames' images too. chord: InterpolationOptions::chord_steps; exact:
-// InterpolationOptions::exact_samples.
+// InterpolationOptions::exact_samples; chord_stop: InterpolationOptions::chord_decrement_stop.
 template <class MakeCore>
 SequenceStats run_sequence(const std::string& label, const Loaded& L, MakeCore&& make_core, int frames, bool gpu_boundary, bool pipelined = true,
-                           int crossing_reps = 0, bool chord = true, ExactSamples exact = InterpolationOptions{}.exact_samples) {
+                           int crossing_reps = 0, bool chord = true, ExactSamples exact = InterpolationOptions{}.exact_samples,
+                           double chord_stop = InterpolationOptions{}.chord_decrement_stop) {
   SequenceStats s;
   auto t0 = Clock::now();
   std::unique_ptr<NewtonCore> core = make_core();
@@ -182,6 +183,7 @@ SequenceStats run_sequence(const std::string& label, const Loaded& L, MakeCore&&
   InterpolationOptions o;
   o.pipelined_overlap = pipelined;
   o.chord_steps = chord;
+  o.chord_decrement_stop = chord ? chord_stop : 0.0;
   o.exact_samples = exact;
   Interpolator interp(*L.setup, L.times, L.maps, o, std::move(core), std::move(boundary));
   s.interpolator_ms = ms_since(t0);
@@ -376,6 +378,8 @@ int main(int argc, char** argv) {
        << "cuda-host: the CUDA core driven call by call from the host (Cholesky and certificate on the CPU); "
           "cuda: the whole solve on the GPU (cuSOLVER, GPU line search and certificate); -nochord: the same without chord "
           "steps (InterpolationOptions::chord_steps off: every frame's systems built and factored at its own points); "
+          "-chordstop: with the chord decrement stop at 1 % of the tolerance (InterpolationOptions::chord_decrement_stop "
+          "0.01: after a full chord step a frame may end on the kept system's decrement, with no exact system of its own); "
           "-exact-all / -exact-subset: exact systems' Hessians over all of G / over H, -exact-then-all: over H, then over G "
           "where that is not positive definite (InterpolationOptions::exact_samples; the other rows: its default, Auto: "
           "the core's choice, over H on the CPU and over G on CUDA). "
@@ -445,13 +449,16 @@ int main(int argc, char** argv) {
       if (skip_sequence) continue;
       cpu.reset();  // the sequences make their own cores
       gpu.reset();
-      SequenceStats sc, sh, sg, ss, sgn, scn, sga, sgt, sca, sct;
+      SequenceStats sc, sh, sg, ss, sgn, sgs, scn, sga, sgt, sca, sct;
       std::fprintf(stderr, "  sequence (CUDA, device loop)\n");
       sg = run_sequence("cuda", L, [&] { return hc::make_newton_core(*L.setup); }, frames, true, true, std::max(reps, 1));
       std::fprintf(stderr, "  sequence (CUDA, device loop, crossing search in series)\n");
       ss = run_sequence("cuda-series", L, [&] { return hc::make_newton_core(*L.setup); }, frames, true, false);
       std::fprintf(stderr, "  sequence (CUDA, device loop, no chord steps)\n");
       sgn = run_sequence("cuda-nochord", L, [&] { return hc::make_newton_core(*L.setup); }, frames, true, true, 0, false);
+      std::fprintf(stderr, "  sequence (CUDA, device loop, chord decrement stop at 1 %% of the tolerance)\n");
+      sgs = run_sequence("cuda-chordstop", L, [&] { return hc::make_newton_core(*L.setup); }, frames, true, true, 0, true,
+                         InterpolationOptions{}.exact_samples, 0.01);
       std::fprintf(stderr, "  sequence (CUDA, device loop, exact systems over H)\n");
       sga = run_sequence("cuda-exact-subset", L, [&] { return hc::make_newton_core(*L.setup); }, frames, true, true, 0, true, ExactSamples::Subset);
       std::fprintf(stderr, "  sequence (CUDA, device loop, exact systems over H, then G where indefinite)\n");
@@ -477,7 +484,7 @@ int main(int argc, char** argv) {
       }
       const std::pair<const char*, const SequenceStats*> rows[] = {
           {"cpu", &sc}, {"cpu-nochord", &scn}, {"cpu-exact-all", &sca}, {"cpu-exact-then-all", &sct}, {"cuda-host", &sh},
-          {"cuda", &sg}, {"cuda-nochord", &sgn}, {"cuda-exact-subset", &sga}, {"cuda-exact-then-all", &sgt}, {"cuda-series", &ss}};
+          {"cuda", &sg}, {"cuda-nochord", &sgn}, {"cuda-chordstop", &sgs}, {"cuda-exact-subset", &sga}, {"cuda-exact-then-all", &sgt}, {"cuda-series", &ss}};
       for (const auto& [label, s] : rows) {
         if (!s->ran) {
           std::snprintf(row, sizeof row, "| %s | %d | %s | skipped (--cpu-sequence-max-samples) | | | | | | | | | | | | | | |\n",

@@ -253,7 +253,8 @@ int main(int argc, char** argv) {
   std::string predict_start = to_string(InterpolationOptions{}.predict_start);
   double hessian_ratio = 0;
   std::string exact_samples = to_string(InterpolationOptions{}.exact_samples);
-  double time_limit = 0, projected_decrement_stop = InterpolationOptions{}.projected_decrement_stop;
+  double time_limit = 0, projected_decrement_stop = InterpolationOptions{}.projected_decrement_stop,
+         chord_decrement_stop = InterpolationOptions{}.chord_decrement_stop;
   app.add_option("--corpus", corpus_file, "The corpus file")->capture_default_str();
   app.add_option("--shapes", shapes_opt, "Only these shapes (comma-separated names)");
   app.add_option("--families", families_opt, "Only shapes of these families: bundled, thin, grid, sprite");
@@ -284,6 +285,11 @@ int main(int argc, char** argv) {
   app.add_flag("--no-checked-decrement-stop", no_checked_stop,
                "Without the checked decrement stop (InterpolationOptions::checked_decrement_stop off): a projected "
                "decrement below the tolerance, scaled by the previous full step's model error, does not end a frame");
+  app.add_option("--chord-decrement-stop", chord_decrement_stop,
+                 "Converged also when, after a full chord step, the kept system's decrement (scaled by that step's model "
+                 "error) is below this fraction of the tolerance (InterpolationOptions::chord_decrement_stop; 0: never)")
+      ->capture_default_str()
+      ->check(unit_interval("0: never"));
   app.add_flag("--no-carry-all-samples", no_carry,
                "A frame's move of its Hessians to all of G is not carried to the next frames "
                "(InterpolationOptions::carry_all_samples off; by default on the CUDA core)");
@@ -403,10 +409,10 @@ int main(int argc, char** argv) {
   std::printf("Machine: %s, %d logical cores; backend %s; %d workers x %d OpenMP threads\n", machine.cpu.c_str(), machine.cores,
               backend.c_str(), jobs, omp_threads);
   std::printf("Corpus: %s (seed %d): %d of %zu sequences on %zu shapes; |G| %s; frames per interval %s; projections %s; "
-              "iteration cap %d; exact systems over %s; projected-decrement stop %g%s%s%s%s%s%s\n\n",
+              "iteration cap %d; exact systems over %s; projected-decrement stop %g; chord-decrement stop %g%s%s%s%s%s%s\n\n",
               corpus_file.c_str(), corpus.seed, total_sequences, corpus.sequences.size(), plan.size(),
               samples > 0 ? std::to_string(samples).c_str() : "per sequence", frames_opt.c_str(), projections_opt.c_str(),
-              max_iterations, exact_samples.c_str(), projected_decrement_stop, paper_newton ? "; the paper's plain Newton (--paper-newton)" : "",
+              max_iterations, exact_samples.c_str(), projected_decrement_stop, no_chord || paper_newton ? 0.0 : chord_decrement_stop, paper_newton ? "; the paper's plain Newton (--paper-newton)" : "",
               no_chord && !paper_newton ? "; no chord steps (--no-chord)" : "",
               no_checked_stop && !paper_newton ? "; no checked decrement stop (--no-checked-decrement-stop)" : "",
               no_carry && !paper_newton ? "; no carry of all samples (--no-carry-all-samples)" : "",
@@ -647,6 +653,7 @@ int main(int argc, char** argv) {
       o.exact_samples = parse_exact_samples(exact_samples);
       o.projected_decrement_stop = projected_decrement_stop;
       o.checked_decrement_stop = !no_checked_stop && !paper_newton;
+      o.chord_decrement_stop = no_chord || paper_newton ? 0.0 : chord_decrement_stop;
       if (no_carry || paper_newton) o.carry_all_samples = AllSamplesCarry::Off;
       o.projection = run.p;
       o.max_iterations = max_iterations;
@@ -696,7 +703,7 @@ int main(int argc, char** argv) {
   out["options"] = {{"corpus", corpus_file},     {"seed", corpus.seed},         {"samples", samples},
                     {"frames", frame_counts},    {"projections", split(projections_opt)}, {"max_iterations", max_iterations},
                     {"limit", limit},            {"paper_newton", paper_newton}, {"time_limit", time_limit},
-                    {"hessian_ratio", hessian_ratio}, {"chord_steps", !no_chord && !paper_newton}, {"predict_start", paper_newton ? "off" : predict_start}, {"checked_decrement_stop", !no_checked_stop && !paper_newton}, {"carry_all_samples", no_carry || paper_newton ? "off" : "auto"}, {"exact_samples", exact_samples},
+                    {"hessian_ratio", hessian_ratio}, {"chord_steps", !no_chord && !paper_newton}, {"predict_start", paper_newton ? "off" : predict_start}, {"checked_decrement_stop", !no_checked_stop && !paper_newton}, {"chord_decrement_stop", no_chord || paper_newton ? 0.0 : chord_decrement_stop}, {"carry_all_samples", no_carry || paper_newton ? "off" : "auto"}, {"exact_samples", exact_samples},
                     {"projected_decrement_stop", projected_decrement_stop}, {"reverse_loops", reverse_loops}};
   json runs_json = json::array(), shapes_json = json::array();
   std::map<RunKey, Stats> total;

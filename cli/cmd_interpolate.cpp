@@ -28,7 +28,7 @@ void register_interpolate(CLI::App& app) {
   struct Opts {
     std::string scene, out = "out";
     int frames = 500, samples = 0, png_count = 16, max_iterations = 100, per_interval = 0;
-    double ratio = 0, tolerance = 5e-8;
+    double ratio = 0, tolerance = 5e-8, chord_decrement_stop = InterpolationOptions{}.chord_decrement_stop;
     std::string projection = "fullproj";
     std::string exact_samples = to_string(InterpolationOptions{}.exact_samples);
     std::string backend = "auto";
@@ -71,6 +71,11 @@ void register_interpolate(CLI::App& app) {
   cmd->add_flag("--no-chord", o->no_chord,
                 "Build every frame's Newton systems at its own points: no chord step solved with the previous frame's last "
                 "exact system (slower; the same frames within the tolerance)");
+  cmd->add_option("--chord-decrement-stop", o->chord_decrement_stop,
+                  "After a frame's full chord step, stop it when the kept system's decrement (scaled by that step's model "
+                  "error) is below this share of the tolerance, with no exact system of its own (0: never)")
+      ->capture_default_str()
+      ->check(CLI::Range(0.0, 1.0));
   cmd->add_flag("--no-carry-all-samples", o->no_carry,
                 "Start every frame's Hessians on the subset H, even after an earlier frame's solve moved them to all of G "
                 "(by default a sequence carries that move on the CUDA core)");
@@ -116,6 +121,7 @@ void register_interpolate(CLI::App& app) {
     if (o->projected_only) io.escalate_after_iterations = 0;  // the chosen projection throughout
     io.free_rotation = !o->gauged_rotation;
     io.chord_steps = !o->no_chord;
+    io.chord_decrement_stop = o->chord_decrement_stop;
     if (o->no_carry) io.carry_all_samples = AllSamplesCarry::Off;
     io.exact_samples = parse_exact_samples(o->exact_samples);
     io.predict_start = parse_predict_start(o->predict_start);

@@ -1043,6 +1043,84 @@ TEST_CASE("newton_run: a solve's first step is a chord step with the kept system
   CHECK((r.x - f.a).norm() < 1e-3);
 }
 
+TEST_CASE("newton_run: chord_decrement_stop ends a solve whose kept system's decrement after a full chord step, scaled, is below its share",
+          "[newton][loop][chord]") {
+  // A kept system `stiff` times the true Hessian (A = I, quadratic energy): the chord step
+  // from e0 leaves e1 = e0 (1 − 1/stiff), lowers the energy by r = 2 − 1/stiff times its
+  // model's decrement, and the kept system's decrement at x, e1²/(2 stiff), scaled by
+  // 1/(2 − r) = stiff is e1²/2: what is left, exactly.
+  const double tol = NewtonOptions{}.tolerance * 2;  // tolerance·|E| at E ≈ 2
+  struct Run {
+    NewtonResult r;
+    size_t systems_built;  // linearize() calls: systems made at the solve's own points
+    int kept_linearizations;
+  };
+  const auto solve = [&](double stiff, double left_share, double rule) {
+    FakeStepper f;
+    f.K = f.A;
+    f.kept_scale = stiff;
+    KeptSystem slot;
+    slot.owner = &f;
+    NewtonOptions o;
+    o.kept_system = &slot;
+    o.expand_ratio = 0;  // full steps only: the rule reads the chord's
+    o.chord_decrement_stop = rule;
+    const double e1 = std::sqrt(2 * left_share * tol), e0 = e1 / (1 - 1 / stiff);
+    const NewtonResult r = newton_run(f, true, true, f.a + Eigen::Vector2d(e0, 0), o);
+    return Run{r, f.choices.size(), f.kept_linearizations};
+  };
+  // 5 % of the tolerance left, a kept system 20 % too stiff: one chord step, then the
+  // kept system's decrement ends the solve (share 0.1); no system of its own is built.
+  {
+    const Run on = solve(1.2, 0.05, 0.1);
+    INFO(on.r.message);
+    CHECK(on.r.converged);
+    CHECK(on.r.certified);
+    CHECK(on.r.iterations == 1);
+    CHECK(on.r.log[0].chord);
+    CHECK(on.r.message.find("chord decrement") != std::string::npos);
+    CHECK(on.systems_built == 0);
+    CHECK(on.kept_linearizations == 2);  // the chord step's and the decrement's
+    CHECK(on.r.energy - 2 < 0.1 * tol);  // what the stop left: within its share
+    // Without the rule the exact system is built at x, and its decrement ends the solve.
+    const Run off = solve(1.2, 0.05, 0);
+    CHECK(off.r.converged);
+    CHECK(off.r.iterations == 1);
+    CHECK(off.r.message.find("chord decrement") == std::string::npos);
+    CHECK(off.systems_built >= 1);
+    CHECK(off.kept_linearizations == 1);
+  }
+  // 50 % of the tolerance left: above the share, so the exact system decides, as without it.
+  {
+    const Run above = solve(1.2, 0.5, 0.1);
+    CHECK(above.r.converged);
+    CHECK(above.r.message.find("chord decrement") == std::string::npos);
+    CHECK(above.systems_built >= 1);
+  }
+  // A kept system 1.5x too stiff understates what is left by 1.5: unscaled, 14 % of the
+  // tolerance would read as 9.3 %, below the share; scaled, it is 14 %, so the exact
+  // system decides. (The chord step's own decrease, 1.1 tolerances, is above the
+  // energy-decrease test's.)
+  {
+    const Run stiff = solve(1.5, 0.14, 0.1);
+    INFO(stiff.r.message << " iterations " << stiff.r.iterations);
+    CHECK(stiff.r.converged);
+    CHECK(stiff.r.message.find("chord decrement") == std::string::npos);
+    CHECK(stiff.systems_built >= 1);
+  }
+  // Too soft (0.9x): the chord step overshoots (r < 1), and its decrement, taken as it
+  // is, overstates what is left (5 % read as 5.6 %): still below the share, so it stops,
+  // with less than the share left.
+  {
+    const Run soft = solve(0.9, 0.05, 0.1);
+    INFO(soft.r.message << " iterations " << soft.r.iterations);
+    CHECK(soft.r.converged);
+    CHECK(soft.r.message.find("chord decrement") != std::string::npos);
+    CHECK(soft.systems_built == 0);
+    CHECK(soft.r.energy - 2 < 0.1 * tol);
+  }
+}
+
 TEST_CASE("newton_run: a warm solve asks its start, the chord's gradient and solve before it reads the start's energy",
           "[newton][loop][chord]") {
   // A stepper recording its calls: the deferred start (NewtonStepper::start_deferred)

@@ -539,6 +539,7 @@ NewtonOptions frame_newton_options(const InterpolationOptions& o) {
   no.tolerance = o.tolerance;
   no.projected_decrement_stop = o.projected_decrement_stop;
   no.checked_decrement_stop = o.checked_decrement_stop;
+  no.chord_decrement_stop = o.chord_decrement_stop;
   no.max_iterations = o.max_iterations;
   no.projection = o.projection;
   no.exact_hessian_when_definite = o.exact_hessian_when_definite;

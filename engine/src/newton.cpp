@@ -613,6 +613,28 @@ NewtonResult newton_run(NewtonStepper& st, bool certify, bool rotation_invariant
       }
       log.chord = sys.factored;
     }
+    // 1b. After a full chord step: the kept system's decrement at x, scaled by that
+    //     step's model error (NewtonOptions::chord_decrement_stop), may end the solve
+    //     before any system of its own is built.
+    if (!log.chord && opt.chord_decrement_stop > 0 && prev && prev->chord && prev->step == 1.0 && prev->backtracks == 0 &&
+        prev->decrement2 > 0 && dE_prev > 0 && kept && !kept->empty()) {
+      const double r = std::max(1.0, dE_prev / (prev->decrement2 / 2));
+      if (r < 2) {
+        t0 = Clock::now();
+        const bool solvable = st.linearize_kept(*kept);
+        res.timing.energy_gradient += ms_since(t0);
+        if (solvable) {
+          t0 = Clock::now();
+          const NewtonSystem chord = st.decrement(0);
+          res.timing.solve += ms_since(t0);
+          if (chord.factored && chord.slope < 0 && -chord.slope / 2 / (2 - r) < opt.chord_decrement_stop * stop_tol) {
+            res.stop = NewtonStop::Converged;
+            res.message = "converged (chord decrement, scaled by the chord step's model error, below its share of the tolerance)";
+            break;
+          }
+        }
+      }
+    }
     bool exact_on_all = false;  // the exact system (tried below) summed over all of G
     const bool prev_full = prev && prev->step >= 1.0;
     const bool prev_cut = prev && opt.exact_after_cut && !prev->exact_hessian && prev->backtracks > prev->certificate_rejections;

@@ -54,6 +54,13 @@ struct InterpolationOptions {
   // energy (issue #20: near-rigid frames whose exact system over G never factors took a
   // second projected step worth ~3e-9 at a tolerance of 1e-7). Keyframe authoring: off.
   bool checked_decrement_stop = true;
+  // NewtonOptions::chord_decrement_stop: a frame whose full chord step left the kept
+  // system's decrement (scaled by that step's model error) below this share of the
+  // tolerance ends there, without an exact system of its own (issue #23: most of a warm
+  // frame's work). 0: never, the default until it is measured on the GPU and over the
+  // stress corpus (on the CPU core it saves ~40 % of the time at 500 frames per interval
+  // and costs steps on some sequences at 100: NewtonOptions). Keyframe authoring: 0.
+  double chord_decrement_stop = 0;
   int max_iterations = 100;
   // FullProj, not the paper's PartProj: over the stress corpus (bench_stress, issue #20)
   // FullProj took the fewest Newton iterations per frame at 60, 100 and 500 frames per

@@ -296,6 +296,28 @@ struct NewtonOptions {
   // said was not worth taking. Interpolation turns it on
   // (InterpolationOptions::checked_decrement_stop); authoring leaves it off.
   bool checked_decrement_stop = false;
+  // Also converged, after a full chord step (the solve's first step, with the factor kept
+  // by an earlier solve, kept_system; step 1, no backtrack): the kept system's decrement
+  // at the new x, scaled by that step's model error as in checked_decrement_stop, below
+  // this share of tolerance·|E|. For a quadratic energy the scaled number is the
+  // decrement along the step's direction exactly; the share is the margin for the other
+  // directions, where the kept factor (made at an earlier frame's solution) may be
+  // stiffer than the energy. The solve then ends without a system of its own: no exact
+  // Hessian and no factor, the bulk of a warm frame's work on either core, and the next
+  // solve's chord step reuses the same older factor (where it overshoots, that solve
+  // builds its systems at its own points, as without a kept one). Where the test fails
+  // the iteration goes on as without it. Measured (issue #23, 2026-12-07, CPU core with
+  // exact systems over G, chromium_superbomb/bend_steps, hinge and u_to_s at |G| = 3,000,
+  // Delete and PartProj): at 500 frames per interval 22.8–26.2 → 13.9–14.5 ms per frame for
+  // 1.00 → 1.02–1.03 iterations per frame with a share of 0.01; at 100 the same iterations
+  // (1.28 / 1.30), the test seldom passing. Larger shares fire where frames are further
+  // apart, and the factor they leave kept overshoots in the next frame: at 100, 1.34–1.36
+  // iterations with 0.03 and 1.52–1.54 with 0.1 (bend_steps at |G| = 40,000 with 0.1:
+  // 1.01 → 1.49), and even 0.01 costs steps on some sequences at |G| = 40,000 (drag, 100
+  // frames per interval: Delete 199 → 222 iterations over 198 frames, PartProj 202 → 210).
+  // Off by default (InterpolationOptions::chord_decrement_stop) until measured on the GPU
+  // and over the stress corpus; authoring 0 (never).
+  double chord_decrement_stop = 0;
   HessianProjection projection = HessianProjection::PartProj;
   // Once a full step was taken (or, with exact_after_cut, a projected step that Armijo
   // cut), use the unprojected Hessian whenever its reduced system is positive definite
