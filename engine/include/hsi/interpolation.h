@@ -57,9 +57,10 @@ struct InterpolationOptions {
   // NewtonOptions::chord_decrement_stop: a frame whose full chord step left the kept
   // system's decrement (scaled by that step's model error) below this share of the
   // tolerance ends there, without an exact system of its own (issue #23: most of a warm
-  // frame's work). 0: never, the default until it is measured on the GPU and over the
-  // stress corpus (on the CPU core it saves ~40 % of the time at 500 frames per interval
-  // and costs steps on some sequences at 100: NewtonOptions). Keyframe authoring: 0.
+  // frame's work). 0: never, the default: on the CPU core it saves ~40 % of the time on
+  // some sequences at 500 frames per interval, but on the CUDA core a bar_holes frame is
+  // slower with it and over the stress corpus it costs steps (NewtonOptions). Keyframe
+  // authoring: 0.
   double chord_decrement_stop = 0;
   int max_iterations = 100;
   // FullProj, not the paper's PartProj: over the stress corpus (bench_stress, issue #20)
