@@ -334,6 +334,8 @@ int main(int argc, char** argv) {
   app.add_option("--json", json_file, "Also write every number to this JSON file");
   app.add_option("--export", export_dir, "Write the selected sequences as scene files (handles + targets) into this folder and stop");
   CLI11_PARSE(app, argc, argv);
+  // The chord decrement stop the runs use: none without chord steps or in the paper's plain Newton.
+  const double chord_stop = no_chord || paper_newton ? 0.0 : chord_decrement_stop;
 
   std::vector<int> frame_counts;
   std::vector<HessianProjection> projections;
@@ -412,7 +414,7 @@ int main(int argc, char** argv) {
               "iteration cap %d; exact systems over %s; projected-decrement stop %g; chord-decrement stop %g%s%s%s%s%s%s\n\n",
               corpus_file.c_str(), corpus.seed, total_sequences, corpus.sequences.size(), plan.size(),
               samples > 0 ? std::to_string(samples).c_str() : "per sequence", frames_opt.c_str(), projections_opt.c_str(),
-              max_iterations, exact_samples.c_str(), projected_decrement_stop, no_chord || paper_newton ? 0.0 : chord_decrement_stop, paper_newton ? "; the paper's plain Newton (--paper-newton)" : "",
+              max_iterations, exact_samples.c_str(), projected_decrement_stop, chord_stop, paper_newton ? "; the paper's plain Newton (--paper-newton)" : "",
               no_chord && !paper_newton ? "; no chord steps (--no-chord)" : "",
               no_checked_stop && !paper_newton ? "; no checked decrement stop (--no-checked-decrement-stop)" : "",
               no_carry && !paper_newton ? "; no carry of all samples (--no-carry-all-samples)" : "",
@@ -653,7 +655,7 @@ int main(int argc, char** argv) {
       o.exact_samples = parse_exact_samples(exact_samples);
       o.projected_decrement_stop = projected_decrement_stop;
       o.checked_decrement_stop = !no_checked_stop && !paper_newton;
-      o.chord_decrement_stop = no_chord || paper_newton ? 0.0 : chord_decrement_stop;
+      o.chord_decrement_stop = chord_stop;
       if (no_carry || paper_newton) o.carry_all_samples = AllSamplesCarry::Off;
       o.projection = run.p;
       o.max_iterations = max_iterations;
@@ -703,7 +705,7 @@ int main(int argc, char** argv) {
   out["options"] = {{"corpus", corpus_file},     {"seed", corpus.seed},         {"samples", samples},
                     {"frames", frame_counts},    {"projections", split(projections_opt)}, {"max_iterations", max_iterations},
                     {"limit", limit},            {"paper_newton", paper_newton}, {"time_limit", time_limit},
-                    {"hessian_ratio", hessian_ratio}, {"chord_steps", !no_chord && !paper_newton}, {"predict_start", paper_newton ? "off" : predict_start}, {"checked_decrement_stop", !no_checked_stop && !paper_newton}, {"chord_decrement_stop", no_chord || paper_newton ? 0.0 : chord_decrement_stop}, {"carry_all_samples", no_carry || paper_newton ? "off" : "auto"}, {"exact_samples", exact_samples},
+                    {"hessian_ratio", hessian_ratio}, {"chord_steps", !no_chord && !paper_newton}, {"predict_start", paper_newton ? "off" : predict_start}, {"checked_decrement_stop", !no_checked_stop && !paper_newton}, {"chord_decrement_stop", chord_stop}, {"carry_all_samples", no_carry || paper_newton ? "off" : "auto"}, {"exact_samples", exact_samples},
                     {"projected_decrement_stop", projected_decrement_stop}, {"reverse_loops", reverse_loops}};
   json runs_json = json::array(), shapes_json = json::array();
   std::map<RunKey, Stats> total;

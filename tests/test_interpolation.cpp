@@ -527,6 +527,18 @@ class CountingCore final : public ForwardingCore {
   }
   int hessians = 0;
 };
+
+// A sequence of `frames` frames of the twist scene with these options on a CountingCore,
+// and the Hessians its solves asked for (the set-up's not counted).
+std::vector<FrameResult> counted_sequence(TwistScene& S, const InterpolationOptions& o, int frames, int& hessians) {
+  auto core = std::make_unique<CountingCore>(*S.setup);
+  CountingCore* counting = core.get();
+  Interpolator I(*S.setup, S.times, S.maps, o, std::move(core));
+  const int before = counting->hessians;  // set-up's
+  std::vector<FrameResult> f = I.sequence(frames);
+  hessians = counting->hessians - before;
+  return f;
+}
 }  // namespace
 
 TEST_CASE("a sequence with chord steps builds fewer Hessians, takes no more iterations and gives the frames of one without",
@@ -536,13 +548,7 @@ TEST_CASE("a sequence with chord steps builds fewer Hessians, takes no more iter
     InterpolationOptions o;
     o.chord_steps = chord;
     o.predict_start = PredictStart::Off;  // chord steps alone (a predicted start takes none)
-    auto core = std::make_unique<CountingCore>(*S.setup);
-    CountingCore* counting = core.get();
-    Interpolator I(*S.setup, S.times, S.maps, o, std::move(core));
-    const int before = counting->hessians;  // set-up's
-    std::vector<FrameResult> f = I.sequence(81);
-    hessians = counting->hessians - before;
-    return f;
+    return counted_sequence(S, o, 81, hessians);
   };
   int with = 0, without = 0;
   const std::vector<FrameResult> a = run(true, with), b = run(false, without);
@@ -581,13 +587,7 @@ TEST_CASE("a dense sequence with the chord decrement stop builds fewer Hessians 
     o.chord_decrement_stop = share;
     o.predict_start = PredictStart::Off;
     o.exact_samples = ExactSamples::All;  // as on the CUDA core
-    auto core = std::make_unique<CountingCore>(*S.setup);
-    CountingCore* counting = core.get();
-    Interpolator I(*S.setup, S.times, S.maps, o, std::move(core));
-    const int before = counting->hessians;
-    std::vector<FrameResult> f = I.sequence(241);
-    hessians = counting->hessians - before;
-    return f;
+    return counted_sequence(S, o, 241, hessians);
   };
   int with = 0, without = 0;
   const std::vector<FrameResult> a = run(0.01, with), b = run(0, without);

@@ -580,6 +580,16 @@ NewtonResult newton_run(NewtonStepper& st, bool certify, bool rotation_invariant
     // and after a projected step that Armijo cut (the projection's model overshot; with
     // an exact step that Armijo cut the projection comes next): NewtonOptions::exact_after_cut.
     const NewtonIteration* prev = res.log.empty() ? nullptr : &res.log.back();
+    // The previous step's model error, for the decrement stops that read it (NewtonOptions::
+    // checked_decrement_stop, chord_decrement_stop): after a full step of this solve (step
+    // 1, no backtrack) that lowered the energy by r times its model's −gᵀd/2 (r taken as at
+    // least 1), a model as stiff leaves 1/(2 − r) times its decrement. The divisor 2 − r,
+    // or 0 where no full step tells or r ≥ 2 (no stop).
+    const double model_error_divisor = [&] {
+      if (!prev || prev->step != 1.0 || prev->backtracks != 0 || !(prev->decrement2 > 0) || !(dE_prev > 0)) return 0.0;
+      const double r = std::max(1.0, dE_prev / (prev->decrement2 / 2));
+      return r < 2 ? 2 - r : 0.0;
+    }();
     // 1a. A chord step, first in the solve: the kept factor (the last exact system of an
     //     earlier solve, NewtonOptions::kept_system) with the gradient at x. Its first
     //     trial step (the line search's first batch, asked now) must pass Armijo, or the
@@ -616,22 +626,18 @@ NewtonResult newton_run(NewtonStepper& st, bool certify, bool rotation_invariant
     // 1b. After a full chord step: the kept system's decrement at x, scaled by that
     //     step's model error (NewtonOptions::chord_decrement_stop), may end the solve
     //     before any system of its own is built.
-    if (!log.chord && opt.chord_decrement_stop > 0 && prev && prev->chord && prev->step == 1.0 && prev->backtracks == 0 &&
-        prev->decrement2 > 0 && dE_prev > 0 && kept && !kept->empty()) {
-      const double r = std::max(1.0, dE_prev / (prev->decrement2 / 2));
-      if (r < 2) {
+    if (!log.chord && opt.chord_decrement_stop > 0 && model_error_divisor > 0 && prev->chord && kept && !kept->empty()) {
+      t0 = Clock::now();
+      const bool solvable = st.linearize_kept(*kept);
+      res.timing.energy_gradient += ms_since(t0);
+      if (solvable) {
         t0 = Clock::now();
-        const bool solvable = st.linearize_kept(*kept);
-        res.timing.energy_gradient += ms_since(t0);
-        if (solvable) {
-          t0 = Clock::now();
-          const NewtonSystem chord = st.decrement(0);
-          res.timing.solve += ms_since(t0);
-          if (chord.factored && chord.slope < 0 && -chord.slope / 2 / (2 - r) < opt.chord_decrement_stop * stop_tol) {
-            res.stop = NewtonStop::Converged;
-            res.message = "converged (chord decrement, scaled by the chord step's model error, below its share of the tolerance)";
-            break;
-          }
+        const NewtonSystem chord = st.decrement(0);
+        res.timing.solve += ms_since(t0);
+        if (chord.factored && chord.slope < 0 && -chord.slope / 2 / model_error_divisor < opt.chord_decrement_stop * stop_tol) {
+          res.stop = NewtonStop::Converged;
+          res.message = "converged (chord decrement, scaled by the chord step's model error, below its share of the tolerance)";
+          break;
         }
       }
     }
@@ -705,14 +711,11 @@ NewtonResult newton_run(NewtonStepper& st, bool certify, bool rotation_invariant
     // The same with the stiffness the previous full step showed (NewtonOptions::
     // checked_decrement_stop): its decrease over its model's, r, says the model's
     // decrement understates what the energy offers by 1/(2 − r).
-    if (!log.exact_hessian && !log.chord && opt.checked_decrement_stop && prev && prev->step == 1.0 && prev->backtracks == 0 &&
-        prev->decrement2 > 0 && dE_prev > 0) {
-      const double r = std::max(1.0, dE_prev / (prev->decrement2 / 2));
-      if (r < 2 && -slope / 2 / (2 - r) < stop_tol) {
-        res.stop = NewtonStop::Converged;
-        res.message = "converged (projected Newton decrement, scaled by the last step's model error, below tolerance)";
-        break;
-      }
+    if (!log.exact_hessian && !log.chord && opt.checked_decrement_stop && model_error_divisor > 0 &&
+        -slope / 2 / model_error_divisor < stop_tol) {
+      res.stop = NewtonStop::Converged;
+      res.message = "converged (projected Newton decrement, scaled by the last step's model error, below tolerance)";
+      break;
     }
 
     // 2. Armijo backtracking from min(1, safe_fraction · s_max); a step is taken only if
