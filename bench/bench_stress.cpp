@@ -188,8 +188,12 @@ void trace_run(Interpolator& interp, const ShapeSetup& setup, const std::vector<
     if (std::count(key_times.begin(), key_times.end(), times[i])) {  // a keyframe: the frame is the keyframe itself
       x = interp.frame(times[i]).x;
       predictor.add(times[i], x);
-      kept = KeptSystem{};  // as Interpolator::sequence: nothing carried across a keyframe
+      kept = KeptSystem{};  // as Interpolator::sequence: nothing carried across a keyframe…
       last_iterations = 0;
+      if (no.kept_system && interp.options().seed_chord_at_keyframes && i + 1 < times.size()) {
+        interp.core().set_targets(interp.blended_metric(times[i]));  // … but the keyframe's own exact system
+        newton_seed_kept_system(interp.core(), setup.metric_space, x, no, kept);
+      }
       continue;
     }
     interp.core().set_targets(interp.blended_metric(times[i]));
@@ -249,7 +253,7 @@ int main(int argc, char** argv) {
   std::string cache_file;
   int limit = 0, samples = 0, max_iterations = 100, jobs = 1, threads = 0;
   bool paper_newton = false, author_only = false, trace = false, reverse_loops = false, no_chord = false, no_checked_stop = false,
-       no_carry = false;
+       no_carry = false, seed_chord = InterpolationOptions{}.seed_chord_at_keyframes;
   std::string predict_start = to_string(InterpolationOptions{}.predict_start);
   double hessian_ratio = 0;
   std::string exact_samples = to_string(InterpolationOptions{}.exact_samples);
@@ -290,6 +294,10 @@ int main(int argc, char** argv) {
                  "error) is below this fraction of the tolerance (InterpolationOptions::chord_decrement_stop; 0: never)")
       ->capture_default_str()
       ->check(unit_interval("0: never"));
+  app.add_flag("--seed-chord,!--no-seed-chord", seed_chord,
+               "Seed the chord slot at each keyframe with the keyframe's own exact system, so that the first frame of an "
+               "interval starts with a chord step (InterpolationOptions::seed_chord_at_keyframes)")
+      ->capture_default_str();
   app.add_flag("--no-carry-all-samples", no_carry,
                "A frame's move of its Hessians to all of G is not carried to the next frames "
                "(InterpolationOptions::carry_all_samples off; by default on the CUDA core)");
@@ -656,6 +664,7 @@ int main(int argc, char** argv) {
       o.projected_decrement_stop = projected_decrement_stop;
       o.checked_decrement_stop = !no_checked_stop && !paper_newton;
       o.chord_decrement_stop = chord_stop;
+      o.seed_chord_at_keyframes = seed_chord;
       if (no_carry || paper_newton) o.carry_all_samples = AllSamplesCarry::Off;
       o.projection = run.p;
       o.max_iterations = max_iterations;
@@ -705,7 +714,7 @@ int main(int argc, char** argv) {
   out["options"] = {{"corpus", corpus_file},     {"seed", corpus.seed},         {"samples", samples},
                     {"frames", frame_counts},    {"projections", split(projections_opt)}, {"max_iterations", max_iterations},
                     {"limit", limit},            {"paper_newton", paper_newton}, {"time_limit", time_limit},
-                    {"hessian_ratio", hessian_ratio}, {"chord_steps", !no_chord && !paper_newton}, {"predict_start", paper_newton ? "off" : predict_start}, {"checked_decrement_stop", !no_checked_stop && !paper_newton}, {"chord_decrement_stop", chord_stop}, {"carry_all_samples", no_carry || paper_newton ? "off" : "auto"}, {"exact_samples", exact_samples},
+                    {"hessian_ratio", hessian_ratio}, {"chord_steps", !no_chord && !paper_newton}, {"predict_start", paper_newton ? "off" : predict_start}, {"checked_decrement_stop", !no_checked_stop && !paper_newton}, {"chord_decrement_stop", chord_stop}, {"seed_chord_at_keyframes", seed_chord && !no_chord && !paper_newton}, {"carry_all_samples", no_carry || paper_newton ? "off" : "auto"}, {"exact_samples", exact_samples},
                     {"projected_decrement_stop", projected_decrement_stop}, {"reverse_loops", reverse_loops}};
   json runs_json = json::array(), shapes_json = json::array();
   std::map<RunKey, Stats> total;

@@ -281,6 +281,22 @@ FrameResult Interpolator::frame_searched(double t, const Eigen::VectorXd& warm_s
   return r;
 }
 
+void Interpolator::set_core_targets(double t) {
+  // The keyframes' metric sets live in the core (on the GPU for the CUDA core): per
+  // frame only the weights travel. Given again if the core has had other sets since.
+  const std::vector<double> w = key_weights(times_, options_.timing, t);
+  const bool smooth = interval_timing(times_, options_.timing, t) == KeyTiming::Smooth;
+  if (!core_->blend_targets(target_token_, w, smooth)) {
+    target_token_ = core_->set_target_keys(key_metrics_, key_log_metrics_);
+    if (!core_->blend_targets(target_token_, w, smooth)) throw std::logic_error("the Newton core did not keep the keyframes' metrics");
+  }
+}
+
+void Interpolator::seed_chord(size_t j, KeptSystem& slot) {
+  set_core_targets(times_[j]);  // keyframe j's own metric: key_x_[j] is its minimiser
+  newton_seed_kept_system(*core_, setup_.metric_space, key_x_[j], frame_newton_options(options_), slot);
+}
+
 FrameResult Interpolator::frame_before_crossings(double t, const Eigen::VectorXd& warm_start,
                                                  const CertificateResult* warm_certificate, MapValues& image, bool& search,
                                                  KeptSystem* kept, const Eigen::VectorXd* predicted) {
@@ -319,16 +335,7 @@ FrameResult Interpolator::frame_before_crossings(double t, const Eigen::VectorXd
     return keyframe_itself(static_cast<size_t>(k), "keyframe " + std::to_string(k) + " held");
   }
   auto tp = Clock::now();
-  {
-    // The keyframes' metric sets live in the core (on the GPU for the CUDA core): per
-    // frame only the weights travel. Given again if the core has had other sets since.
-    const std::vector<double> w = key_weights(times_, options_.timing, t);
-    const bool smooth = interval_timing(times_, options_.timing, t) == KeyTiming::Smooth;
-    if (!core_->blend_targets(target_token_, w, smooth)) {
-      target_token_ = core_->set_target_keys(key_metrics_, key_log_metrics_);
-      if (!core_->blend_targets(target_token_, w, smooth)) throw std::logic_error("the Newton core did not keep the keyframes' metrics");
-    }
-  }
+  set_core_targets(t);
   r.parts.targets = ms_since(tp);
   NewtonOptions no = frame_newton_options(options_);
   const Eigen::VectorXd& x0 = warm_start.size() ? warm_start : key_x_[static_cast<size_t>(k)];
@@ -473,6 +480,11 @@ std::vector<FrameResult> Interpolator::sequence(const std::vector<double>& times
       // interval are known (the predictor keeps to the interval itself).
       kept = KeptSystem{};
       last_iterations = 0;
+      // …but the keyframe's own exact system, for the next frame's chord step
+      // (InterpolationOptions::seed_chord_at_keyframes).
+      if (chord && options_.seed_chord_at_keyframes && out.back().keyframe && i + 1 < frames)
+        for (size_t j = 0; j < times_.size(); ++j)
+          if (t == times_[j]) seed_chord(j, kept);
     } else {
       last_iterations = out.back().iterations;
     }

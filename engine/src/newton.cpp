@@ -456,6 +456,24 @@ NewtonResult newton_solve(NewtonCore& core, const MapSpace& space, const Certifi
   return newton_run(*stepper, o.certify && certifier, rotation_invariant, x0, o);
 }
 
+bool newton_seed_kept_system(NewtonCore& core, const MapSpace& space, const Eigen::VectorXd& x, const NewtonOptions& opt,
+                             KeptSystem& slot) {
+  std::unique_ptr<NewtonStepper> st = core.make_stepper(space, nullptr, nullptr);
+  if (!st) st = make_host_stepper(core, space, nullptr, nullptr);
+  ExactSamples samples = opt.exact_samples == ExactSamples::Auto ? core.preferred_exact_samples() : opt.exact_samples;
+  if (samples == ExactSamples::Auto) samples = ExactSamples::Subset;
+  const bool rotation_invariant = space.gauge() == Gauge::ModuloRigid;
+  slot = KeptSystem{};
+  if (!std::isfinite(st->start(x))) return false;
+  const auto attempt = [&](bool all) {
+    st->linearize({true, opt.projection, rotation_invariant && opt.exact_modulo_rotation, all});
+    return st->decrement(opt.exact_ridge).factored;
+  };
+  bool factored = attempt(samples == ExactSamples::All);
+  if (!factored && samples == ExactSamples::SubsetThenAll) factored = attempt(true);
+  return factored && st->keep(slot);
+}
+
 NewtonResult newton_run(NewtonStepper& st, bool certify, bool rotation_invariant, const Eigen::VectorXd& x0,
                         const NewtonOptions& opt) {
   const auto t_start = Clock::now();
@@ -604,6 +622,17 @@ NewtonResult newton_run(NewtonStepper& st, bool certify, bool rotation_invariant
         const bool solvable = st.linearize_kept(*kept);
         res.timing.energy_gradient += ms_since(t0);
         if (solvable) factor(0);
+      }
+      // Nothing worth a step at the start: the kept system's decrement below the share of
+      // the tolerance a projected system's must be under (NewtonOptions::
+      // projected_decrement_stop; a kept factor may be stiffer than the energy here, as a
+      // projection). Frames that do not move the metric (a rigid motion between keyframes)
+      // end here, as they end on a projected system without one.
+      if (sys.factored && opt.projected_decrement_stop > 0 &&
+          -sys.slope / 2 < opt.projected_decrement_stop * opt.tolerance * std::max(std::abs(E), 1e-300)) {
+        res.stop = NewtonStop::Converged;
+        res.message = "converged (chord decrement below its share of the tolerance)";
+        break;
       }
       if (sys.factored && sys.slope < -opt.descent_slope * scale) {
         t0 = Clock::now();

@@ -106,6 +106,19 @@ struct InterpolationOptions {
   // mostly builds and factors no system at all (issue #23). false: every frame's systems
   // built at its own points, as frame() does.
   bool chord_steps = true;
+  // With chord_steps: at each keyframe the sequence's chord slot is seeded with the
+  // exact system at the keyframe itself (newton_seed_kept_system), so that the first
+  // frame after it starts with a chord step too. false (the default): the slot starts
+  // empty there, and the interval's first frame builds its own systems. Measured (issue
+  // #20, one H100, the stress corpus at 100 frames per interval on the CUDA core, 46,629
+  // frames per projection, every one certified and converged either way): iterations
+  // Delete 62,387 → 62,273, FullProj 60,426 → 60,761, PartProj 60,722 → 60,807. The
+  // frames after a keyframe then start on the same exact factor whatever the projection,
+  // and the projections' totals move together: PartProj − Delete on chromium_superbomb
+  // +6 → −1, on chromium_enemy01 −21 → +6 (its squash_stretch: PartProj's unseeded
+  // start had led to one iteration a frame, 251 against 288; seeded all three take 288).
+  // Not the default: it costs the default projection (FullProj) iterations.
+  bool seed_chord_at_keyframes = false;
   // Interpolator::sequence's starts (PredictStart): the previous frame's solution, or the
   // secant through the last two solved frames of the keyframe interval extrapolated to
   // the frame's time (SecantPredictor, a first-order continuation predictor: off from
@@ -307,6 +320,11 @@ class Interpolator {
   OverlapResult overlap_of(const HarmonicMap& map);
   // f at the overlap check's breakpoints by boundary_ (or the setup's), into out.f.
   void boundary_image(const HarmonicMap& map, MapValues& out);
+  // The core's targets: the blended metric at t.
+  void set_core_targets(double t);
+  // Seeds a sequence's chord slot with keyframe j's own exact system
+  // (InterpolationOptions::seed_chord_at_keyframes).
+  void seed_chord(size_t j, KeptSystem& slot);
   // frame() but for the crossing search: the image it is to search is left in `image`
   // and `search` set (a keyframe or held frame has its overlap from set-up: not set);
   // ms does not count it.

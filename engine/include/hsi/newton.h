@@ -280,6 +280,11 @@ struct NewtonOptions {
   // there, blob/spin), the frame otherwise takes one more projected step whose decrease
   // (in the traces: what its model predicted, ~1e-9 at E = 2) stops it. Interpolation
   // sets 0.01 (InterpolationOptions::projected_decrement_stop, measured there); authoring 0.
+  // The same share ends a solve at its start where a chord step's system (the kept one,
+  // kept_system) has a decrement below it: a kept factor may be stiffer than the energy
+  // as a projection is, and a frame that does not move the metric (a rigid motion between
+  // keyframes, with the slot seeded at the keyframe: newton_seed_kept_system) has nothing
+  // to step.
   double projected_decrement_stop = 0;
   // Also converged: a projected system (not a chord one) whose decrement −gᵀd/2, scaled
   // by how far the previous step's model understated its own decrease, is below
@@ -574,6 +579,17 @@ struct NewtonResult {
 // these arguments, else the host stepper.
 NewtonResult newton_solve(NewtonCore& core, const MapSpace& space, const Certifier* certifier, const QuadraticTerm* quad,
                           const Eigen::VectorXd& x0, const NewtonOptions& options);
+
+// Seeds a sequence's chord slot at a solution: the exact system at x (the minimiser of
+// the core's present energy: a keyframe, whose blended metric is its own), built and
+// factored as newton_solve's exact systems are (options' projection, exact_samples,
+// exact_modulo_rotation, exact_ridge) and kept in `slot` for the next solve's chord step
+// (NewtonOptions::kept_system). Where it does not factor, or x's energy is not finite,
+// the slot is left empty. Returns whether it factored. (Issue #20: the first frame
+// after a keyframe had no chord step, and where its own end point's exact system did not
+// factor, PartProj's case on chromium_superbomb/hinge, neither had the frames after it.)
+bool newton_seed_kept_system(NewtonCore& core, const MapSpace& space, const Eigen::VectorXd& x, const NewtonOptions& options,
+                             KeptSystem& slot);
 
 // The loop itself over any stepper (newton_solve's body; tests drive it with a fake).
 // certify: the stepper's certificates decide steps; rotation_invariant: the energy is
