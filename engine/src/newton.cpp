@@ -443,14 +443,29 @@ std::unique_ptr<NewtonStepper> make_host_stepper(NewtonCore& core, const MapSpac
   return std::make_unique<HostStepper>(core, space, certifier, quad);
 }
 
+namespace {
+
+// The core's own stepper for these arguments where it has one, else the host stepper.
+std::unique_ptr<NewtonStepper> stepper_for(NewtonCore& core, const MapSpace& space, const Certifier* certifier,
+                                           const QuadraticTerm* quad) {
+  std::unique_ptr<NewtonStepper> st = core.make_stepper(space, certifier, quad);
+  return st ? std::move(st) : make_host_stepper(core, space, certifier, quad);
+}
+
+// ExactSamples::Auto resolved by the core (the subset H where the core has no preference).
+ExactSamples resolved_exact_samples(const NewtonCore& core, ExactSamples s) {
+  if (s == ExactSamples::Auto) s = core.preferred_exact_samples();
+  return s == ExactSamples::Auto ? ExactSamples::Subset : s;
+}
+
+}  // namespace
+
 NewtonResult newton_solve(NewtonCore& core, const MapSpace& space, const Certifier* certifier, const QuadraticTerm* quad,
                           const Eigen::VectorXd& x0, const NewtonOptions& opt) {
-  std::unique_ptr<NewtonStepper> stepper = core.make_stepper(space, certifier, quad);
-  if (!stepper) stepper = make_host_stepper(core, space, certifier, quad);
+  std::unique_ptr<NewtonStepper> stepper = stepper_for(core, space, certifier, quad);
   const bool rotation_invariant = space.gauge() == Gauge::ModuloRigid && !quad;
-  NewtonOptions o = opt;  // ExactSamples::Auto resolved by the core
-  if (o.exact_samples == ExactSamples::Auto) o.exact_samples = core.preferred_exact_samples();
-  if (o.exact_samples == ExactSamples::Auto) o.exact_samples = ExactSamples::Subset;
+  NewtonOptions o = opt;
+  o.exact_samples = resolved_exact_samples(core, o.exact_samples);
   if (o.carry_all_samples == AllSamplesCarry::Auto)
     o.carry_all_samples = o.exact_samples == ExactSamples::All ? AllSamplesCarry::On : AllSamplesCarry::Off;
   return newton_run(*stepper, o.certify && certifier, rotation_invariant, x0, o);
@@ -458,10 +473,8 @@ NewtonResult newton_solve(NewtonCore& core, const MapSpace& space, const Certifi
 
 bool newton_seed_kept_system(NewtonCore& core, const MapSpace& space, const Eigen::VectorXd& x, const NewtonOptions& opt,
                              KeptSystem& slot) {
-  std::unique_ptr<NewtonStepper> st = core.make_stepper(space, nullptr, nullptr);
-  if (!st) st = make_host_stepper(core, space, nullptr, nullptr);
-  ExactSamples samples = opt.exact_samples == ExactSamples::Auto ? core.preferred_exact_samples() : opt.exact_samples;
-  if (samples == ExactSamples::Auto) samples = ExactSamples::Subset;
+  std::unique_ptr<NewtonStepper> st = stepper_for(core, space, nullptr, nullptr);
+  const ExactSamples samples = resolved_exact_samples(core, opt.exact_samples);
   const bool rotation_invariant = space.gauge() == Gauge::ModuloRigid;
   slot = KeptSystem{};
   if (!std::isfinite(st->start(x))) return false;
@@ -586,6 +599,11 @@ NewtonResult newton_run(NewtonStepper& st, bool certify, bool rotation_invariant
     const double stop_tol = opt.tolerance * std::max(std::abs(E), 1e-300);
     const auto no_descent = [&](const NewtonSystem& s) { return !(s.slope < -opt.descent_slope * scale); };
     const auto decrement_below = [&](const NewtonSystem& s) { return -s.slope / 2 < stop_tol; };
+    // A projected (or kept) system's: below its share (NewtonOptions::projected_decrement_stop).
+    const auto projected_decrement_below = [&](const NewtonSystem& s) {
+      return opt.projected_decrement_stop > 0 &&
+             -s.slope / 2 < opt.projected_decrement_stop * opt.tolerance * std::max(std::abs(E), 1e-300);
+    };
     // The exact system: its factor and decrement first; d only where the solve goes on.
     auto factor_exact = [&](double ridge) {
       t0 = Clock::now();
@@ -628,8 +646,7 @@ NewtonResult newton_run(NewtonStepper& st, bool certify, bool rotation_invariant
       // projected_decrement_stop; a kept factor may be stiffer than the energy here, as a
       // projection). Frames that do not move the metric (a rigid motion between keyframes)
       // end here, as they end on a projected system without one.
-      if (sys.factored && opt.projected_decrement_stop > 0 &&
-          -sys.slope / 2 < opt.projected_decrement_stop * opt.tolerance * std::max(std::abs(E), 1e-300)) {
+      if (sys.factored && projected_decrement_below(sys)) {
         res.stop = NewtonStop::Converged;
         res.message = "converged (chord decrement below its share of the tolerance)";
         break;
@@ -731,8 +748,7 @@ NewtonResult newton_run(NewtonStepper& st, bool certify, bool rotation_invariant
     log.decrement2 = -sys.slope;
     log.max_safe_step = sys.max_safe_step;
     const double slope = sys.slope;
-    if (!log.exact_hessian && !log.chord && opt.projected_decrement_stop > 0 &&
-        -slope / 2 < opt.projected_decrement_stop * opt.tolerance * std::max(std::abs(E), 1e-300)) {
+    if (!log.exact_hessian && !log.chord && projected_decrement_below(sys)) {
       res.stop = NewtonStop::Converged;
       res.message = "converged (projected Newton decrement below its share of the tolerance)";
       break;
