@@ -219,6 +219,110 @@ Row time_order(int m, int reps) {
   return row;
 }
 
+// Many systems of one order at once (issue #23: a lockstep batch of sequences needs one
+// factor and solve per sequence and step): `batch` copies of the order's matrix, each
+// factored and solved. Totals in µs for the whole batch, median over the timed calls.
+struct BatchRow {
+  double potrf_each = 0, potrf_batched = 0, ours_each = 0, ours_batched = 0;  // factor
+  double potrs_each = 0, solve_each = 0, solve_batched = 0;                    // solve on the factor
+  double max_rel_diff = 0;  // ours batched against cuSOLVER's potrf + potrs, over the batch
+  int bad_info = 0;         // matrices whose info was not 0 (either path)
+  bool one_launch = false;
+};
+
+BatchRow time_batch(int m, int batch, int reps) {
+  BatchRow row;
+  hc::Stream stream;
+  hc::SolverHandle solver(stream);
+  const size_t M = static_cast<size_t>(m), B = static_cast<size_t>(batch);
+  const std::vector<double> A_host = spd_matrix(m);
+  std::vector<double> A_all(M * M * B), b_all(M * B);
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> u(-1, 1);
+  for (size_t k = 0; k < B; ++k) std::copy(A_host.begin(), A_host.end(), A_all.begin() + static_cast<std::ptrdiff_t>(k * M * M));
+  for (double& v : b_all) v = u(rng);
+  hc::DeviceArray<double> A0(M * M * B), b0(M * B), A(M * M * B), b(M * B);
+  hc::DeviceArray<int> info(B);
+  HSI_CUDA_CHECK(cudaMemcpy(A0.get(), A_all.data(), A0.bytes(), cudaMemcpyHostToDevice));
+  HSI_CUDA_CHECK(cudaMemcpy(b0.get(), b_all.data(), b0.bytes(), cudaMemcpyHostToDevice));
+  std::vector<double*> A_ptrs(B), b_ptrs(B);
+  for (size_t k = 0; k < B; ++k) {
+    A_ptrs[k] = A.get() + k * M * M;
+    b_ptrs[k] = b.get() + k * M;
+  }
+  hc::DeviceArray<double*> A_array(B), b_array(B);
+  HSI_CUDA_CHECK(cudaMemcpy(A_array.get(), A_ptrs.data(), A_array.bytes(), cudaMemcpyHostToDevice));
+  HSI_CUDA_CHECK(cudaMemcpy(b_array.get(), b_ptrs.data(), b_array.bytes(), cudaMemcpyHostToDevice));
+  HSI_CUDA_CHECK(cudaDeviceSynchronize());
+  int lwork = 0;
+  HSI_CUDA_CHECK(cusolverDnDpotrf_bufferSize(solver, CUBLAS_FILL_MODE_LOWER, m, A.get(), m, &lwork));
+  hc::DeviceArray<double> work(static_cast<size_t>(std::max(lwork, 1)));
+  const long long stride = static_cast<long long>(M * M);
+  const auto restore_A = [&] { HSI_CUDA_CHECK(cudaMemcpyAsync(A.get(), A0.get(), A.bytes(), cudaMemcpyDeviceToDevice, stream)); };
+  const auto restore_b = [&] { HSI_CUDA_CHECK(cudaMemcpyAsync(b.get(), b0.get(), b.bytes(), cudaMemcpyDeviceToDevice, stream)); };
+  const auto potrf_each = [&] {
+    for (size_t k = 0; k < B; ++k)
+      HSI_CUDA_CHECK(cusolverDnDpotrf(solver, CUBLAS_FILL_MODE_LOWER, m, A_ptrs[k], m, work.get(), lwork, info.get() + k));
+  };
+  const auto potrs_each = [&] {
+    for (size_t k = 0; k < B; ++k)
+      HSI_CUDA_CHECK(cusolverDnDpotrs(solver, CUBLAS_FILL_MODE_LOWER, m, 1, A_ptrs[k], m, b_ptrs[k], m, info.get() + k));
+  };
+  const auto ours_each = [&] {
+    for (size_t k = 0; k < B; ++k) HSI_CUDA_CHECK(hk::cholesky_factor(m, A_ptrs[k], m, info.get() + k, stream));
+  };
+  const auto solve_each = [&] {
+    for (size_t k = 0; k < B; ++k) HSI_CUDA_CHECK(hk::cholesky_solve(m, A_ptrs[k], m, b_ptrs[k], stream));
+  };
+  const auto ours_batched = [&] { HSI_CUDA_CHECK(hk::cholesky_factor_batched(m, A.get(), m, stride, info.get(), batch, stream)); };
+  const auto solve_batched = [&] {
+    HSI_CUDA_CHECK(hk::cholesky_solve_batched(m, A.get(), m, stride, b.get(), m, batch, stream));
+  };
+  const auto infos_bad = [&] {
+    std::vector<int> v(B);
+    HSI_CUDA_CHECK(cudaStreamSynchronize(stream));
+    HSI_CUDA_CHECK(cudaMemcpy(v.data(), info.get(), info.bytes(), cudaMemcpyDeviceToHost));
+    return static_cast<int>(std::count_if(v.begin(), v.end(), [](int i) { return i != 0; }));
+  };
+  const auto solutions = [&] {
+    std::vector<double> x(M * B);
+    HSI_CUDA_CHECK(cudaStreamSynchronize(stream));
+    HSI_CUDA_CHECK(cudaMemcpy(x.data(), b.get(), b.bytes(), cudaMemcpyDeviceToHost));
+    return x;
+  };
+  row.one_launch = hk::cholesky_batched_in_cluster(m);
+  row.potrf_each = median_us(stream, reps, restore_A, potrf_each);
+  // cusolverDnDpotrfBatched is meant for small matrices; above m = 512 it is not timed (-1).
+  row.potrf_batched = m > 512 ? -1.0 : median_us(stream, m <= 64 ? reps : std::max(5, reps / 10), restore_A, [&] {
+    HSI_CUDA_CHECK(cusolverDnDpotrfBatched(solver, CUBLAS_FILL_MODE_LOWER, m, A_array.get(), m, info.get(), batch));
+  });
+  row.ours_each = median_us(stream, reps, restore_A, ours_each);
+  row.ours_batched = median_us(stream, reps, restore_A, ours_batched);
+  // Solves on a factor (cuSOLVER's for potrs, ours for ours).
+  restore_A();
+  potrf_each();
+  row.bad_info += infos_bad();
+  row.potrs_each = median_us(stream, reps, restore_b, potrs_each);
+  restore_b();
+  potrs_each();
+  const std::vector<double> x_ref = solutions();
+  restore_A();
+  ours_batched();
+  row.bad_info += infos_bad();
+  row.solve_each = median_us(stream, reps, restore_b, solve_each);
+  row.solve_batched = median_us(stream, reps, restore_b, solve_batched);
+  restore_b();
+  solve_batched();
+  const std::vector<double> x = solutions();
+  double diff = 0, scale = 0;
+  for (size_t i = 0; i < x.size(); ++i) {
+    diff = std::max(diff, std::abs(x[i] - x_ref[i]));
+    scale = std::max(scale, std::abs(x_ref[i]));
+  }
+  row.max_rel_diff = diff / std::max(scale, 1e-300);
+  return row;
+}
+
 std::string us_or_na(double us) {
   if (us < 0) return "n/a";
   char s[32];
@@ -232,10 +336,11 @@ int main(int argc, char** argv) {
   CLI::App app{"hsi dense Cholesky benchmark: ours against cuSOLVER's potrf/potrs at the Newton system's orders"};
   std::vector<std::string> scenes;
   std::vector<int> orders{64, 128, 256, 305, 512, 1024};
-  int reps = 100;
+  int reps = 100, batch = 64;
   app.add_option("scenes", scenes, "Scene files: each adds a row at its Newton system's order");
   app.add_option("--orders", orders, "System orders m to time besides the scenes' (comma-separated)")->delimiter(',')->capture_default_str();
   app.add_option("--reps", reps, "Timed calls per measurement (the median is printed; at least 50)")->capture_default_str();
+  app.add_option("--batch", batch, "Systems per batch in the batched table (0: no batched table)")->capture_default_str()->check(CLI::Range(0, 65535));
   CLI11_PARSE(app, argc, argv);
   reps = std::max(reps, 50);
   std::vector<std::pair<std::string, int>> rows;
@@ -278,6 +383,28 @@ int main(int argc, char** argv) {
                 us_or_na(r.cusolver_graph).c_str(), us_or_na(r.ours_graph).c_str(), graph_ratio.c_str(), r.max_rel_diff,
                 r.cusolver_info, r.ours_info, r.xpotrf, r.xpotrs, r.potrf_batched, r.potrs_batched, r.factor_solve);
     std::fflush(stdout);
+  }
+  if (batch > 0) {
+    std::printf("\n## %d systems of one order at once (a lockstep batch's factor and solve per step)\n\n"
+                "Totals for the whole batch in µs, median over the timed calls (A or b restored outside the timed region), "
+                "and per system. each: one call per system on one stream; potrfBatched: cusolverDnDpotrfBatched at batch "
+                "%d (%s, not above m = 512); ours batched: cholesky_factor_batched / cholesky_solve_batched (one launch of %d clusters where "
+                "the order fits the cluster kernel, else one call per system). max rel diff: ours batched (factor and "
+                "solve) against potrf + potrs, over the batch.\n\n",
+                batch, batch, "fewer timed calls above m = 64", batch);
+    std::printf("| scene | m | potrf each µs | potrfBatched µs | our factor each µs | our factor batched µs | per system µs | "
+                "potrf each / ours batched | potrs each µs | our solve each µs | our solve batched µs | per system µs | "
+                "one launch | info ≠ 0 | max rel diff |\n"
+                "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
+    for (const auto& [name, m] : rows) {
+      std::fprintf(stderr, "batch of %d at m = %d%s%s\n", batch, m, name.empty() ? "" : ": ", name.c_str());
+      const BatchRow r = time_batch(m, batch, reps);
+      std::printf("| %s | %d | %.1f | %s | %.1f | %.1f | %.2f | %.1fx | %.1f | %.1f | %.1f | %.2f | %s | %d | %.1e |\n",
+                  name.empty() ? "-" : name.c_str(), m, r.potrf_each, us_or_na(r.potrf_batched).c_str(), r.ours_each, r.ours_batched,
+                  r.ours_batched / batch, r.potrf_each / r.ours_batched, r.potrs_each, r.solve_each, r.solve_batched,
+                  r.solve_batched / batch, r.one_launch ? "yes" : "no", r.bad_info, r.max_rel_diff);
+      std::fflush(stdout);
+    }
   }
   return 0;
 }

@@ -395,3 +395,88 @@ TEST_CASE("dense Cholesky: the solve with a given factor (cuSOLVER's potrf) agre
     }
   }
 }
+
+TEST_CASE("dense Cholesky, batched: each matrix's factor, status and solve are the single call's, bit for bit",
+          "[cuda][dense][batched]") {
+  // Bad arguments first (no GPU needed): overlapping strides, a batch out of range.
+  {
+    double* A = nullptr;
+    int* info = nullptr;
+    CHECK(hk::cholesky_factor_batched(10, A, 10, 99, info, 2, nullptr) == cudaErrorInvalidValue);
+    CHECK(hk::cholesky_factor_batched(10, A, 10, 100, info, -1, nullptr) == cudaErrorInvalidValue);
+    CHECK(hk::cholesky_factor_batched(10, A, 10, 100, info, 65536, nullptr) == cudaErrorInvalidValue);
+    CHECK(hk::cholesky_solve_batched(10, A, 10, 100, A, 9, 2, nullptr) == cudaErrorInvalidValue);
+    CHECK(hk::cholesky_solve_batched(10, A, 10, 99, A, 10, 2, nullptr) == cudaErrorInvalidValue);
+  }
+  HSI_REQUIRE_GPU();
+  hc::Stream stream;
+  // Orders inside the cluster kernel (one launch) and one above it (one matrix after the
+  // other); in each batch one matrix is not positive definite, at a column of its own.
+  for (const int m : {1, 33, 100, 292, 305, 512, 700}) {
+    const int batch = m > 400 ? 3 : 9, lda = m + 1;
+    const long long stride = static_cast<long long>(lda) * m + 5;  // a gap between matrices, NaN
+    const int bad = batch / 2, bad_column = (m + 1) / 2;
+    std::vector<double> host(static_cast<size_t>(stride) * batch, kNaN), rhs(static_cast<size_t>(m + 2) * batch, kNaN);
+    std::vector<Eigen::MatrixXd> mats;
+    for (int k = 0; k < batch; ++k) {
+      Eigen::MatrixXd A = k % 2 ? ill_conditioned(m, 1e8, 300u + static_cast<unsigned>(k)) : well_conditioned(m, 200u + static_cast<unsigned>(k));
+      if (k == bad) A(bad_column - 1, bad_column - 1) = -1e6;  // fails at that column or before it
+      mats.push_back(A);
+      for (int j = 0; j < m; ++j)
+        for (int i = j; i < m; ++i) host[static_cast<size_t>(k * stride + i + static_cast<long long>(j) * lda)] = A(i, j);
+      const Eigen::VectorXd b = random_vector(m, 400u + static_cast<unsigned>(k));
+      for (int i = 0; i < m; ++i) rhs[static_cast<size_t>(k * (m + 2) + i)] = b(i);
+    }
+    hc::DeviceArray<double> A(host.size()), b(rhs.size());
+    hc::DeviceArray<int> info(static_cast<size_t>(batch));
+    HSI_CUDA_CHECK(cudaMemcpy(A.get(), host.data(), A.bytes(), cudaMemcpyHostToDevice));
+    HSI_CUDA_CHECK(cudaMemcpy(b.get(), rhs.data(), b.bytes(), cudaMemcpyHostToDevice));
+    HSI_CUDA_CHECK(cudaMemset(info.get(), 0xff, info.bytes()));
+    copies_landed();
+    HSI_CUDA_CHECK(hk::cholesky_factor_batched(m, A.get(), lda, stride, info.get(), batch, stream));
+    HSI_CUDA_CHECK(hk::cholesky_solve_batched(m, A.get(), lda, stride, b.get(), m + 2, batch, stream));
+    HSI_CUDA_CHECK(cudaStreamSynchronize(stream));
+    std::vector<double> factors(host.size()), solutions(rhs.size());
+    std::vector<int> infos(static_cast<size_t>(batch));
+    HSI_CUDA_CHECK(cudaMemcpy(factors.data(), A.get(), A.bytes(), cudaMemcpyDeviceToHost));
+    HSI_CUDA_CHECK(cudaMemcpy(solutions.data(), b.get(), b.bytes(), cudaMemcpyDeviceToHost));
+    HSI_CUDA_CHECK(cudaMemcpy(infos.data(), info.get(), info.bytes(), cudaMemcpyDeviceToHost));
+    INFO("m = " << m << ", batch " << batch << (hk::cholesky_batched_in_cluster(m) ? " (one launch)" : " (one by one)"));
+    for (int k = 0; k < batch; ++k) {
+      INFO("matrix " << k);
+      // The same matrix alone through the single calls.
+      const Eigen::VectorXd bk = random_vector(m, 400u + static_cast<unsigned>(k));
+      DeviceSystem one(mats[static_cast<size_t>(k)], lda, bk);
+      one.factor_and_solve(stream);
+      HSI_CUDA_CHECK(cudaStreamSynchronize(stream));
+      CHECK(infos[static_cast<size_t>(k)] == one.info_value());
+      if (k == bad) {
+        CHECK(infos[static_cast<size_t>(k)] == reference_info(mats[static_cast<size_t>(k)]));
+        CHECK(infos[static_cast<size_t>(k)] >= 1);
+      } else {
+        CHECK(infos[static_cast<size_t>(k)] == 0);
+      }
+      const std::vector<double> alone = one.matrix();
+      bool same = true, untouched = true;
+      for (int j = 0; j < m; ++j)
+        for (int i = 0; i < lda; ++i) {
+          const double v = factors[static_cast<size_t>(k * stride + i + static_cast<long long>(j) * lda)];
+          if (i >= j && i < m) same = same && std::memcmp(&v, &alone[static_cast<size_t>(i + j * lda)], sizeof v) == 0;
+          else untouched = untouched && std::isnan(v);
+        }
+      CHECK(same);
+      CHECK(untouched);
+      if (k != bad) {
+        const Eigen::VectorXd x = one.solution();
+        bool same_x = true;
+        for (int i = 0; i < m; ++i) same_x = same_x && std::memcmp(&solutions[static_cast<size_t>(k * (m + 2) + i)], &x(i), sizeof(double)) == 0;
+        CHECK(same_x);
+        CHECK(residual(mats[static_cast<size_t>(k)], x, bk) < 1e-12);
+      }
+      // The gaps between matrices and right-hand sides are never written.
+      for (long long g = k * stride + static_cast<long long>(lda) * m; g < (k + 1) * stride; ++g)
+        CHECK(std::isnan(factors[static_cast<size_t>(g)]));
+      CHECK(std::isnan(solutions[static_cast<size_t>(k * (m + 2) + m)]));
+    }
+  }
+}

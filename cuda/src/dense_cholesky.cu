@@ -304,7 +304,11 @@ __device__ void factor_column(double* col, int ld, int j, double* inv_diag, int*
 }
 
 __global__ void __cluster_dims__(kClusterBlocks, 1, 1) __launch_bounds__(kClusterThreads)
-    factor_cluster(int m, double* A, int lda, double* b, int* info, int T) {
+    factor_cluster(int m, double* A, int lda, double* b, int* info, int T, long long stride_a, long long stride_b) {
+  // Matrix blockIdx.y of a strided batch (cholesky_factor_batched; one matrix: y = 0).
+  A += static_cast<long long>(blockIdx.y) * stride_a;
+  if (b != nullptr) b += static_cast<long long>(blockIdx.y) * stride_b;
+  info += blockIdx.y;
   extern __shared__ double smem[];
   __shared__ int fail;
   const cg::cluster_group cluster = cg::this_cluster();
@@ -610,7 +614,11 @@ static_assert(solve_cluster_shared_bytes(kSolveClusterMaxTiles) <= 227 * 1024, "
 // release store, which covers every lane's writes the barrier ordered before it.
 
 __global__ void __cluster_dims__(kClusterBlocks, 1, 1) __launch_bounds__(kSolveClusterThreads)
-    solve_cluster(int m, const double* __restrict__ L, int lda, double* b, int T, Substitution part) {
+    solve_cluster(int m, const double* __restrict__ L, int lda, double* b, int T, Substitution part, long long stride_l,
+                  long long stride_b) {
+  // Matrix blockIdx.y of a strided batch (cholesky_solve_batched; one matrix: y = 0).
+  L += static_cast<long long>(blockIdx.y) * stride_l;
+  b += static_cast<long long>(blockIdx.y) * stride_b;
   const bool forward = part != Substitution::Back, back = part != Substitution::Forward;
   extern __shared__ double smem[];
   const cg::cluster_group cluster = cg::this_cluster();
@@ -757,7 +765,7 @@ cudaError_t cholesky_factor(int m, double* A, int lda, int* info, cudaStream_t s
   if (m <= kCholeskyClusterMaxOrder && cluster_factor_available()) {
     // cluster_factor_available() set the attribute for the largest T.
     const size_t bytes = cluster_shared_bytes(T);
-    factor_cluster<<<kClusterBlocks, kClusterThreads, bytes, stream>>>(m, A, lda, nullptr, info, T);
+    factor_cluster<<<kClusterBlocks, kClusterThreads, bytes, stream>>>(m, A, lda, nullptr, info, T, 0, 0);
     return cudaGetLastError();
   }
   for (int c = 0; c < T; ++c) {
@@ -777,7 +785,7 @@ cudaError_t cholesky_solve(int m, const double* L, int lda, double* b, cudaStrea
   static_assert((kCholeskySolveMaxOrder / kT) * (kT * sizeof(double) + 2 * sizeof(int)) <= 48 * 1024,
                 "the solve's shared memory must fit the default 48 KiB");
   if (cholesky_solve_in_cluster(m)) {
-    solve_cluster<<<kClusterBlocks, kSolveClusterThreads, solve_cluster_shared_bytes(T), stream>>>(m, L, lda, b, T, part);
+    solve_cluster<<<kClusterBlocks, kSolveClusterThreads, solve_cluster_shared_bytes(T), stream>>>(m, L, lda, b, T, part, 0, 0);
     return cudaGetLastError();
   }
   solve_kernel<<<1, kSolveThreads, solve_shared_bytes(T), stream>>>(m, L, lda, b, T, part);
@@ -795,10 +803,45 @@ cudaError_t cholesky_factor_solve(int m, double* A, int lda, double* b, int* inf
   }
   const int T = tiles(m + 1);  // b is row m
   const size_t bytes = cluster_shared_bytes(T);
-  factor_cluster<<<kClusterBlocks, kClusterThreads, bytes, stream>>>(m, A, lda, b, info, T);
+  factor_cluster<<<kClusterBlocks, kClusterThreads, bytes, stream>>>(m, A, lda, b, info, T, 0, 0);
   if (const cudaError_t e = cudaGetLastError(); e != cudaSuccess) return e;
   solve_kernel<<<1, kSolveThreads, solve_shared_bytes(tiles(m)), stream>>>(m, A, lda, b, tiles(m), Substitution::Back);
   return cudaGetLastError();
 }
+
+cudaError_t cholesky_factor_batched(int m, double* A, int lda, long long stride_a, int* info, int batch, cudaStream_t stream) {
+  if (m < 0 || lda < (m > 1 ? m : 1) || batch < 0 || batch > 65535 || (batch > 1 && stride_a < static_cast<long long>(lda) * m))
+    return cudaErrorInvalidValue;
+  if (batch == 0) return cudaSuccess;
+  if (m == 0) return cudaMemsetAsync(info, 0, sizeof(int) * static_cast<size_t>(batch), stream);
+  if (!cholesky_batched_in_cluster(m)) {  // one matrix after the other
+    for (int k = 0; k < batch; ++k)
+      if (const cudaError_t e = cholesky_factor(m, A + k * stride_a, lda, info + k, stream); e != cudaSuccess) return e;
+    return cudaSuccess;
+  }
+  const int T = tiles(m);
+  factor_cluster<<<dim3(kClusterBlocks, static_cast<unsigned>(batch)), kClusterThreads, cluster_shared_bytes(T), stream>>>(
+      m, A, lda, nullptr, info, T, stride_a, 0);
+  return cudaGetLastError();
+}
+
+cudaError_t cholesky_solve_batched(int m, const double* L, int lda, long long stride_l, double* b, long long stride_b, int batch,
+                                   cudaStream_t stream, Substitution part) {
+  if (m < 0 || lda < (m > 1 ? m : 1) || m > kCholeskySolveMaxOrder || batch < 0 || batch > 65535 ||
+      (batch > 1 && (stride_l < static_cast<long long>(lda) * m || stride_b < m)))
+    return cudaErrorInvalidValue;
+  if (batch == 0 || m == 0) return cudaSuccess;
+  if (!cholesky_solve_in_cluster(m)) {
+    for (int k = 0; k < batch; ++k)
+      if (const cudaError_t e = cholesky_solve(m, L + k * stride_l, lda, b + k * stride_b, stream, part); e != cudaSuccess) return e;
+    return cudaSuccess;
+  }
+  const int T = tiles(m);
+  solve_cluster<<<dim3(kClusterBlocks, static_cast<unsigned>(batch)), kSolveClusterThreads, solve_cluster_shared_bytes(T), stream>>>(
+      m, L, lda, b, T, part, stride_l, stride_b);
+  return cudaGetLastError();
+}
+
+bool cholesky_batched_in_cluster(int m) { return m > 0 && m <= kCholeskyClusterMaxOrder && cluster_factor_available(); }
 
 }  // namespace hsi::cuda::kernels

@@ -72,4 +72,25 @@ bool cholesky_solve_in_cluster(int m);
 // m > kCholeskySolveMaxOrder; otherwise the launch status.
 cudaError_t cholesky_factor_solve(int m, double* A, int lda, double* b, int* info, cudaStream_t stream);
 
+// Many systems of one order at once (issue #23: a lockstep batch of sequences factors
+// one system per sequence and step; one launch instead of one per sequence, the
+// clusters of all the batch's matrices side by side on the GPU). Matrix k is
+// A + k · stride_a (column-major, leading dimension lda, stride_a ≥ lda · m), its
+// status info[k] as cholesky_factor's; each matrix's factor is bit for bit the one
+// cholesky_factor makes of it alone. One kernel of `batch` clusters where
+// cholesky_batched_in_cluster(m), else cholesky_factor on each matrix in turn.
+// cudaErrorInvalidValue for m < 0, lda < max(1, m), batch outside [0, 65535] or a
+// stride that makes matrices overlap; otherwise the launch status.
+cudaError_t cholesky_factor_batched(int m, double* A, int lda, long long stride_a, int* info, int batch, cudaStream_t stream);
+
+// cholesky_solve on each of `batch` systems: factor k at L + k · stride_l, right-hand
+// side k at b + k · stride_b (stride_b ≥ m); bit for bit cholesky_solve's result for
+// each. One kernel of `batch` clusters where cholesky_solve_in_cluster(m), else
+// cholesky_solve on each in turn.
+cudaError_t cholesky_solve_batched(int m, const double* L, int lda, long long stride_l, double* b, long long stride_b, int batch,
+                                   cudaStream_t stream, Substitution part = Substitution::Both);
+
+// Whether cholesky_factor_batched(m, …) is one kernel on the current device.
+bool cholesky_batched_in_cluster(int m);
+
 }  // namespace hsi::cuda::kernels
