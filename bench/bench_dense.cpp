@@ -224,7 +224,7 @@ Row time_order(int m, int reps) {
 // factored and solved. Totals in µs for the whole batch, median over the timed calls.
 struct BatchRow {
   double potrf_each = 0, potrf_batched = 0, ours_each = 0, ours_batched = 0;  // factor
-  double potrs_each = 0, solve_each = 0, solve_batched = 0;                    // solve on the factor
+  double potrs_each = 0, potrs_batched = 0, solve_each = 0, solve_batched = 0;  // solve on the factor
   double max_rel_diff = 0;  // ours batched against cuSOLVER's potrf + potrs, over the batch
   int bad_info = 0;         // matrices whose info was not 0 (either path)
   bool one_launch = false;
@@ -303,6 +303,10 @@ BatchRow time_batch(int m, int batch, int reps) {
   potrf_each();
   row.bad_info += infos_bad();
   row.potrs_each = median_us(stream, reps, restore_b, potrs_each);
+  // cusolverDnDpotrsBatched (one right-hand side per system, its only form) on the same factors.
+  row.potrs_batched = m > 512 ? -1.0 : median_us(stream, m <= 64 ? reps : std::max(5, reps / 10), restore_b, [&] {
+    HSI_CUDA_CHECK(cusolverDnDpotrsBatched(solver, CUBLAS_FILL_MODE_LOWER, m, 1, A_array.get(), m, b_array.get(), m, info.get(), batch));
+  });
   restore_b();
   potrs_each();
   const std::vector<double> x_ref = solutions();
@@ -390,18 +394,21 @@ int main(int argc, char** argv) {
                 "and per system. each: one call per system on one stream; potrfBatched: cusolverDnDpotrfBatched at batch "
                 "%d (%s, not above m = 512); ours batched: cholesky_factor_batched / cholesky_solve_batched (one launch of %d clusters where "
                 "the order fits the cluster kernel, else one call per system). max rel diff: ours batched (factor and "
-                "solve) against potrf + potrs, over the batch.\n\n",
+                "solve) against potrf + potrs, over the batch. potrsBatched: cusolverDnDpotrsBatched on potrf's factors.\n\n",
                 batch, batch, "fewer timed calls above m = 64", batch);
     std::printf("| scene | m | potrf each µs | potrfBatched µs | our factor each µs | our factor batched µs | per system µs | "
-                "potrf each / ours batched | potrs each µs | our solve each µs | our solve batched µs | per system µs | "
-                "one launch | info ≠ 0 | max rel diff |\n"
-                "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
+                "potrf each / ours batched | potrfBatched / ours batched | potrs each µs | potrsBatched µs | our solve each µs | "
+                "our solve batched µs | per system µs | one launch | info ≠ 0 | max rel diff |\n"
+                "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
     for (const auto& [name, m] : rows) {
       std::fprintf(stderr, "batch of %d at m = %d%s%s\n", batch, m, name.empty() ? "" : ": ", name.c_str());
       const BatchRow r = time_batch(m, batch, reps);
-      std::printf("| %s | %d | %.1f | %s | %.1f | %.1f | %.2f | %.1fx | %.1f | %.1f | %.1f | %.2f | %s | %d | %.1e |\n",
+      char vs_batched[32] = "n/a";
+      if (r.potrf_batched > 0) std::snprintf(vs_batched, sizeof vs_batched, "%.2fx", r.potrf_batched / r.ours_batched);
+      std::printf("| %s | %d | %.1f | %s | %.1f | %.1f | %.2f | %.1fx | %s | %.1f | %s | %.1f | %.1f | %.2f | %s | %d | %.1e |\n",
                   name.empty() ? "-" : name.c_str(), m, r.potrf_each, us_or_na(r.potrf_batched).c_str(), r.ours_each, r.ours_batched,
-                  r.ours_batched / batch, r.potrf_each / r.ours_batched, r.potrs_each, r.solve_each, r.solve_batched,
+                  r.ours_batched / batch, r.potrf_each / r.ours_batched, vs_batched, r.potrs_each,
+                  us_or_na(r.potrs_batched).c_str(), r.solve_each, r.solve_batched,
                   r.solve_batched / batch, r.one_launch ? "yes" : "no", r.bad_info, r.max_rel_diff);
       std::fflush(stdout);
     }
