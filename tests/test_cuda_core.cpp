@@ -281,6 +281,19 @@ TEST_CASE("CUDA core matches the CPU core on every asset", "[cuda]") {
         worst_h = std::max(worst_h, rel_diff(Hg, Hc));
         CHECK(rel_diff(Hg, Hc) < 1e-9);
         CHECK(Hg == Hg.transpose());
+        // The Hessian without forming it (NewtonCore::hessian_times), over H and over G.
+        std::mt19937 prng(seed + 11u * static_cast<unsigned>(mode));
+        std::normal_distribution<double> pd(0, 1);
+        Eigen::VectorXd pv(Hc.rows());
+        for (Eigen::Index i = 0; i < pv.size(); ++i) pv(i) = pd(prng);
+        for (bool all : {false, true}) {
+          INFO((all ? "over G" : "over H"));
+          const Eigen::VectorXd ref = cpu.hessian(p, exact, all) * pv;
+          const Eigen::VectorXd hg = gpu.hessian_times(p, exact, all, pv);
+          REQUIRE(hg.size() == ref.size());
+          worst_h = std::max(worst_h, (hg - ref).cwiseAbs().maxCoeff() / ref.cwiseAbs().maxCoeff());
+          CHECK((hg - ref).cwiseAbs().maxCoeff() < 1e-10 * ref.cwiseAbs().maxCoeff());
+        }
       }
       // The line-search pieces along a random direction.
       std::mt19937 rng(seed + 7);

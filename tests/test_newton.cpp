@@ -143,6 +143,35 @@ TEST_CASE("the Hessian over every sample, split over the threads, equals the nai
   }
 }
 
+TEST_CASE("hessian_times applies the Hessian without forming it (every projection, exact, subset and all samples)", "[newton]") {
+  // A map and targets away from the identity, and a random vector: the product sample by
+  // sample against the matrix hessian() forms, and against NewtonCore's default (which
+  // forms it), for every choice the loop makes.
+  Fixture fx(test::bar_with_holes(), 1500, 0.2);
+  fx.core->set_targets(fx.metrics_of(fx.perturbed_identity(7, 0.05)));
+  fx.core->set_coefficients(fx.space().T() * fx.perturbed_identity(8, 0.05));
+  const int n = fx.core->n();
+  std::mt19937 rng(9);
+  std::normal_distribution<double> nd(0, 1);
+  Eigen::VectorXd p(4 * n);
+  for (Eigen::Index i = 0; i < p.size(); ++i) p(i) = nd(rng);
+  for (HessianProjection proj : {HessianProjection::Delete, HessianProjection::FullProj, HessianProjection::PartProj})
+    for (bool exact : {false, true})
+      for (bool all : {false, true}) {
+        INFO(to_string(proj) << (exact ? " exact" : "") << (all ? " over G" : " over H"));
+        const Eigen::VectorXd ref = fx.core->hessian(proj, exact, all) * p;
+        const Eigen::VectorXd hp = fx.core->hessian_times(proj, exact, all, p);
+        REQUIRE(hp.size() == ref.size());
+        CHECK((hp - ref).cwiseAbs().maxCoeff() <= 1e-12 * ref.cwiseAbs().maxCoeff());
+        CHECK(fx.core->NewtonCore::hessian_times(proj, exact, all, p) == ref);
+      }
+  // The subset's and all of G's products differ (so the test above can tell them apart).
+  CHECK((fx.core->hessian_times(HessianProjection::PartProj, true, false, p) -
+         fx.core->hessian_times(HessianProjection::PartProj, true, true, p)).cwiseAbs().maxCoeff() > 1e-6);
+  CHECK_THROWS_WITH(fx.core->hessian_times(HessianProjection::PartProj, true, true, Eigen::VectorXd::Ones(3)),
+                    Catch::Contains("3 entries") && Catch::Contains(std::to_string(4 * n)));
+}
+
 TEST_CASE("the Newton system's Cholesky solve: both builds solve it, refuse an indefinite one, and add the ridge", "[newton]") {
   std::mt19937 rng(4);
   std::uniform_real_distribution<double> u(-1, 1);

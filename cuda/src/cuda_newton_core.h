@@ -215,19 +215,28 @@ class CudaNewtonCore final : public NewtonCore {
     HSI_CUDA_CHECK(kernels::gradient_samples(G_, g_.get(), ab_.get(), gab_.get(), s));
     // (∂/∂Re φ + i ∂/∂Im φ) E = Σ conj(D) (∂E/∂Re a + i ∂E/∂Im a): [gφ | gψ] = Dᴴ [ga | gb].
     HSI_CUDA_CHECK(kernels::tall_adjoint_times_two(G_, n_, D_, gab_.get(), coef_.get(), s));
-    HSI_CUDA_CHECK(cudaMemcpyAsync(coef_down_.get(), coef_.get(), coef_.bytes(), cudaMemcpyDeviceToHost, s));
-    HSI_CUDA_CHECK(cudaStreamSynchronize(s));
-    const double count = static_cast<double>(G_);
-    const Eigen::Index n = n_;
-    Eigen::VectorXd out(4 * n);
-    for (Eigen::Index j = 0; j < n; ++j) {
-      const double2 gphi = coef_down_[static_cast<size_t>(j)], gpsi = coef_down_[static_cast<size_t>(n + j)];
-      out(j) = gphi.x / count;
-      out(n + j) = gphi.y / count;
-      out(2 * n + j) = gpsi.x / count;
-      out(3 * n + j) = gpsi.y / count;
+    return download_coefficients(static_cast<double>(G_));
+  }
+
+  // Sample by sample on the device: [da | db] = D_rows p, each sample's Hessian applied
+  // (kernels::hessian_apply), then D_rowsᴴ back as in gradient().
+  Eigen::VectorXd hessian_times(HessianProjection projection, bool exact, bool all_samples, const Eigen::VectorXd& p) override {
+    const Eigen::Index n4 = 4 * static_cast<Eigen::Index>(n_);
+    if (p.size() != n4)
+      throw InputError("hessian_times: a vector of " + std::to_string(p.size()) + " entries, expected " + std::to_string(n4));
+    const cudaStream_t s = stream_;
+    if (!hv_in_.get()) {
+      hv_in_ = DeviceArray<double2>(2 * sz(G_));
+      hv_out_ = DeviceArray<double2>(2 * sz(G_));
     }
-    return out;
+    const int rows = all_samples ? G_ : h_;
+    const double2* R = all_samples ? D_ : DH_;
+    upload_coefficients(p, "Hessian product's");
+    HSI_CUDA_CHECK(kernels::tall_times_two(rows, n_, R, coef_.get(), hv_in_.get(), s));
+    HSI_CUDA_CHECK(kernels::hessian_apply(rows, G_, all_samples ? nullptr : H_, g_.get(), ab_.get(), hv_in_.get(), to_device(projection),
+                                          exact, hv_out_.get(), s));
+    HSI_CUDA_CHECK(kernels::tall_adjoint_times_two(rows, n_, R, hv_out_.get(), coef_.get(), s));
+    return download_coefficients(static_cast<double>(rows));
   }
 
   Eigen::MatrixXd hessian(HessianProjection projection, bool exact, bool all_samples) override {
@@ -262,6 +271,27 @@ class CudaNewtonCore final : public NewtonCore {
 
   // a = D φ, b = D ψ (or da, db) from v = (Re φ, Im φ, Re ψ, Im ψ): one GEMM D [φ | ψ].
   void apply_D(const Eigen::VectorXd& v, double2* out, const char* what) {
+    upload_coefficients(v, what);
+    HSI_CUDA_CHECK(kernels::tall_times_two(G_, n_, D_, coef_.get(), out, stream_));
+  }
+  // coef_ (n × 2 complex: [φ-like | ψ-like]) down, divided by count, in the v layout.
+  Eigen::VectorXd download_coefficients(double count) {
+    const cudaStream_t s = stream_;
+    HSI_CUDA_CHECK(cudaMemcpyAsync(coef_down_.get(), coef_.get(), coef_.bytes(), cudaMemcpyDeviceToHost, s));
+    HSI_CUDA_CHECK(cudaStreamSynchronize(s));
+    const Eigen::Index n = n_;
+    Eigen::VectorXd out(4 * n);
+    for (Eigen::Index j = 0; j < n; ++j) {
+      const double2 gphi = coef_down_[static_cast<size_t>(j)], gpsi = coef_down_[static_cast<size_t>(n + j)];
+      out(j) = gphi.x / count;
+      out(n + j) = gphi.y / count;
+      out(2 * n + j) = gpsi.x / count;
+      out(3 * n + j) = gpsi.y / count;
+    }
+    return out;
+  }
+  // coef_ ← v (4n reals, v layout) as n × 2 complex [φ | ψ].
+  void upload_coefficients(const Eigen::VectorXd& v, const char* what) {
     const Eigen::Index n = n_;
     if (v.size() != 4 * n)
       throw InputError(std::string("hsi::cuda: the ") + what + " vector has " + std::to_string(v.size()) + " entries, expected " +
@@ -272,7 +302,6 @@ class CudaNewtonCore final : public NewtonCore {
       c[n + j] = make_double2(v(2 * n + j), v(3 * n + j));
     }
     coef_up_.send(coef_.get(), coef_.size(), stream_);
-    HSI_CUDA_CHECK(kernels::tall_times_two(G_, n_, D_, coef_.get(), out, stream_));
   }
 
   // Hv_ ← the real Hessian (4n × 4n), mean over H or, with all_samples, over all of G, on
@@ -335,6 +364,7 @@ class CudaNewtonCore final : public NewtonCore {
   DeviceArray<double> Hv_;        // the real Hessian, 4n × 4n
   DeviceArray<int> all_index_;    // 0 … |G|−1, and the all-samples weights and rows: build_hessian()
   DeviceArray<double2> W_all_, Wt_all_;
+  DeviceArray<double2> hv_in_, hv_out_;  // hessian_times' [da | db] and per-sample products, 2 × |G| each (made on first use)
   DeviceArray<double> part_sum_;  // reduction partials (sums or minima)
   DeviceArray<int> part_bad_;
   DeviceArray<unsigned> done_;    // the one-launch reductions' counter (newton_kernels.h): 0 between launches

@@ -167,6 +167,28 @@ __global__ void __launch_bounds__(kBlock) h_sample_weights(int h, int G, const i
   }
 }
 
+// out (rows × 2, [w_a | w_b]): per row k, sample s = index[k] (or k without an index),
+// the sample's 4×4 Hessian (as h_sample_weights makes it) applied to the row's
+// (Re da, Im da, Re db, Im db) from din (rows × 2): NewtonCore::hessian_times' samples.
+__global__ void __launch_bounds__(kBlock) hessian_apply_kernel(int rows, int G, const int* __restrict__ index, const double* __restrict__ g,
+                                                              const double2* __restrict__ ab, const double2* __restrict__ din,
+                                                              Projection projection, bool exact, double2* __restrict__ out) {
+  for (int k = static_cast<int>(blockIdx.x * blockDim.x + threadIdx.x); k < rows; k += static_cast<int>(gridDim.x * blockDim.x)) {
+    const int s = index ? index[k] : k;
+    const double2 a = ab[s], b = ab[G + s];
+    double gi[3];
+    load_metric(g, s, gi);
+    const sample::Derivatives d = sample::isometric_derivatives(gi, a.x, a.y, b.x, b.y, projection, exact, true);
+    const double2 da = din[k], db = din[rows + k];
+    const double v[4] = {da.x, da.y, db.x, db.y};
+    double y[4];
+#pragma unroll
+    for (int i = 0; i < 4; ++i) y[i] = d.hess.m[i][0] * v[0] + d.hess.m[i][1] * v[1] + d.hess.m[i][2] * v[2] + d.hess.m[i][3] * v[3];
+    out[k] = make_double2(y[0], y[1]);
+    out[rows + k] = make_double2(y[2], y[3]);
+  }
+}
+
 // Wt (|H| × 6n, column-major): column block q is w_q ∘ D_H for even q, w_q ∘ conj(D_H)
 // for odd q. Threads run along the rows (k) so that every access is coalesced.
 __global__ void weighted_rows_kernel(int h, int n, const double2* __restrict__ DH, const double2* __restrict__ W, double2* __restrict__ Wt) {
@@ -626,6 +648,12 @@ cudaError_t mean_energies(int G, const double* g, const double2* ab, const doubl
 
 cudaError_t gradient_samples(int G, const double* g, const double2* ab, double2* gab, cudaStream_t stream) {
   gradient_kernel<<<blocks_for(G, kBlock, 1LL << 30), kBlock, 0, stream>>>(G, g, ab, gab);
+  return cudaGetLastError();
+}
+
+cudaError_t hessian_apply(int rows, int G, const int* index, const double* g, const double2* ab, const double2* din,
+                          sample::Projection projection, bool exact, double2* out, cudaStream_t stream) {
+  hessian_apply_kernel<<<blocks_for(rows, kBlock, 1LL << 30), kBlock, 0, stream>>>(rows, G, index, g, ab, din, projection, exact, out);
   return cudaGetLastError();
 }
 

@@ -50,6 +50,12 @@ cudaError_t gradient_samples(int G, const double* g, const double2* ab, double2*
 cudaError_t weighted_rows(int G, int h, int n, const int* H, const double* g, const double2* ab, sample::Projection projection,
                           bool exact, const double2* DH, double2* W, double2* Wt, cudaStream_t stream);
 
+// out (rows × 2) = per row k the 4×4 Hessian of sample index[k] (k without an index; the
+// weights weighted_rows makes) applied to (Re, Im) of din's [da | db] row k (rows × 2):
+// with din = D_rows p and then D_rowsᴴ out, the Hessian times p (NewtonCore::hessian_times).
+cudaError_t hessian_apply(int rows, int G, const int* index, const double* g, const double2* ab, const double2* din,
+                          sample::Projection projection, bool exact, double2* out, cudaStream_t stream);
+
 // Hv (4n × 4n, column-major, symmetric) from R = D_Hᴴ Wt (n × 6n) divided by count:
 // newton.cpp's real_block layout, then (M + Mᵀ)/2.
 cudaError_t real_hessian(int n, const double2* R, double count, double* Hv, cudaStream_t stream);

@@ -117,6 +117,36 @@ class CpuNewtonCore final : public NewtonCore {
     return Hv / static_cast<double>(h);
   }
 
+  Eigen::VectorXd hessian_times(HessianProjection projection, bool exact, bool all_samples, const Eigen::VectorXd& p) override {
+    const Eigen::Index n = D_.cols();
+    if (p.size() != 4 * n)
+      throw InputError("hessian_times: a vector of " + std::to_string(p.size()) + " entries, expected " + std::to_string(4 * n));
+    // The samples' parts of p, (da, db) = D_rows (p_φ, p_ψ), their 4×4 Hessians applied
+    // ((Re, Im) of a, then of b, as hessian() orders them), and Σ conj(D) (w_a, w_b), as
+    // gradient() maps its per-sample derivatives back. (D_H is stored by rows, D by columns.)
+    ColumnPair pq(n, 2);
+    pq.col(0) = p.segment(0, n).cast<cd>() + cd(0, 1) * p.segment(n, n).cast<cd>();
+    pq.col(1) = p.segment(2 * n, n).cast<cd>() + cd(0, 1) * p.segment(3 * n, n).cast<cd>();
+    auto apply = [&](const auto& rows) {
+      const Eigen::Index h = rows.rows();
+      const ColumnPair d = rows * pq;
+      ColumnPair w(h, 2);
+#pragma omp parallel for schedule(static)
+      for (Eigen::Index k = 0; k < h; ++k) {
+        const Eigen::Index s = all_samples ? k : H_[static_cast<size_t>(k)];
+        const Eigen::Matrix4d K = isometric_derivatives(g_[static_cast<size_t>(s)], a_(s), b_(s), projection, exact).hess;
+        const Eigen::Vector4d y = K * Eigen::Vector4d(d(k, 0).real(), d(k, 0).imag(), d(k, 1).real(), d(k, 1).imag());
+        w(k, 0) = cd(y(0), y(1));
+        w(k, 1) = cd(y(2), y(3));
+      }
+      return ColumnPair((rows.adjoint() * w) / static_cast<double>(h));
+    };
+    const ColumnPair r = all_samples ? apply(D_) : apply(DH_);
+    Eigen::VectorXd out(4 * n);
+    out << r.col(0).real(), r.col(0).imag(), r.col(1).real(), r.col(1).imag();
+    return out;
+  }
+
   void set_direction(const Eigen::VectorXd& dv) override {
     const Eigen::Index n = D_.cols();
     times(dv.segment(0, n).cast<cd>() + cd(0, 1) * dv.segment(n, n).cast<cd>(),

@@ -71,6 +71,16 @@ class NewtonCore {
   // PSD Hessian (mean over H; with all_samples, over all of G), or with exact = true the
   // unprojected one.
   virtual Eigen::MatrixXd hessian(HessianProjection projection, bool exact = false, bool all_samples = false) = 0;
+  // H p for the Hessian hessian(projection, exact, all_samples) returns, without forming
+  // it: each sample's 4×4 Hessian applied to the sample's part of p, then summed back
+  // through the basis rows as the gradient is, O(|G| n) work against the matrix's
+  // O(|G| n²) (a Krylov solve's product: a preconditioned conjugate gradient with a kept
+  // factor reaches the exact system's Newton decrement in 2-4 such products where that
+  // factor is one frame old, bench/results/pcg_decrement_2026-12-07.md). Equal to
+  // hessian(...) · p up to round-off. The default forms the matrix.
+  virtual Eigen::VectorXd hessian_times(HessianProjection projection, bool exact, bool all_samples, const Eigen::VectorXd& p) {
+    return hessian(projection, exact, all_samples) * p;
+  }
   virtual void set_direction(const Eigen::VectorXd& dv) = 0;
   virtual double max_safe_step() = 0;              // first s > 0 with |a + s da| = |b + s db| at a sample
   virtual double energy_at(double s) = 0;          // energy at v + s dv
