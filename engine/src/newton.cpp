@@ -123,13 +123,14 @@ class CpuNewtonCore final : public NewtonCore {
       throw InputError("hessian_times: a vector of " + std::to_string(p.size()) + " entries, expected " + std::to_string(4 * n));
     // The samples' parts of p, (da, db) = D_rows (p_φ, p_ψ), their 4×4 Hessians applied
     // ((Re, Im) of a, then of b, as hessian() orders them), and Σ conj(D) (w_a, w_b), as
-    // gradient() maps its per-sample derivatives back. (D_H is stored by rows, D by columns.)
+    // gradient() maps its per-sample derivatives back; both products are the thin ones
+    // the other calls use (row_parallel.h). (D_H is stored by rows, D by columns.)
     ColumnPair pq(n, 2);
     pq.col(0) = p.segment(0, n).cast<cd>() + cd(0, 1) * p.segment(n, n).cast<cd>();
     pq.col(1) = p.segment(2 * n, n).cast<cd>() + cd(0, 1) * p.segment(3 * n, n).cast<cd>();
     auto apply = [&](const auto& rows) {
       const Eigen::Index h = rows.rows();
-      const ColumnPair d = rows * pq;
+      const ColumnPair d = detail::rows_times(rows, pq);
       ColumnPair w(h, 2);
 #pragma omp parallel for schedule(static)
       for (Eigen::Index k = 0; k < h; ++k) {
@@ -139,7 +140,7 @@ class CpuNewtonCore final : public NewtonCore {
         w(k, 0) = cd(y(0), y(1));
         w(k, 1) = cd(y(2), y(3));
       }
-      return ColumnPair((rows.adjoint() * w) / static_cast<double>(h));
+      return ColumnPair(detail::rows_adjoint_times(rows, w) / static_cast<double>(h));
     };
     const ColumnPair r = all_samples ? apply(D_) : apply(DH_);
     Eigen::VectorXd out(4 * n);
