@@ -121,6 +121,17 @@ __global__ void __launch_bounds__(kBlock) energies_mean_kernel(int G, const doub
                                                                const double2* __restrict__ dab, const double* __restrict__ steps,
                                                                int count, double* __restrict__ part_sum, int* __restrict__ part_bad,
                                                                unsigned* __restrict__ done, double* __restrict__ out) {
+  // System blockIdx.y of a lockstep batch (mean_energies_batched; one system: 0): its
+  // arrays at fixed strides, its own partials and counter.
+  const size_t sys = blockIdx.y, parts_per_system = static_cast<size_t>(count) * gridDim.x;
+  g += sys * 3 * static_cast<size_t>(G);
+  ab += sys * 2 * static_cast<size_t>(G);
+  dab += sys * 2 * static_cast<size_t>(G);
+  steps += sys * static_cast<size_t>(count);
+  part_sum += sys * parts_per_system;
+  part_bad += sys * parts_per_system;
+  done += sys;
+  out += sys * static_cast<size_t>(count);
   for (int k = 0; k < count; ++k) {
     energy_partial(G, g, ab, dab, steps[k], part_sum, part_bad, static_cast<unsigned>(k) * gridDim.x + blockIdx.x);
     __syncthreads();  // block_sum_bad's shared slots are reused by the next step
@@ -138,6 +149,10 @@ __global__ void __launch_bounds__(kBlock) energies_mean_kernel(int G, const doub
 // where the sample is infinite, as on the CPU).
 __global__ void __launch_bounds__(kBlock) gradient_kernel(int G, const double* __restrict__ g, const double2* __restrict__ ab,
                                                            double2* __restrict__ gab) {
+  const size_t sys = blockIdx.y;  // system of a lockstep batch (gradient_samples_batched)
+  g += sys * 3 * static_cast<size_t>(G);
+  ab += sys * 2 * static_cast<size_t>(G);
+  gab += sys * 2 * static_cast<size_t>(G);
   for (int i = static_cast<int>(blockIdx.x * blockDim.x + threadIdx.x); i < G; i += static_cast<int>(gridDim.x * blockDim.x)) {
     const double2 a = ab[i], b = ab[G + i];
     double gi[3];
@@ -154,6 +169,10 @@ __global__ void __launch_bounds__(kBlock) gradient_kernel(int G, const double* _
 __global__ void __launch_bounds__(kBlock) h_sample_weights(int h, int G, const int* __restrict__ H, const double* __restrict__ g,
                                                           const double2* __restrict__ ab, Projection projection, bool exact,
                                                           double2* __restrict__ W) {
+  const size_t sys = blockIdx.y;  // system of a lockstep batch (weighted_rows_batched)
+  g += sys * 3 * static_cast<size_t>(G);
+  ab += sys * 2 * static_cast<size_t>(G);
+  W += sys * 6 * static_cast<size_t>(h);
   for (int k = static_cast<int>(blockIdx.x * blockDim.x + threadIdx.x); k < h; k += static_cast<int>(gridDim.x * blockDim.x)) {
     const int s = H[k];
     const double2 a = ab[s], b = ab[G + s];
@@ -194,6 +213,9 @@ __global__ void __launch_bounds__(kBlock) hessian_apply_kernel(int rows, int G, 
 __global__ void weighted_rows_kernel(int h, int n, const double2* __restrict__ DH, const double2* __restrict__ W, double2* __restrict__ Wt) {
   const int k = static_cast<int>(blockIdx.x * blockDim.x + threadIdx.x);
   if (k >= h) return;
+  const size_t sys = blockIdx.z;  // system of a lockstep batch: its weights and rows (D_H shared)
+  W += sys * 6 * static_cast<size_t>(h);
+  Wt += sys * static_cast<size_t>(h) * 6 * static_cast<size_t>(n);
   double2 w[6];
 #pragma unroll
   for (int q = 0; q < 6; ++q) w[q] = W[static_cast<size_t>(q) * h + k];
@@ -230,6 +252,9 @@ __device__ __forceinline__ double raw_hessian(int n, const double2* __restrict__
 // Hv = (M + Mᵀ)/2, column-major 4n × 4n, with M the raw Hessian above.
 __global__ void real_hessian_kernel(int n, const double2* __restrict__ R, double count, double* __restrict__ Hv) {
   const int N = 4 * n;
+  const size_t sys = blockIdx.z;  // system of a lockstep batch (real_hessian_batched)
+  R += sys * 6 * static_cast<size_t>(n) * static_cast<size_t>(n);
+  Hv += sys * static_cast<size_t>(N) * static_cast<size_t>(N);
   for (int c = static_cast<int>(blockIdx.y * blockDim.y + threadIdx.y); c < N; c += static_cast<int>(gridDim.y * blockDim.y))
     for (int r = static_cast<int>(blockIdx.x * blockDim.x + threadIdx.x); r < N; r += static_cast<int>(gridDim.x * blockDim.x))
       Hv[static_cast<size_t>(c) * N + r] = (raw_hessian(n, R, count, r, c) + raw_hessian(n, R, count, c, r)) / 2;
@@ -240,6 +265,12 @@ __global__ void real_hessian_kernel(int n, const double2* __restrict__ R, double
 __global__ void __launch_bounds__(kBlock) safe_step_kernel(int G, const double2* __restrict__ ab, const double2* __restrict__ dab,
                                                            double* __restrict__ part_min, unsigned* __restrict__ done,
                                                            double* __restrict__ out) {
+  const size_t sys = blockIdx.y;  // system of a lockstep batch (max_safe_step_batched): its own partials and counter
+  ab += sys * 2 * static_cast<size_t>(G);
+  dab += sys * 2 * static_cast<size_t>(G);
+  part_min += sys * gridDim.x;
+  done += sys;
+  out += sys;
   double t = sample::infinity();
   for (int i = static_cast<int>(blockIdx.x * blockDim.x + threadIdx.x); i < G; i += static_cast<int>(gridDim.x * blockDim.x)) {
     const double2 a = ab[i], b = ab[G + i], da = dab[i], db = dab[G + i];
@@ -352,6 +383,9 @@ constexpr int kTallRows = 32, kTallSlices = 8;
 __global__ void __launch_bounds__(kTallRows* kTallSlices)
     tall_times_two_kernel(int rows, int k, const double2* __restrict__ A, const double2* __restrict__ B, double2* __restrict__ C) {
   __shared__ double2 part[2][kTallSlices][kTallRows];
+  const size_t sys = blockIdx.y;  // system of a lockstep batch (tall_times_two_batched): its B and C, A shared
+  B += sys * 2 * static_cast<size_t>(k);
+  C += sys * 2 * static_cast<size_t>(rows);
   const int tx = static_cast<int>(threadIdx.x), ty = static_cast<int>(threadIdx.y);
   const int i = static_cast<int>(blockIdx.x) * kTallRows + tx;
   double2 c0 = make_double2(0, 0), c1 = make_double2(0, 0);
@@ -641,13 +675,52 @@ cudaError_t mean_energy(int G, const double* g, const double2* ab, const double2
 
 cudaError_t mean_energies(int G, const double* g, const double2* ab, const double2* dab, const double* steps, int count,
                           double* part_sum, int* part_bad, unsigned* done, double* out, cudaStream_t stream) {
-  if (count < 1 || count > kMaxSteps) return cudaErrorInvalidValue;
-  energies_mean_kernel<<<reduction_blocks(G), kBlock, 0, stream>>>(G, g, ab, dab, steps, count, part_sum, part_bad, done, out);
-  return cudaGetLastError();
+  return mean_energies_batched(1, G, g, ab, dab, steps, count, part_sum, part_bad, done, out, stream);
 }
 
 cudaError_t gradient_samples(int G, const double* g, const double2* ab, double2* gab, cudaStream_t stream) {
-  gradient_kernel<<<blocks_for(G, kBlock, 1LL << 30), kBlock, 0, stream>>>(G, g, ab, gab);
+  return gradient_samples_batched(1, G, g, ab, gab, stream);
+}
+
+cudaError_t mean_energies_batched(int systems, int G, const double* g, const double2* ab, const double2* dab, const double* steps,
+                                  int count, double* part_sum, int* part_bad, unsigned* done, double* out, cudaStream_t stream) {
+  if (count < 1 || count > kMaxSteps || systems < 1 || systems > kMaxBatchSystems) return cudaErrorInvalidValue;
+  const dim3 grid(reduction_blocks(G), static_cast<unsigned>(systems));
+  energies_mean_kernel<<<grid, kBlock, 0, stream>>>(G, g, ab, dab, steps, count, part_sum, part_bad, done, out);
+  return cudaGetLastError();
+}
+
+cudaError_t gradient_samples_batched(int systems, int G, const double* g, const double2* ab, double2* gab, cudaStream_t stream) {
+  if (systems < 1 || systems > kMaxBatchSystems) return cudaErrorInvalidValue;
+  const dim3 grid(blocks_for(G, kBlock, 1LL << 30), static_cast<unsigned>(systems));
+  gradient_kernel<<<grid, kBlock, 0, stream>>>(G, g, ab, gab);
+  return cudaGetLastError();
+}
+
+cudaError_t weighted_rows_batched(int systems, int G, int h, int n, const int* H, const double* g, const double2* ab,
+                                  sample::Projection projection, bool exact, const double2* DH, double2* W, double2* Wt,
+                                  cudaStream_t stream) {
+  if (systems < 1 || systems > kMaxBatchSystems) return cudaErrorInvalidValue;
+  h_sample_weights<<<dim3(blocks_for(h, kBlock, 1LL << 30), static_cast<unsigned>(systems)), kBlock, 0, stream>>>(h, G, H, g, ab,
+                                                                                                                 projection, exact, W);
+  if (const cudaError_t e = cudaGetLastError(); e != cudaSuccess) return e;
+  const dim3 block(32, 8), grid(blocks_for(h, 32, 1LL << 30), blocks_for(n, 8, 65535), static_cast<unsigned>(systems));
+  weighted_rows_kernel<<<grid, block, 0, stream>>>(h, n, DH, W, Wt);
+  return cudaGetLastError();
+}
+
+cudaError_t real_hessian_batched(int systems, int n, const double2* R, double count, double* Hv, cudaStream_t stream) {
+  if (systems < 1 || systems > kMaxBatchSystems) return cudaErrorInvalidValue;
+  const long long N = 4LL * n;
+  const dim3 block(32, 8), grid(blocks_for(N, 32, 65535), blocks_for(N, 8, 65535), static_cast<unsigned>(systems));
+  real_hessian_kernel<<<grid, block, 0, stream>>>(n, R, count, Hv);
+  return cudaGetLastError();
+}
+
+cudaError_t max_safe_step_batched(int systems, int G, const double2* ab, const double2* dab, double* part_min, unsigned* done,
+                                  double* out, cudaStream_t stream) {
+  if (systems < 1 || systems > kMaxBatchSystems) return cudaErrorInvalidValue;
+  safe_step_kernel<<<dim3(reduction_blocks(G), static_cast<unsigned>(systems)), kBlock, 0, stream>>>(G, ab, dab, part_min, done, out);
   return cudaGetLastError();
 }
 
@@ -659,24 +732,16 @@ cudaError_t hessian_apply(int rows, int G, const int* index, const double* g, co
 
 cudaError_t weighted_rows(int G, int h, int n, const int* H, const double* g, const double2* ab, sample::Projection projection,
                           bool exact, const double2* DH, double2* W, double2* Wt, cudaStream_t stream) {
-  h_sample_weights<<<blocks_for(h, kBlock, 1LL << 30), kBlock, 0, stream>>>(h, G, H, g, ab, projection, exact, W);
-  if (const cudaError_t e = cudaGetLastError(); e != cudaSuccess) return e;
-  const dim3 block(32, 8), grid(blocks_for(h, 32, 1LL << 30), blocks_for(n, 8, 65535));
-  weighted_rows_kernel<<<grid, block, 0, stream>>>(h, n, DH, W, Wt);
-  return cudaGetLastError();
+  return weighted_rows_batched(1, G, h, n, H, g, ab, projection, exact, DH, W, Wt, stream);
 }
 
 cudaError_t real_hessian(int n, const double2* R, double count, double* Hv, cudaStream_t stream) {
-  const long long N = 4LL * n;
-  const dim3 block(32, 8), grid(blocks_for(N, 32, 65535), blocks_for(N, 8, 65535));
-  real_hessian_kernel<<<grid, block, 0, stream>>>(n, R, count, Hv);
-  return cudaGetLastError();
+  return real_hessian_batched(1, n, R, count, Hv, stream);
 }
 
 cudaError_t max_safe_step(int G, const double2* ab, const double2* dab, double* part_min, unsigned* done, double* out,
                           cudaStream_t stream) {
-  safe_step_kernel<<<reduction_blocks(G), kBlock, 0, stream>>>(G, ab, dab, part_min, done, out);
-  return cudaGetLastError();
+  return max_safe_step_batched(1, G, ab, dab, part_min, done, out, stream);
 }
 
 cudaError_t dot(int n, const double* a, const double* b, double* out, cudaStream_t stream) {
@@ -748,8 +813,13 @@ cudaError_t copy(const CopyList& list, int entries, cudaStream_t stream) {
 }
 
 cudaError_t tall_times_two(int rows, int k, const double2* A, const double2* B, double2* C, cudaStream_t stream) {
-  const dim3 block(kTallRows, kTallSlices);
-  tall_times_two_kernel<<<blocks_for(rows, kTallRows, 1LL << 30), block, 0, stream>>>(rows, k, A, B, C);
+  return tall_times_two_batched(1, rows, k, A, B, C, stream);
+}
+
+cudaError_t tall_times_two_batched(int systems, int rows, int k, const double2* A, const double2* B, double2* C, cudaStream_t stream) {
+  if (systems < 1 || systems > kMaxBatchSystems) return cudaErrorInvalidValue;
+  const dim3 block(kTallRows, kTallSlices), grid(blocks_for(rows, kTallRows, 1LL << 30), static_cast<unsigned>(systems));
+  tall_times_two_kernel<<<grid, block, 0, stream>>>(rows, k, A, B, C);
   return cudaGetLastError();
 }
 

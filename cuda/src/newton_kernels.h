@@ -65,6 +65,31 @@ cudaError_t real_hessian(int n, const double2* R, double count, double* Hv, cuda
 cudaError_t max_safe_step(int G, const double2* ab, const double2* dab, double* part_min, unsigned* done, double* out,
                           cudaStream_t stream);
 
+// Lockstep batches (issue #23): `systems` Newton systems of one setup (the same G, H, D
+// and D_H, each its own targets and point) in one launch per call, so that a batch of
+// sequences stepped together pays each kernel's launch and each pass over D once, not
+// once per sequence. System s's arrays sit at fixed strides from the pointers given:
+// targets g 3G doubles, ab / dab / gab 2G complex (so that the 2·systems columns of one
+// ZGEMM D·[c_1 … c_S] are the systems' [a | b] in order), the trial steps `count`, the
+// energies out `count`, W 6|H| and Wt |H|·6n complex, R 6n² complex, Hv 16n² doubles,
+// the safe steps one; each reduction's partials `count`·reduction_blocks(G) (the safe
+// step's reduction_blocks(G)) and its own counter (done[s], all 0 before and after).
+// System s's results are bit for bit what the one-system call gives on its arrays: the
+// one-system calls above are these with systems = 1.
+constexpr int kMaxBatchSystems = 65535;  // a grid's y / z extent
+cudaError_t mean_energies_batched(int systems, int G, const double* g, const double2* ab, const double2* dab, const double* steps,
+                                  int count, double* part_sum, int* part_bad, unsigned* done, double* out, cudaStream_t stream);
+cudaError_t gradient_samples_batched(int systems, int G, const double* g, const double2* ab, double2* gab, cudaStream_t stream);
+cudaError_t weighted_rows_batched(int systems, int G, int h, int n, const int* H, const double* g, const double2* ab,
+                                  sample::Projection projection, bool exact, const double2* DH, double2* W, double2* Wt,
+                                  cudaStream_t stream);
+cudaError_t real_hessian_batched(int systems, int n, const double2* R, double count, double* Hv, cudaStream_t stream);
+cudaError_t max_safe_step_batched(int systems, int G, const double2* ab, const double2* dab, double* part_min, unsigned* done,
+                                  double* out, cudaStream_t stream);
+// tall_times_two for each system: C_s = A · B_s (B_s k × 2 at B + 2k·s, C_s rows × 2 at
+// C + 2·rows·s), A shared.
+cudaError_t tall_times_two_batched(int systems, int rows, int k, const double2* A, const double2* B, double2* C, cudaStream_t stream);
+
 // The reduced system's small helpers (one block each, deterministic):
 // *out = Σ a_i b_i; *out = max_i |A_ii| (A n × n column-major; the ridge: add_relative_ridge below).
 cudaError_t dot(int n, const double* a, const double* b, double* out, cudaStream_t stream);
