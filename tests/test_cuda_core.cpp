@@ -25,6 +25,7 @@
 #include "hsi/cuda/newton_core.h"
 #include "device.h"
 #include "dense_cholesky.h"
+#include "device_certifier.h"
 #include "newton_kernels.h"
 #include "sample_math.cuh"
 #include "hsi/interpolation.h"
@@ -294,6 +295,9 @@ TEST_CASE("CUDA core matches the CPU core on every asset", "[cuda]") {
           worst_h = std::max(worst_h, (hg - ref).cwiseAbs().maxCoeff() / ref.cwiseAbs().maxCoeff());
           CHECK((hg - ref).cwiseAbs().maxCoeff() < 1e-10 * ref.cwiseAbs().maxCoeff());
         }
+        // A vector of the wrong size: an InputError naming both sizes, before any launch.
+        CHECK_THROWS_WITH(gpu.hessian_times(p, exact, true, Eigen::VectorXd::Ones(3)),
+                          Catch::Contains("3 entries") && Catch::Contains(std::to_string(Hc.rows())));
       }
       // The line-search pieces along a random direction.
       std::mt19937 rng(seed + 7);
@@ -574,6 +578,87 @@ TEST_CASE("the GPU certificate agrees with the CPU certificate", "[cuda][certify
   std::printf("[cuda] certificate: %d maps certified, %d refused, identical verdicts\n", certified, refused);
   CHECK(certified > 0);
   CHECK(refused > 0);
+}
+
+// A lockstep batch's certificates (issue #23): several maps of one setup certified in the
+// launches one map takes (DeviceCertifier with a capacity) give each map's own verdict.
+TEST_CASE("the GPU certificate of a batch of maps gives each map's verdict", "[cuda][certify][lockstep]") {
+  HSI_REQUIRE_GPU();
+  int maps_checked = 0, same_bits = 0, refused = 0;
+  const auto scenes = test::asset_scenes();
+  for (size_t si = 0; si < std::min<size_t>(3, scenes.size()); ++si) {
+    INFO(scenes[si].filename().string());
+    AssetCores ac(scenes[si]);
+    std::vector<HarmonicMap> maps;
+    for (const Keyframe& k : ac.scene.keyframes)
+      if (k.coefficients) maps.push_back(*k.coefficients);
+    std::mt19937 rng(5);
+    std::normal_distribution<double> g(0, 1);
+    const size_t keys = maps.size();
+    for (size_t k = 0; k < keys; ++k)
+      for (double amp : {1e-3, 3e-2, 3e-1}) {  // certified, near the fold boundary, folded
+        HarmonicMap m = maps[k];
+        const double scale = amp * m.phi.cwiseAbs().maxCoeff();
+        for (Eigen::Index j = 0; j < m.phi.size() - ac.setup->cage.hole_count(); ++j) {
+          m.phi(j) += scale * cd(g(rng), g(rng));
+          m.psi(j) += scale * cd(g(rng), g(rng));
+        }
+        maps.push_back(m);
+      }
+    maps.push_back(affine_map(ac.setup->cage, 0.5, 1.0, 0));  // reverses orientation
+    const int count = static_cast<int>(maps.size());
+    hsi::cuda::Stream stream;
+    hsi::cuda::BlasHandle blas(stream);
+    hsi::cuda::DeviceCertifier one(*ac.setup, stream, blas);
+    hsi::cuda::DeviceCertifier batch(*ac.setup, stream, blas, count + 2);  // room to spare: fewer maps than capacity
+    REQUIRE(batch.capacity() == count + 2);
+    const int M = batch.coefficient_count();
+    std::vector<double2> coef(2 * static_cast<size_t>(M) * static_cast<size_t>(count));
+    for (int s = 0; s < count; ++s) {
+      REQUIRE(maps[size_t(s)].phi.size() == M);
+      for (int j = 0; j < M; ++j) {
+        const cd phi = maps[size_t(s)].phi(j), psi = maps[size_t(s)].psi(j);
+        coef[size_t(s) * 2 * size_t(M) + size_t(j)] = make_double2(phi.real(), phi.imag());
+        coef[size_t(s) * 2 * size_t(M) + size_t(M + j)] = make_double2(psi.real(), psi.imag());
+      }
+    }
+    hsi::cuda::DeviceArray<double2> dcoef(coef.size());
+    REQUIRE(cudaMemcpy(dcoef.get(), coef.data(), dcoef.bytes(), cudaMemcpyHostToDevice) == cudaSuccess);
+    for (int launch = 0; launch < 2; ++launch) {  // again: the per-map counters were left at 0
+      batch.enqueue(dcoef.get(), CertificateOptions{}, count);
+      const std::vector<CertificateResult> all = batch.fetch_all(count);
+      REQUIRE(all.size() == maps.size());
+      for (int s = 0; s < count; ++s) {
+        INFO("map " << s << ", launch " << launch);
+        const CertificateResult a = one.certify(maps[size_t(s)]), &b = all[size_t(s)];
+        CHECK(b.certified == a.certified);
+        CHECK(b.reason == a.reason);
+        CHECK(b.fail_loop == a.fail_loop);
+        CHECK(b.fail_edge == a.fail_edge);
+        CHECK(b.winding == a.winding);
+        CHECK(b.segments == a.segments);
+        CHECK(b.subdivisions == a.subdivisions);
+        CHECK(b.observed_sigma1_max == a.observed_sigma1_max);  // from the values alone: the same product
+        CHECK(b.observed_sigma2_min == a.observed_sigma2_min);
+        if (a.certified) {
+          CHECK(b.sigma2_min == Approx(a.sigma2_min).epsilon(1e-13));
+          CHECK(b.sigma1_max == Approx(a.sigma1_max).epsilon(1e-13));
+          CHECK(b.k_max == Approx(a.k_max).epsilon(1e-13));
+          same_bits += b.sigma2_min == a.sigma2_min && b.sigma1_max == a.sigma1_max && b.k_max == a.k_max;
+        } else {
+          ++refused;
+        }
+        ++maps_checked;
+      }
+    }
+    CHECK_THROWS_WITH(batch.enqueue(dcoef.get(), CertificateOptions{}, count + 3), Catch::Contains("maps for a certifier of"));
+    CHECK_THROWS_WITH(batch.fetch_all(0), Catch::Contains("maps for a certifier of"));
+    CHECK_THROWS_WITH(hsi::cuda::DeviceCertifier(*ac.setup, stream, blas, 0), Catch::Contains("a batch of 0 maps"));
+  }
+  std::printf("[cuda] batched certificate: %d maps against one at a time, %d refused, %d certified with the same bounds bit for bit\n",
+              maps_checked, refused, same_bits);
+  CHECK(refused > 0);
+  CHECK(maps_checked > refused);
 }
 
 // The setup core certifies maps for its setup's certifier on the device (an

@@ -1,6 +1,7 @@
 // The certificate's kernels (see certify_kernels.h), line for line the arithmetic of
 // engine/src/certificate.cpp so that both backends reach the same verdicts.
 #include "certify_kernels.h"
+#include "newton_kernels.h"  // kMaxBatchSystems
 #include "one_launch.cuh"
 
 #include <algorithm>
@@ -104,6 +105,11 @@ __device__ Values values_at(const CageView& cage, const double2* __restrict__ co
 __global__ void jumps_kernel(CageView cage, const double2* __restrict__ coef, double* __restrict__ jumps,
                              double* __restrict__ abs_coef, int* __restrict__ stop) {
   const int M = cage.m + cage.N;
+  const size_t sys = blockIdx.y;  // system of a lockstep batch (lipschitz_jumps_batched): its coefficients, jumps and flag
+  coef += sys * 2 * static_cast<size_t>(M);
+  jumps += sys * 2 * static_cast<size_t>(M);
+  abs_coef += sys * 2 * static_cast<size_t>(M);
+  if (stop) stop += sys;
   if (stop && blockIdx.x == 0 && threadIdx.x == 0) *stop = 0;  // certify_segments' flag, cleared before it runs
   for (int i = static_cast<int>(blockIdx.x * blockDim.x + threadIdx.x); i < M; i += static_cast<int>(gridDim.x * blockDim.x)) {
     abs_coef[i] = cabs(coef[i]);
@@ -146,6 +152,13 @@ __global__ void __launch_bounds__(kThreads) segments_kernel(CageView cage, Segme
   const int i = static_cast<int>(blockIdx.x * blockDim.x + threadIdx.x);
   if (i >= seg.S) return;
   const int S = seg.S, M = cage.m + cage.N;
+  const size_t sys = blockIdx.y;  // system of a lockstep batch (certify_segments_batched)
+  coef += sys * 2 * static_cast<size_t>(M);
+  values += sys * 4 * static_cast<size_t>(S);
+  errs += sys * 4 * static_cast<size_t>(S);
+  lip += sys * 2 * static_cast<size_t>(S);
+  if (stop) stop += sys;
+  out += sys * static_cast<size_t>(S);
   SegmentOutcome o;
   o.ok = 1;
   o.arg = 0;
@@ -298,6 +311,12 @@ __device__ Fold load_fold(const Fold* p) {
 __global__ void __launch_bounds__(kReduceThreads) reduce_kernel(int S, const SegmentOutcome* __restrict__ outcomes,
                                                                 const double2* __restrict__ values, Fold* partials,
                                                                 unsigned* __restrict__ done, CertifySummary* out) {
+  const size_t sys = blockIdx.y;  // system of a lockstep batch (reduce_certificate_batched): its own partials and counter
+  outcomes += sys * static_cast<size_t>(S);
+  values += sys * 4 * static_cast<size_t>(S);
+  partials += sys * kReducePartials;
+  done += sys;
+  out += sys;
   Fold f = fold_identity(S);
   for (int i = static_cast<int>(blockIdx.x * blockDim.x + threadIdx.x); i < S; i += static_cast<int>(gridDim.x * blockDim.x)) {
     const SegmentOutcome& o = outcomes[i];
@@ -349,26 +368,46 @@ unsigned blocks(long long count, int threads) {
 }  // namespace
 
 cudaError_t lipschitz_jumps(CageView cage, const double2* coef, double* jumps, double* abs_coef, int* stop, cudaStream_t stream) {
-  jumps_kernel<<<blocks(cage.m + cage.N, 128), 128, 0, stream>>>(cage, coef, jumps, abs_coef, stop);
-  return cudaGetLastError();
+  return lipschitz_jumps_batched(1, cage, coef, jumps, abs_coef, stop, stream);
 }
 
 cudaError_t certify_segments(CageView cage, SegmentsView seg, const double2* coef, const double2* values, const double* errs,
                              const double* lip, const char* touches, int max_depth, long long max_pieces, int* stop,
                              SegmentOutcome* out, cudaStream_t stream) {
-  if (max_depth > kMaxCertifyDepth) return cudaErrorInvalidValue;
-  segments_kernel<<<blocks(seg.S, kThreads), kThreads, 0, stream>>>(cage, seg, coef, values, errs, lip, touches, max_depth,
-                                                                   max_pieces, stop, out);
-  return cudaGetLastError();
+  return certify_segments_batched(1, cage, seg, coef, values, errs, lip, touches, max_depth, max_pieces, stop, out, stream);
 }
 
 cudaError_t reduce_certificate(int S, const SegmentOutcome* outcomes, const double2* values, void* partials, unsigned* done,
                                CertifySummary* out, cudaStream_t stream) {
+  return reduce_certificate_batched(1, S, outcomes, values, partials, done, out, stream);
+}
+
+cudaError_t lipschitz_jumps_batched(int systems, CageView cage, const double2* coef, double* jumps, double* abs_coef, int* stop,
+                                    cudaStream_t stream) {
+  if (systems < 1 || systems > kMaxBatchSystems) return cudaErrorInvalidValue;
+  jumps_kernel<<<dim3(blocks(cage.m + cage.N, 128), static_cast<unsigned>(systems)), 128, 0, stream>>>(cage, coef, jumps, abs_coef,
+                                                                                                          stop);
+  return cudaGetLastError();
+}
+
+cudaError_t certify_segments_batched(int systems, CageView cage, SegmentsView seg, const double2* coef, const double2* values,
+                                     const double* errs, const double* lip, const char* touches, int max_depth, long long max_pieces,
+                                     int* stop, SegmentOutcome* out, cudaStream_t stream) {
+  if (max_depth > kMaxCertifyDepth || systems < 1 || systems > kMaxBatchSystems) return cudaErrorInvalidValue;
+  segments_kernel<<<dim3(blocks(seg.S, kThreads), static_cast<unsigned>(systems)), kThreads, 0, stream>>>(
+      cage, seg, coef, values, errs, lip, touches, max_depth, max_pieces, stop, out);
+  return cudaGetLastError();
+}
+
+cudaError_t reduce_certificate_batched(int systems, int S, const SegmentOutcome* outcomes, const double2* values, void* partials,
+                                       unsigned* done, CertifySummary* out, cudaStream_t stream) {
   static_assert(kReducePartials <= kReduceThreads);
+  if (systems < 1 || systems > kMaxBatchSystems) return cudaErrorInvalidValue;
   const long long per_block = 4LL * kReduceThreads;  // a few segments per thread
   const int parts = static_cast<int>(std::min<long long>(std::max<long long>((S + per_block - 1) / per_block, 1), kReducePartials));
   Fold* p = static_cast<Fold*>(partials);
-  reduce_kernel<<<static_cast<unsigned>(parts), kReduceThreads, 0, stream>>>(S, outcomes, values, p, done, out);
+  reduce_kernel<<<dim3(static_cast<unsigned>(parts), static_cast<unsigned>(systems)), kReduceThreads, 0, stream>>>(S, outcomes, values,
+                                                                                                                    p, done, out);
   return cudaGetLastError();
 }
 

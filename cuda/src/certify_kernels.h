@@ -75,4 +75,19 @@ size_t reduce_partials_bytes();
 cudaError_t reduce_certificate(int S, const SegmentOutcome* outcomes, const double2* values, void* partials, unsigned* done,
                                CertifySummary* out, cudaStream_t stream);
 
+// Lockstep batches (newton_kernels.h): `systems` maps of one setup certified in one launch
+// per call. System s's arrays at fixed strides from the pointers given: coef, jumps and
+// abs_coef 2M, values and errs 4S, lip 2S, outcomes S, the summary one, the flag stop[s]
+// (stop may be null), partials reduce_partials_bytes() and its own counter done[s]. Each
+// system's results bit for bit the one-system call's (which are these with systems = 1),
+// but where stop is given: which segments still run after one fails depends on timing,
+// in a batch as alone (the verdict and the first failing segment do not).
+cudaError_t lipschitz_jumps_batched(int systems, CageView cage, const double2* coef, double* jumps, double* abs_coef, int* stop,
+                                    cudaStream_t stream);
+cudaError_t certify_segments_batched(int systems, CageView cage, SegmentsView seg, const double2* coef, const double2* values,
+                                     const double* errs, const double* lip, const char* touches, int max_depth, long long max_pieces,
+                                     int* stop, SegmentOutcome* out, cudaStream_t stream);
+cudaError_t reduce_certificate_batched(int systems, int S, const SegmentOutcome* outcomes, const double2* values, void* partials,
+                                       unsigned* done, CertifySummary* out, cudaStream_t stream);
+
 }  // namespace hsi::cuda::kernels

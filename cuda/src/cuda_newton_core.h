@@ -221,9 +221,7 @@ class CudaNewtonCore final : public NewtonCore {
   // Sample by sample on the device: [da | db] = D_rows p, each sample's Hessian applied
   // (kernels::hessian_apply), then D_rowsᴴ back as in gradient().
   Eigen::VectorXd hessian_times(HessianProjection projection, bool exact, bool all_samples, const Eigen::VectorXd& p) override {
-    const Eigen::Index n4 = 4 * static_cast<Eigen::Index>(n_);
-    if (p.size() != n4)
-      throw InputError("hessian_times: a vector of " + std::to_string(p.size()) + " entries, expected " + std::to_string(n4));
+    upload_coefficients(p, "Hessian product's");  // checks p's size (an InputError naming both sizes)
     const cudaStream_t s = stream_;
     if (!hv_in_.get()) {
       hv_in_ = DeviceArray<double2>(2 * sz(G_));
@@ -231,7 +229,6 @@ class CudaNewtonCore final : public NewtonCore {
     }
     const int rows = all_samples ? G_ : h_;
     const double2* R = all_samples ? D_ : DH_;
-    upload_coefficients(p, "Hessian product's");
     HSI_CUDA_CHECK(kernels::tall_times_two(rows, n_, R, coef_.get(), hv_in_.get(), s));
     HSI_CUDA_CHECK(kernels::hessian_apply(rows, G_, all_samples ? nullptr : H_, g_.get(), ab_.get(), hv_in_.get(), to_device(projection),
                                           exact, hv_out_.get(), s));

@@ -31,8 +31,11 @@ DeviceCertifier::DeviceCertifier(const hsi::Certifier& host, const Cage& cage, c
   rows_ = upload(cage, host.segments(), host.breakpoint_D(), host.breakpoint_E(), host.weights(), stream_);
 }
 
-DeviceCertifier::DeviceCertifier(const ShapeSetup& setup, cudaStream_t stream, cublasHandle_t blas)
-    : stream_(stream), blas_(blas) {
+DeviceCertifier::DeviceCertifier(const ShapeSetup& setup, cudaStream_t stream, cublasHandle_t blas, int capacity)
+    : capacity_(capacity), stream_(stream), blas_(blas) {
+  if (capacity < 1 || capacity > kernels::kMaxBatchSystems)
+    throw InputError("hsi::cuda certificate: a batch of " + std::to_string(capacity) + " maps (1 to " +
+                     std::to_string(kernels::kMaxBatchSystems) + ")");
   const hsi::Certifier& host = setup.certifier;
   set_up(setup.cage, host.segments(), host.breakpoint_D(), host.breakpoint_E(), host.weights());
   rows_ = std::static_pointer_cast<const Rows>(setup.shared_backend_data(device_key("certifier rows"), [&] {
@@ -53,18 +56,19 @@ void DeviceCertifier::set_up(const Cage& cage, const CertificateSegments& seg, c
   if (!s_by_m(D) || !s_by_m(E) || !s_by_m(w.WD) || !s_by_m(w.WE) || w.W.rows() != S_ || w.Wh.rows() != S_ ||
       w.W.cols() + w.Wh.cols() != M_ || w.touches.size() != sz(S_))
     throw InputError("hsi::cuda certificate: the basis rows or weights do not match the segments and the cage");
+  const size_t C = sz(capacity_);
   coef_ = DeviceArray<double2>(2 * sz(M_));
-  values_ = DeviceArray<double2>(4 * sz(S_));
-  errs_ = DeviceArray<double>(4 * sz(S_));
-  jumps_ = DeviceArray<double>(2 * sz(M_));
-  abs_coef_ = DeviceArray<double>(2 * sz(M_));
-  lip_ = DeviceArray<double>(2 * sz(S_));
-  outcomes_ = DeviceArray<kernels::SegmentOutcome>(sz(S_));
-  partials_ = DeviceArray<unsigned char>(kernels::reduce_partials_bytes());
-  stop_ = DeviceArray<int>(1);
-  done_ = DeviceArray<unsigned>(1);
-  HSI_CUDA_CHECK(cudaMemsetAsync(done_.get(), 0, done_.bytes(), stream_));  // reduce_certificate's counter
-  summary_down_ = PinnedArray<kernels::CertifySummary>(1);
+  values_ = DeviceArray<double2>(4 * sz(S_) * C);
+  errs_ = DeviceArray<double>(4 * sz(S_) * C);
+  jumps_ = DeviceArray<double>(2 * sz(M_) * C);
+  abs_coef_ = DeviceArray<double>(2 * sz(M_) * C);
+  lip_ = DeviceArray<double>(2 * sz(S_) * C);
+  outcomes_ = DeviceArray<kernels::SegmentOutcome>(sz(S_) * C);
+  partials_ = DeviceArray<unsigned char>(kernels::reduce_partials_bytes() * C);
+  stop_ = DeviceArray<int>(C);
+  done_ = DeviceArray<unsigned>(C);
+  HSI_CUDA_CHECK(cudaMemsetAsync(done_.get(), 0, done_.bytes(), stream_));  // reduce_certificate's counters
+  summary_down_ = PinnedArray<kernels::CertifySummary>(C);
   coef_up_ = PinnedArray<double2>(2 * sz(M_));
 }
 
@@ -116,32 +120,49 @@ kernels::CageView DeviceCertifier::cage_view() const {
 }
 kernels::SegmentsView DeviceCertifier::segments_view() const { return {rows_->points.get(), rows_->next.get(), S_}; }
 
-void DeviceCertifier::enqueue(const double2* coef, const CertificateOptions& options) {
+void DeviceCertifier::enqueue(const double2* coef, const CertificateOptions& options, int maps) {
+  if (maps < 1 || maps > capacity_)
+    throw InputError("hsi::cuda certificate: " + std::to_string(maps) + " maps for a certifier of " + std::to_string(capacity_));
   if (options.max_depth > kernels::kMaxCertifyDepth)
     throw InputError("hsi::cuda certificate: max_depth " + std::to_string(options.max_depth) + " exceeds the GPU's " +
                      std::to_string(kernels::kMaxCertifyDepth));
   const cudaStream_t s = stream_;
   // Values at the breakpoints: [a | a1 | b | b1] = [D; E] · [φ | ψ] (a tall product).
-  HSI_CUDA_CHECK(kernels::tall_times_two(2 * S_, M_, rows_->DE.get(), coef, values_.get(), s));
+  HSI_CUDA_CHECK(kernels::tall_times_two_batched(maps, 2 * S_, M_, rows_->DE.get(), coef, values_.get(), s));
   // Lipschitz constants of f_zz and (conj f_zbar)' per segment: [W | Wh] · jumps; the
   // values' rounding weights: [WD; WE] · [|φ| | |ψ|].
   int* stop = options.stop_at_first_failure ? stop_.get() : nullptr;  // cleared by lipschitz_jumps
-  HSI_CUDA_CHECK(kernels::lipschitz_jumps(cage_view(), coef, jumps_.get(), abs_coef_.get(), stop, s));
+  HSI_CUDA_CHECK(kernels::lipschitz_jumps_batched(maps, cage_view(), coef, jumps_.get(), abs_coef_.get(), stop, s));
+  // Every map's two columns side by side (M × 2·maps, S × 2·maps): one product each.
   const double one = 1, zero = 0;
-  HSI_CUDA_CHECK(cublasDgemm(blas_, CUBLAS_OP_N, CUBLAS_OP_N, S_, 2, M_, &one, rows_->WWh.get(), S_, jumps_.get(), M_, &zero,
+  HSI_CUDA_CHECK(cublasDgemm(blas_, CUBLAS_OP_N, CUBLAS_OP_N, S_, 2 * maps, M_, &one, rows_->WWh.get(), S_, jumps_.get(), M_, &zero,
                              lip_.get(), S_));
-  HSI_CUDA_CHECK(cublasDgemm(blas_, CUBLAS_OP_N, CUBLAS_OP_N, 2 * S_, 2, M_, &one, rows_->WDE.get(), 2 * S_, abs_coef_.get(), M_,
-                             &zero, errs_.get(), 2 * S_));
-  HSI_CUDA_CHECK(kernels::certify_segments(cage_view(), segments_view(), coef, values_.get(), errs_.get(), lip_.get(),
-                                           rows_->touches.get(), options.max_depth, options.max_pieces_per_segment, stop,
-                                           outcomes_.get(), s));
-  // The summary straight into pinned host memory (mapped: no copy), read by fetch().
-  HSI_CUDA_CHECK(kernels::reduce_certificate(S_, outcomes_.get(), values_.get(), partials_.get(), done_.get(), summary_down_.get(), s));
+  HSI_CUDA_CHECK(cublasDgemm(blas_, CUBLAS_OP_N, CUBLAS_OP_N, 2 * S_, 2 * maps, M_, &one, rows_->WDE.get(), 2 * S_, abs_coef_.get(),
+                             M_, &zero, errs_.get(), 2 * S_));
+  HSI_CUDA_CHECK(kernels::certify_segments_batched(maps, cage_view(), segments_view(), coef, values_.get(), errs_.get(), lip_.get(),
+                                                   rows_->touches.get(), options.max_depth, options.max_pieces_per_segment, stop,
+                                                   outcomes_.get(), s));
+  // The summaries straight into pinned host memory (mapped: no copy), read by fetch().
+  HSI_CUDA_CHECK(kernels::reduce_certificate_batched(maps, S_, outcomes_.get(), values_.get(), partials_.get(), done_.get(),
+                                                     summary_down_.get(), s));
 }
 
 CertificateResult DeviceCertifier::fetch() {
   HSI_CUDA_CHECK(cudaStreamSynchronize(stream_));
-  const kernels::CertifySummary& k = summary_down_[0];
+  return result(summary_down_[0]);
+}
+
+std::vector<CertificateResult> DeviceCertifier::fetch_all(int maps) {
+  if (maps < 1 || maps > capacity_)
+    throw InputError("hsi::cuda certificate: " + std::to_string(maps) + " maps for a certifier of " + std::to_string(capacity_));
+  HSI_CUDA_CHECK(cudaStreamSynchronize(stream_));
+  std::vector<CertificateResult> out;
+  out.reserve(sz(maps));
+  for (int s = 0; s < maps; ++s) out.push_back(result(summary_down_[sz(s)]));
+  return out;
+}
+
+CertificateResult DeviceCertifier::result(const kernels::CertifySummary& k) const {
   CertificateResult r;
   r.segments = k.segments;
   r.subdivisions = k.subdivisions;

@@ -24,15 +24,24 @@ class DeviceCertifier {
   // The same from a setup's certifier, its rows on the device shared by every
   // DeviceCertifier made from that setup on this GPU (ShapeSetup::shared_backend_data):
   // uploaded by the first, read only by all.
-  DeviceCertifier(const ShapeSetup& setup, cudaStream_t stream, cublasHandle_t blas);
+  // `capacity`: the most maps one enqueue() certifies at once (a lockstep batch's maps,
+  // issue #23); the per-map buffers are made for that many.
+  DeviceCertifier(const ShapeSetup& setup, cudaStream_t stream, cublasHandle_t blas, int capacity = 1);
 
   int coefficient_count() const { return M_; }  // M = m + N complex per φ and ψ
   int segment_count() const { return S_; }
+  int capacity() const { return capacity_; }
 
   // Enqueues the certificate of the map whose full coefficients [φ | ψ] (M × 2 complex,
   // column-major) are at `coef` on the device; fetch() waits and returns the verdict.
-  void enqueue(const double2* coef, const CertificateOptions& options);
+  // With `maps` > 1 (at most capacity()), the maps at coef + 2M·s for s < maps, all in
+  // the launches one map takes; fetch_all() returns each map's verdict, what enqueue()
+  // and fetch() give for that map alone (the bounds to the last bits where the two small
+  // weight products sum in another order; the verdict, the failing segment and the
+  // counts the same).
+  void enqueue(const double2* coef, const CertificateOptions& options, int maps = 1);
   CertificateResult fetch();
+  std::vector<CertificateResult> fetch_all(int maps);
 
   // Convenience for tests and benchmarks: upload the map, enqueue, fetch.
   CertificateResult certify(const HarmonicMap& map, const CertificateOptions& options = {});
@@ -53,13 +62,15 @@ class DeviceCertifier {
                                       const CertificateWeights& w, cudaStream_t stream);
   // Checks the sizes, sets the counts and makes this certifier's own buffers.
   void set_up(const Cage& cage, const CertificateSegments& seg, const MatrixXcd& D, const MatrixXcd& E, const CertificateWeights& w);
+  CertificateResult result(const kernels::CertifySummary& k) const;
 
-  int m_ = 0, N_ = 0, M_ = 0, S_ = 0;
+  int m_ = 0, N_ = 0, M_ = 0, S_ = 0, capacity_ = 1;
   cudaStream_t stream_;
   cublasHandle_t blas_;
   std::vector<int> loop_, edge_;  // per segment, to name a failure
   std::shared_ptr<const Rows> rows_;
   DeviceArray<double2> coef_;      // upload target of certify()
+  // Per map (capacity_ of each, one after another):
   DeviceArray<double2> values_;    // [a | a1 | b | b1], S × 4 (= 2S × 2)
   DeviceArray<double> errs_;       // their rounding weights, the same layout
   DeviceArray<double> jumps_;      // M × 2
