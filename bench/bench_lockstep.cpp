@@ -89,12 +89,16 @@ std::vector<double> spd_matrix(int m) {
   return A;
 }
 
-enum Stage { kStart, kGradient, kChord, kTry, kCertify, kExactH, kExactG, kFactor, kRowsH, kRowsG, kStages };
+enum Stage { kStart, kGradient, kChord, kTry, kCertify, kExactH, kExactG, kFactor, kRowsH, kRowsG, kProdH, kProd3mH, kProdTH, kReduced, kStages };
 const char* const kStageNames[kStages] = {"start (x → a, b at G, E)", "gradient (∂E at G, Dᴴ, Tᵀ)", "chord (kept factor's solve, d at G)",
                                           "try (safe step, one trial energy)",
                                           "certificate (x → full coefficients, the certificate)", "exact system over H", "exact system over G",
                                           "factor + triangular solves", "(of exact over H: the weights and weighted rows alone)",
-                                          "(of exact over G: the weights and weighted rows alone)"};
+                                          "(of exact over G: the weights and weighted rows alone)",
+                                          "(of exact over H: the Hessians' product D_Hᴴ Wt alone)",
+                                          "(the same product by ZGEMM3m, Gauss's three real products)",
+                                          "(the same product transposed: Wtᴴ D_H)",
+                                          "(of exact: the reduced system Tᵀ H T alone, two GEMMs)"};
 
 // One scene's device data for up to S systems, and the stages' three ways.
 struct Bench {
@@ -330,6 +334,27 @@ struct Bench {
             cublasDgemm(b, CUBLAS_OP_T, CUBLAS_OP_N, m, m, 4 * n, &kOneD, Tc.get(), 4 * n, y, 4 * n, &kZeroD, Hr.get() + size_t(s) * mz * mz, m));
         break;
       }
+      case kProdH:
+      case kProd3mH:
+      case kProdTH: {
+        double2* wt = Wt.get() + size_t(s) * size_t(h) * 6 * nz;
+        double2* r = R.get() + size_t(s) * 6 * nz * nz;
+        if (stage == kProdH)
+          HSI_CUDA_CHECK(cublasZgemm(b, CUBLAS_OP_C, CUBLAS_OP_N, n, 6 * n, h, &kOne, DH.get(), h, wt, h, &kZero, r, n));
+        else if (stage == kProd3mH)
+          HSI_CUDA_CHECK(cublasZgemm3m(b, CUBLAS_OP_C, CUBLAS_OP_N, n, 6 * n, h, &kOne, DH.get(), h, wt, h, &kZero, r, n));
+        else
+          HSI_CUDA_CHECK(cublasZgemm(b, CUBLAS_OP_C, CUBLAS_OP_N, 6 * n, n, h, &kOne, wt, h, DH.get(), h, &kZero, r, 6 * n));
+        break;
+      }
+      case kReduced: {
+        double* hv = Hv.get() + size_t(s) * 16 * nz * nz;
+        double* y = Y.get() + size_t(s) * 4 * nz * mz;
+        HSI_CUDA_CHECK(cublasDgemm(b, CUBLAS_OP_N, CUBLAS_OP_N, 4 * n, m, 4 * n, &kOneD, hv, 4 * n, Tc.get(), 4 * n, &kZeroD, y, 4 * n));
+        HSI_CUDA_CHECK(
+            cublasDgemm(b, CUBLAS_OP_T, CUBLAS_OP_N, m, m, 4 * n, &kOneD, Tc.get(), 4 * n, y, 4 * n, &kZeroD, Hr.get() + size_t(s) * mz * mz, m));
+        break;
+      }
       case kFactor: {
         double* A = Hr.get() + size_t(s) * mz * mz;
         HSI_CUDA_CHECK(cudaMemcpyAsync(A, A0.get() + size_t(s) * mz * mz, mz * mz * sizeof(double), cudaMemcpyDeviceToDevice, st));
@@ -424,6 +449,23 @@ struct Bench {
                                                  static_cast<long long>(mz * mz), S));
         break;
       }
+      case kProdH:
+        HSI_CUDA_CHECK(cublasZgemm(b, CUBLAS_OP_C, CUBLAS_OP_N, n, 6 * n * S, h, &kOne, DH.get(), h, Wt.get(), h, &kZero, R.get(), n));
+        break;
+      case kProd3mH:
+        HSI_CUDA_CHECK(cublasZgemm3m(b, CUBLAS_OP_C, CUBLAS_OP_N, n, 6 * n * S, h, &kOne, DH.get(), h, Wt.get(), h, &kZero, R.get(), n));
+        break;
+      case kProdTH:  // [R_1ᴴ; …; R_Sᴴ] (6nS × n)
+        HSI_CUDA_CHECK(cublasZgemm(b, CUBLAS_OP_C, CUBLAS_OP_N, 6 * n * S, n, h, &kOne, Wt.get(), h, DH.get(), h, &kZero, R.get(), 6 * n * S));
+        break;
+      case kReduced:
+        HSI_CUDA_CHECK(cublasDgemmStridedBatched(b, CUBLAS_OP_N, CUBLAS_OP_N, 4 * n, m, 4 * n, &kOneD, Hv.get(), 4 * n,
+                                                 static_cast<long long>(16 * nz * nz), Tc.get(), 4 * n, 0, &kZeroD, Y.get(), 4 * n,
+                                                 static_cast<long long>(4 * nz * mz), S));
+        HSI_CUDA_CHECK(cublasDgemmStridedBatched(b, CUBLAS_OP_T, CUBLAS_OP_N, m, m, 4 * n, &kOneD, Tc.get(), 4 * n, 0, Y.get(), 4 * n,
+                                                 static_cast<long long>(4 * nz * mz), &kZeroD, Hr.get(), m,
+                                                 static_cast<long long>(mz * mz), S));
+        break;
       case kFactor:
         HSI_CUDA_CHECK(cudaMemcpyAsync(Hr.get(), A0.get(), A0.bytes(), cudaMemcpyDeviceToDevice, st));
         HSI_CUDA_CHECK(cusolverDnDpotrfBatched(*main_solver, CUBLAS_FILL_MODE_LOWER, m, A_array.get(), m, info.get(), S));
@@ -448,8 +490,8 @@ struct Bench {
 };
 
 // Kernel launches (cuBLAS / cuSOLVER calls counted as one) per system and stage.
-constexpr int kEachLaunches[kStages] = {3, 2, 3, 2, 7, 5, 5, 3, 2, 2};
-constexpr int kLockstepLaunches[kStages] = {3, 3, 3, 2, 7, 5, 5, 3, 2, 2};
+constexpr int kEachLaunches[kStages] = {3, 2, 3, 2, 7, 5, 5, 3, 2, 2, 1, 1, 1, 2};
+constexpr int kLockstepLaunches[kStages] = {3, 3, 3, 2, 7, 5, 5, 3, 2, 2, 1, 1, 1, 2};
 
 }  // namespace
 
@@ -507,7 +549,7 @@ int main(int argc, char** argv) {
         std::printf("| %s | %.2f | %.2f | %.2f | %.1f× | %.1f× | %d | %d |\n", kStageNames[st], e, k, l, e / l, k / l, kEachLaunches[st],
                     kLockstepLaunches[st]);
         for (int over = 0; over < 2; ++over) {
-          if ((stage == kExactG && over == 1) || (stage == kExactH && over == 0) || stage == kRowsH || stage == kRowsG) continue;
+          if ((stage == kExactG && over == 1) || (stage == kExactH && over == 0) || stage >= kRowsH) continue;
           sum_each[over] += e;
           sum_spread[over] += k;
           sum_lock[over] += l;
