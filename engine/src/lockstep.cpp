@@ -1,0 +1,156 @@
+// The lockstep group's proxy stepper and the serial batch stepper (hsi/lockstep.h).
+#include "hsi/lockstep.h"
+
+#include <stdexcept>
+#include <string>
+
+namespace hsi {
+
+namespace {
+
+using Kind = StepRequest::Kind;
+
+// System s's NewtonStepper: each call a request through the group's gate.
+class ProxyStepper final : public NewtonStepper {
+ public:
+  ProxyStepper(LockstepGate<StepRequest>& gate, int system) : gate_(gate), system_(system) {}
+
+  double start(const Eigen::VectorXd& x0) override {
+    StepRequest r = request(Kind::Start);
+    r.x0 = &x0;
+    post(r);
+    return r.energy;
+  }
+  void start_deferred(const Eigen::VectorXd& x0) override {
+    StepRequest r = request(Kind::StartDeferred);
+    r.x0 = &x0;
+    post(r);
+  }
+  double start_energy() override {
+    StepRequest r = request(Kind::StartEnergy);
+    post(r);
+    return r.energy;
+  }
+  void linearize(const HessianChoice& choice) override {
+    StepRequest r = request(Kind::Linearize);
+    r.choice = &choice;
+    post(r);
+  }
+  NewtonSystem solve(double ridge) override { return system_call(Kind::Solve, ridge); }
+  NewtonSystem decrement(double ridge) override { return system_call(Kind::Decrement, ridge); }
+  NewtonSystem direction() override { return system_call(Kind::Direction, 0); }
+  void trial_energies(std::span<const double> steps, std::span<double> energies) override {
+    StepRequest r = request(Kind::TrialEnergies);
+    r.steps = steps;
+    r.energies = energies;
+    post(r);
+  }
+  CertificateResult certify(double step, bool full) override {
+    StepRequest r = request(Kind::Certify);
+    r.number = step;
+    r.full = full;
+    post(r);
+    return std::move(r.certificate);
+  }
+  void certify_ahead(double step) override {
+    StepRequest r = request(Kind::CertifyAhead);
+    r.number = step;
+    post(r);
+  }
+  void accept(double step) override {
+    StepRequest r = request(Kind::Accept);
+    r.number = step;
+    post(r);
+  }
+  Eigen::VectorXd x() override {
+    StepRequest r = request(Kind::X);
+    post(r);
+    return std::move(r.x);
+  }
+  bool keep(KeptSystem& slot) override {
+    StepRequest r = request(Kind::Keep);
+    r.slot = &slot;
+    post(r);
+    return r.ok;
+  }
+  bool linearize_kept(const KeptSystem& slot) override {
+    StepRequest r = request(Kind::LinearizeKept);
+    r.kept = &slot;
+    post(r);
+    return r.ok;
+  }
+
+ private:
+  StepRequest request(Kind kind) const {
+    StepRequest r;
+    r.kind = kind;
+    r.system = system_;
+    return r;
+  }
+  void post(StepRequest& r) {
+    gate_.call(r, static_cast<int>(r.kind));
+    if (r.error) std::rethrow_exception(r.error);
+  }
+  NewtonSystem system_call(Kind kind, double ridge) {
+    StepRequest r = request(kind);
+    r.number = ridge;
+    post(r);
+    return r.system_result;
+  }
+
+  LockstepGate<StepRequest>& gate_;
+  int system_;
+};
+
+}  // namespace
+
+SerialBatchStepper::SerialBatchStepper(std::vector<std::unique_ptr<NewtonStepper>> steppers) : steppers_(std::move(steppers)) {
+  for (const auto& s : steppers_)
+    if (!s) throw std::invalid_argument("SerialBatchStepper: a null stepper");
+}
+
+void SerialBatchStepper::serve(Kind kind, std::span<StepRequest* const> batch) {
+  for (StepRequest* r : batch) {
+    if (r->system < 0 || r->system >= systems() || r->kind != kind)
+      throw std::logic_error("SerialBatchStepper: a request for system " + std::to_string(r->system) + " of " +
+                             std::to_string(systems()) + " or of another kind");
+    NewtonStepper& s = *steppers_[static_cast<size_t>(r->system)];
+    try {
+      serve_one(s, *r);
+    } catch (...) {
+      r->error = std::current_exception();  // this system's loop alone
+    }
+  }
+}
+
+void SerialBatchStepper::serve_one(NewtonStepper& s, StepRequest& r) {
+  switch (r.kind) {
+    case Kind::Start: r.energy = s.start(*r.x0); break;
+    case Kind::StartDeferred: s.start_deferred(*r.x0); break;
+    case Kind::StartEnergy: r.energy = s.start_energy(); break;
+    case Kind::Linearize: s.linearize(*r.choice); break;
+    case Kind::Solve: r.system_result = s.solve(r.number); break;
+    case Kind::Decrement: r.system_result = s.decrement(r.number); break;
+    case Kind::Direction: r.system_result = s.direction(); break;
+    case Kind::TrialEnergies: s.trial_energies(r.steps, r.energies); break;
+    case Kind::Certify: r.certificate = s.certify(r.number, r.full); break;
+    case Kind::CertifyAhead: s.certify_ahead(r.number); break;
+    case Kind::Accept: s.accept(r.number); break;
+    case Kind::X: r.x = s.x(); break;
+    case Kind::Keep: r.ok = s.keep(*r.slot); break;
+    case Kind::LinearizeKept: r.ok = s.linearize_kept(*r.kept); break;
+  }
+}
+
+LockstepGroup::LockstepGroup(BatchStepper& batch)
+    : batch_(batch), gate_(batch.systems(), [this](int key, std::span<StepRequest* const> requests) {
+        batch_.serve(static_cast<StepRequest::Kind>(key), requests);
+      }) {}
+
+std::unique_ptr<NewtonStepper> LockstepGroup::stepper(int system) {
+  if (system < 0 || system >= batch_.systems())
+    throw std::invalid_argument("LockstepGroup: system " + std::to_string(system) + " of " + std::to_string(batch_.systems()));
+  return std::make_unique<ProxyStepper>(gate_, system);
+}
+
+}  // namespace hsi

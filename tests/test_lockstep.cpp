@@ -1,0 +1,175 @@
+// The lockstep group (hsi/lockstep.h): several systems' Newton loops, each on its own
+// thread against a proxy stepper, their calls served together by a SerialBatchStepper,
+// give each system exactly the solve it gets alone (the same x bit for bit, iterations,
+// verdicts), over two solves per system that carry a kept factor for chord steps; the
+// calls were served in rounds, not one by one; one system's failing call reaches its
+// own loop alone.
+#include <catch2/catch.hpp>
+
+#include <random>
+#include <stdexcept>
+#include <thread>
+
+#include "hsi/cage.h"
+#include "hsi/lockstep.h"
+#include "hsi/newton.h"
+#include "hsi/shape_setup.h"
+#include "test_shapes.h"
+
+using namespace hsi;
+
+namespace {
+
+std::vector<Metric> metrics_of(const ShapeSetup& setup, const Eigen::VectorXd& x) {
+  const MapValues v = evaluate_map(evaluate_basis(setup.cage, setup.G.points, kBasisD), setup.metric_space.expand(x));
+  std::vector<Metric> g;
+  for (Eigen::Index i = 0; i < v.f_z.size(); ++i) g.push_back(pullback_metric(v.f_z(i), v.fzbar_conj(i)));
+  return g;
+}
+
+Eigen::VectorXd perturbed(const Eigen::VectorXd& x0, unsigned seed, double amp) {
+  std::mt19937 rng(seed);
+  std::normal_distribution<double> g(0, amp);
+  Eigen::VectorXd x = x0;
+  for (Eigen::Index i = 0; i < x.size(); ++i) x(i) += g(rng);
+  return x;
+}
+
+}  // namespace
+
+TEST_CASE("a lockstep group gives every system the solve it gets alone", "[lockstep]") {
+  for (const Shape& shape : {test::annulus(), test::bar_with_holes()}) {
+    const ShapeSetup setup(shape, build_cage(shape), 1000, 0.3);
+    const MapSpace& space = setup.metric_space;
+    const Eigen::VectorXd id = space.reduce(identity_map(setup.cage)).x;
+    constexpr int S = 5, kSolves = 2;
+    // System s: two frames' targets, from two maps near the identity (seeded per system).
+    std::vector<std::vector<std::vector<Metric>>> targets(S);
+    for (int s = 0; s < S; ++s)
+      for (int f = 0; f < kSolves; ++f)
+        targets[size_t(s)].push_back(metrics_of(setup, perturbed(id, 17u * unsigned(s) + unsigned(f), 0.02 + 0.01 * f)));
+    NewtonOptions options;
+    options.exact_samples = ExactSamples::Subset;
+    const bool rotation_invariant = space.gauge() == Gauge::ModuloRigid;
+
+    // Alone: each system's core and host stepper, its solves one after another.
+    std::vector<std::vector<NewtonResult>> alone(S);
+    for (int s = 0; s < S; ++s) {
+      auto core = make_cpu_newton_core(setup.D_G, setup.H);
+      auto stepper = make_host_stepper(*core, space, &setup.certifier, nullptr);
+      KeptSystem slot;
+      NewtonOptions o = options;
+      o.kept_system = &slot;
+      Eigen::VectorXd x = id;
+      for (int f = 0; f < kSolves; ++f) {
+        core->set_targets(targets[size_t(s)][size_t(f)]);
+        alone[size_t(s)].push_back(newton_run(*stepper, true, rotation_invariant, x, o));
+        x = alone[size_t(s)].back().x;
+      }
+    }
+
+    // Together: the same cores and steppers behind one group, each loop on its thread.
+    std::vector<std::unique_ptr<NewtonCore>> cores;
+    std::vector<std::unique_ptr<NewtonStepper>> own;
+    for (int s = 0; s < S; ++s) {
+      cores.push_back(make_cpu_newton_core(setup.D_G, setup.H));
+      own.push_back(make_host_stepper(*cores.back(), space, &setup.certifier, nullptr));
+    }
+    SerialBatchStepper batch(std::move(own));
+    LockstepGroup group(batch);
+    std::vector<std::vector<NewtonResult>> together(S);
+    std::vector<std::thread> threads;
+    for (int s = 0; s < S; ++s)
+      threads.emplace_back([&, s] {
+        auto proxy = group.stepper(s);
+        KeptSystem slot;
+        NewtonOptions o = options;
+        o.kept_system = &slot;
+        Eigen::VectorXd x = id;
+        for (int f = 0; f < kSolves; ++f) {
+          // Targets are each system's own data (not stepper calls): set between its solves,
+          // while the other threads wait at the gate or run.
+          cores[size_t(s)]->set_targets(targets[size_t(s)][size_t(f)]);
+          together[size_t(s)].push_back(newton_run(*proxy, true, rotation_invariant, x, o));
+          x = together[size_t(s)].back().x;
+        }
+        group.done();
+      });
+    for (auto& t : threads) t.join();
+
+    int calls_alone = 0;
+    for (int s = 0; s < S; ++s)
+      for (int f = 0; f < kSolves; ++f) {
+        INFO("system " << s << ", solve " << f);
+        const NewtonResult &a = alone[size_t(s)][size_t(f)], &b = together[size_t(s)][size_t(f)];
+        CHECK(b.x == a.x);
+        CHECK(b.energy == a.energy);
+        CHECK(b.iterations == a.iterations);
+        CHECK(b.converged == a.converged);
+        CHECK(b.certified == a.certified);
+        CHECK(b.stop == a.stop);
+        CHECK(a.converged);
+        calls_alone += a.iterations;
+      }
+    const auto stats = group.stats();
+    INFO("rounds " << stats.rounds << ", batches " << stats.batches << ", calls " << stats.calls);
+    CHECK(stats.calls > static_cast<std::uint64_t>(calls_alone));  // several calls per iteration
+    CHECK(stats.rounds < stats.calls / 2);                         // served in rounds of several systems
+  }
+}
+
+namespace {
+
+// A stepper whose start() throws (the other calls are never reached in this test).
+struct ThrowingStepper final : NewtonStepper {
+  double start(const Eigen::VectorXd&) override { throw std::runtime_error("this system's start failed"); }
+  void linearize(const HessianChoice&) override {}
+  NewtonSystem solve(double) override { return {}; }
+  void trial_energies(std::span<const double>, std::span<double>) override {}
+  CertificateResult certify(double, bool) override { return {}; }
+  void accept(double) override {}
+  Eigen::VectorXd x() override { return {}; }
+};
+struct ConstantStepper final : NewtonStepper {
+  double start(const Eigen::VectorXd& x0) override { return x0.sum(); }
+  void linearize(const HessianChoice&) override {}
+  NewtonSystem solve(double) override { return {}; }
+  void trial_energies(std::span<const double>, std::span<double>) override {}
+  CertificateResult certify(double, bool) override { return {}; }
+  void accept(double) override {}
+  Eigen::VectorXd x() override { return {}; }
+};
+
+}  // namespace
+
+TEST_CASE("a lockstep group: one system's failing call reaches its own loop alone", "[lockstep]") {
+  std::vector<std::unique_ptr<NewtonStepper>> steppers;
+  steppers.push_back(std::make_unique<ConstantStepper>());
+  steppers.push_back(std::make_unique<ThrowingStepper>());
+  steppers.push_back(std::make_unique<ConstantStepper>());
+  SerialBatchStepper batch(std::move(steppers));
+  LockstepGroup group(batch);
+  std::vector<double> energy(3, 0);
+  std::vector<int> threw(3, 0);
+  std::vector<std::thread> threads;
+  for (int s = 0; s < 3; ++s)
+    threads.emplace_back([&, s] {
+      auto proxy = group.stepper(s);
+      const Eigen::VectorXd x0 = Eigen::VectorXd::Constant(4, s + 1);
+      try {
+        energy[size_t(s)] = proxy->start(x0);
+      } catch (const std::runtime_error&) {
+        threw[size_t(s)] = 1;
+      }
+      group.done();
+    });
+  for (auto& t : threads) t.join();
+  CHECK(threw == std::vector<int>{0, 1, 0});
+  CHECK(energy[0] == 4);
+  CHECK(energy[2] == 12);
+  CHECK(group.stats().rounds == 1);
+  CHECK(group.stats().batches == 1);
+  CHECK_THROWS_WITH(group.stepper(3), Catch::Contains("system 3 of 3"));
+  std::vector<std::unique_ptr<NewtonStepper>> with_null(1);
+  CHECK_THROWS_WITH(SerialBatchStepper(std::move(with_null)), Catch::Contains("null stepper"));
+}
