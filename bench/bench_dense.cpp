@@ -15,6 +15,7 @@
 #include <string>
 #include <vector>
 
+#include "cuda_bench.h"
 #include "dense_cholesky.h"
 #include "device.h"
 #include "hsi/cage.h"
@@ -24,53 +25,10 @@
 using namespace hsi;
 namespace hc = hsi::cuda;
 namespace hk = hsi::cuda::kernels;
+using hsi::bench::median_us;
+using hsi::bench::spd_matrix;
 
 namespace {
-
-// A = B Bᵀ / m + I, B uniform in [−1, 1] (SPD, condition number ~5), and b, fixed seeds.
-std::vector<double> spd_matrix(int m) {
-  std::mt19937 rng(static_cast<unsigned>(m));
-  std::uniform_real_distribution<double> u(-1, 1);
-  const size_t M = static_cast<size_t>(m);
-  std::vector<double> B(M * M), A(M * M, 0.0);
-  for (double& v : B) v = u(rng);
-  for (size_t j = 0; j < M; ++j)
-    for (size_t i = j; i < M; ++i) {
-      double s = 0;
-      for (size_t k = 0; k < M; ++k) s += B[i + k * M] * B[j + k * M];
-      A[i + j * M] = A[j + i * M] = s / m + (i == j ? 1.0 : 0.0);
-    }
-  return A;
-}
-
-// Median time in µs of `body` (CUDA events on `stream`), `reset` run before each call
-// outside the events; three untimed calls first.
-double median_us(cudaStream_t stream, int reps, const std::function<void()>& reset, const std::function<void()>& body) {
-  for (int w = 0; w < 3; ++w) {
-    reset();
-    body();
-  }
-  std::deque<hc::Event> starts, stops;
-  for (int r = 0; r < reps; ++r) {
-    starts.emplace_back(true);
-    stops.emplace_back(true);
-  }
-  for (int r = 0; r < reps; ++r) {
-    reset();
-    HSI_CUDA_CHECK(cudaEventRecord(starts[static_cast<size_t>(r)], stream));
-    body();
-    HSI_CUDA_CHECK(cudaEventRecord(stops[static_cast<size_t>(r)], stream));
-  }
-  HSI_CUDA_CHECK(cudaStreamSynchronize(stream));
-  std::vector<double> us;
-  for (int r = 0; r < reps; ++r) {
-    float ms = 0;
-    HSI_CUDA_CHECK(cudaEventElapsedTime(&ms, starts[static_cast<size_t>(r)], stops[static_cast<size_t>(r)]));
-    us.push_back(1e3 * ms);
-  }
-  std::nth_element(us.begin(), us.begin() + reps / 2, us.end());
-  return us[static_cast<size_t>(reps / 2)];
-}
 
 // `body` captured into a graph and instantiated; null where the capture failed.
 cudaGraphExec_t capture(cudaStream_t stream, const std::function<void()>& body) {

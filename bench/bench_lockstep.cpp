@@ -34,6 +34,7 @@
 #include <vector>
 
 #include "bench_scenes.h"
+#include "cuda_bench.h"
 #include "dense_cholesky.h"
 #include "device_certifier.h"
 #include "device.h"
@@ -44,50 +45,13 @@
 using namespace hsi;
 namespace hc = hsi::cuda;
 namespace hk = hsi::cuda::kernels;
+using hsi::bench::median_us;
+using hsi::bench::spd_matrix;
 
 namespace {
 
 const cuDoubleComplex kOne{1, 0}, kZero{0, 0};
 const double kOneD = 1, kZeroD = 0;
-
-double median_us(cudaStream_t stream, int reps, const std::function<void()>& body) {
-  for (int w = 0; w < 3; ++w) body();
-  std::deque<hc::Event> starts, stops;
-  for (int r = 0; r < reps; ++r) {
-    starts.emplace_back(true);
-    stops.emplace_back(true);
-  }
-  for (int r = 0; r < reps; ++r) {
-    HSI_CUDA_CHECK(cudaEventRecord(starts[static_cast<size_t>(r)], stream));
-    body();
-    HSI_CUDA_CHECK(cudaEventRecord(stops[static_cast<size_t>(r)], stream));
-  }
-  HSI_CUDA_CHECK(cudaStreamSynchronize(stream));
-  std::vector<double> us;
-  for (int r = 0; r < reps; ++r) {
-    float ms = 0;
-    HSI_CUDA_CHECK(cudaEventElapsedTime(&ms, starts[static_cast<size_t>(r)], stops[static_cast<size_t>(r)]));
-    us.push_back(1e3 * ms);
-  }
-  std::nth_element(us.begin(), us.begin() + reps / 2, us.end());
-  return us[static_cast<size_t>(reps / 2)];
-}
-
-// A = B Bᵀ / m + I (SPD), fixed seed.
-std::vector<double> spd_matrix(int m) {
-  std::mt19937 rng(static_cast<unsigned>(m));
-  std::uniform_real_distribution<double> u(-1, 1);
-  const size_t M = static_cast<size_t>(m);
-  std::vector<double> B(M * M), A(M * M, 0.0);
-  for (double& v : B) v = u(rng);
-  for (size_t j = 0; j < M; ++j)
-    for (size_t i = j; i < M; ++i) {
-      double s = 0;
-      for (size_t k = 0; k < M; ++k) s += B[i + k * M] * B[j + k * M];
-      A[i + j * M] = A[j + i * M] = s / m + (i == j ? 1.0 : 0.0);
-    }
-  return A;
-}
 
 enum Stage { kStart, kGradient, kChord, kTry, kCertify, kExactH, kExactG, kFactor, kRowsH, kRowsG, kProdH, kProd3mH, kProdTH, kReduced, kStages };
 const char* const kStageNames[kStages] = {"start (x → a, b at G, E)", "gradient (∂E at G, Dᴴ, Tᵀ)", "chord (kept factor's solve, d at G)",
@@ -265,6 +229,31 @@ struct Bench {
     HSI_CUDA_CHECK(cudaStreamSynchronize(main));
   }
 
+  // R = D_rowsᴴ [Wt_first … Wt_first+count−1]: the systems' weighted rows lie side by side
+  // (rows × 6n each), and so do their R (n × 6n), so one product serves any number of them
+  // (with count 1, the stepper's own call).
+  void hessian_product(cublasHandle_t b, int rows, const double2* rowsD, const double2* wt, double2* r, int count) const {
+    HSI_CUDA_CHECK(cublasZgemm(b, CUBLAS_OP_C, CUBLAS_OP_N, n, 6 * n * count, rows, &kOne, rowsD, rows, wt, rows, &kZero, r, n));
+  }
+  // The reduced systems Tᵀ Hv T of systems [first, first + count): Y = Hv T, then Tᵀ Y;
+  // one system by the stepper's two GEMMs, or (lockstep) as strided batches sharing T.
+  void reduced_system(cublasHandle_t b, int first, int count, bool lockstep) {
+    const size_t nz = size_t(n), mz = size_t(m);
+    const double* hv = Hv.get() + size_t(first) * 16 * nz * nz;
+    double* y = Y.get() + size_t(first) * 4 * nz * mz;
+    double* hr = Hr.get() + size_t(first) * mz * mz;
+    if (!lockstep) {
+      HSI_CUDA_CHECK(cublasDgemm(b, CUBLAS_OP_N, CUBLAS_OP_N, 4 * n, m, 4 * n, &kOneD, hv, 4 * n, Tc.get(), 4 * n, &kZeroD, y, 4 * n));
+      HSI_CUDA_CHECK(cublasDgemm(b, CUBLAS_OP_T, CUBLAS_OP_N, m, m, 4 * n, &kOneD, Tc.get(), 4 * n, y, 4 * n, &kZeroD, hr, m));
+      return;
+    }
+    HSI_CUDA_CHECK(cublasDgemmStridedBatched(b, CUBLAS_OP_N, CUBLAS_OP_N, 4 * n, m, 4 * n, &kOneD, hv, 4 * n,
+                                             static_cast<long long>(16 * nz * nz), Tc.get(), 4 * n, 0, &kZeroD, y, 4 * n,
+                                             static_cast<long long>(4 * nz * mz), count));
+    HSI_CUDA_CHECK(cublasDgemmStridedBatched(b, CUBLAS_OP_T, CUBLAS_OP_N, m, m, 4 * n, &kOneD, Tc.get(), 4 * n, 0, y, 4 * n,
+                                             static_cast<long long>(4 * nz * mz), &kZeroD, hr, m, static_cast<long long>(mz * mz), count));
+  }
+
   // System s's pieces.
   double* xs(int s) const { return x.get() + size_t(s) * size_t(m); }
   double2* Cs(int s) const { return C.get() + size_t(s) * 2 * size_t(n); }
@@ -322,16 +311,12 @@ struct Bench {
         double2* wt = all_rows ? Wtall.get() + size_t(s) * size_t(G) * 6 * nz : Wt.get() + size_t(s) * size_t(h) * 6 * nz;
         const double2* rowsD = all_rows ? D.get() : DH.get();
         double2* r = R.get() + size_t(s) * 6 * nz * nz;
-        double* hv = Hv.get() + size_t(s) * 16 * nz * nz;
-        double* y = Y.get() + size_t(s) * 4 * nz * mz;
         HSI_CUDA_CHECK(hk::weighted_rows(G, rows, n, all_rows ? all.get() : H.get(), gs(s), ABs(s), hc::sample::Projection::PartProj, true,
                                          rowsD, w, wt, st));
         if (stage == kRowsH || stage == kRowsG) break;
-        HSI_CUDA_CHECK(cublasZgemm(b, CUBLAS_OP_C, CUBLAS_OP_N, n, 6 * n, rows, &kOne, rowsD, rows, wt, rows, &kZero, r, n));
-        HSI_CUDA_CHECK(hk::real_hessian(n, r, rows, hv, st));
-        HSI_CUDA_CHECK(cublasDgemm(b, CUBLAS_OP_N, CUBLAS_OP_N, 4 * n, m, 4 * n, &kOneD, hv, 4 * n, Tc.get(), 4 * n, &kZeroD, y, 4 * n));
-        HSI_CUDA_CHECK(
-            cublasDgemm(b, CUBLAS_OP_T, CUBLAS_OP_N, m, m, 4 * n, &kOneD, Tc.get(), 4 * n, y, 4 * n, &kZeroD, Hr.get() + size_t(s) * mz * mz, m));
+        hessian_product(b, rows, rowsD, wt, r, 1);
+        HSI_CUDA_CHECK(hk::real_hessian(n, r, rows, Hv.get() + size_t(s) * 16 * nz * nz, st));
+        reduced_system(b, s, 1, false);
         break;
       }
       case kProdH:
@@ -340,21 +325,16 @@ struct Bench {
         double2* wt = Wt.get() + size_t(s) * size_t(h) * 6 * nz;
         double2* r = R.get() + size_t(s) * 6 * nz * nz;
         if (stage == kProdH)
-          HSI_CUDA_CHECK(cublasZgemm(b, CUBLAS_OP_C, CUBLAS_OP_N, n, 6 * n, h, &kOne, DH.get(), h, wt, h, &kZero, r, n));
+          hessian_product(b, h, DH.get(), wt, r, 1);
         else if (stage == kProd3mH)
           HSI_CUDA_CHECK(cublasZgemm3m(b, CUBLAS_OP_C, CUBLAS_OP_N, n, 6 * n, h, &kOne, DH.get(), h, wt, h, &kZero, r, n));
         else
           HSI_CUDA_CHECK(cublasZgemm(b, CUBLAS_OP_C, CUBLAS_OP_N, 6 * n, n, h, &kOne, wt, h, DH.get(), h, &kZero, r, 6 * n));
         break;
       }
-      case kReduced: {
-        double* hv = Hv.get() + size_t(s) * 16 * nz * nz;
-        double* y = Y.get() + size_t(s) * 4 * nz * mz;
-        HSI_CUDA_CHECK(cublasDgemm(b, CUBLAS_OP_N, CUBLAS_OP_N, 4 * n, m, 4 * n, &kOneD, hv, 4 * n, Tc.get(), 4 * n, &kZeroD, y, 4 * n));
-        HSI_CUDA_CHECK(
-            cublasDgemm(b, CUBLAS_OP_T, CUBLAS_OP_N, m, m, 4 * n, &kOneD, Tc.get(), 4 * n, y, 4 * n, &kZeroD, Hr.get() + size_t(s) * mz * mz, m));
+      case kReduced:
+        reduced_system(b, s, 1, false);
         break;
-      }
       case kFactor: {
         double* A = Hr.get() + size_t(s) * mz * mz;
         HSI_CUDA_CHECK(cudaMemcpyAsync(A, A0.get() + size_t(s) * mz * mz, mz * mz * sizeof(double), cudaMemcpyDeviceToDevice, st));
@@ -432,25 +412,19 @@ struct Bench {
         HSI_CUDA_CHECK(hk::weighted_rows_batched(S, G, rows, n, all_rows ? all.get() : H.get(), g.get(), AB.get(),
                                                  hc::sample::Projection::PartProj, true, rowsD, w, wt, st));
         if (stage == kRowsH || stage == kRowsG) break;
-        // The systems' weighted rows lie side by side (|rows| × 6n each), and so do their
-        // R (n × 6n): one product D_rowsᴴ [Wt_1 … Wt_S], or the same as a strided batch.
+        // One product over every system's weighted rows, or the same as a strided batch.
         if (strided)
           HSI_CUDA_CHECK(cublasZgemmStridedBatched(b, CUBLAS_OP_C, CUBLAS_OP_N, n, 6 * n, rows, &kOne, rowsD, rows, 0, wt, rows,
                                                    static_cast<long long>(size_t(rows) * 6 * nz), &kZero, R.get(), n,
                                                    static_cast<long long>(6 * nz * nz), S));
         else
-          HSI_CUDA_CHECK(cublasZgemm(b, CUBLAS_OP_C, CUBLAS_OP_N, n, 6 * n * S, rows, &kOne, rowsD, rows, wt, rows, &kZero, R.get(), n));
+          hessian_product(b, rows, rowsD, wt, R.get(), S);
         HSI_CUDA_CHECK(hk::real_hessian_batched(S, n, R.get(), rows, Hv.get(), st));
-        HSI_CUDA_CHECK(cublasDgemmStridedBatched(b, CUBLAS_OP_N, CUBLAS_OP_N, 4 * n, m, 4 * n, &kOneD, Hv.get(), 4 * n,
-                                                 static_cast<long long>(16 * nz * nz), Tc.get(), 4 * n, 0, &kZeroD, Y.get(), 4 * n,
-                                                 static_cast<long long>(4 * nz * mz), S));
-        HSI_CUDA_CHECK(cublasDgemmStridedBatched(b, CUBLAS_OP_T, CUBLAS_OP_N, m, m, 4 * n, &kOneD, Tc.get(), 4 * n, 0, Y.get(), 4 * n,
-                                                 static_cast<long long>(4 * nz * mz), &kZeroD, Hr.get(), m,
-                                                 static_cast<long long>(mz * mz), S));
+        reduced_system(b, 0, S, true);
         break;
       }
       case kProdH:
-        HSI_CUDA_CHECK(cublasZgemm(b, CUBLAS_OP_C, CUBLAS_OP_N, n, 6 * n * S, h, &kOne, DH.get(), h, Wt.get(), h, &kZero, R.get(), n));
+        hessian_product(b, h, DH.get(), Wt.get(), R.get(), S);
         break;
       case kProd3mH:
         HSI_CUDA_CHECK(cublasZgemm3m(b, CUBLAS_OP_C, CUBLAS_OP_N, n, 6 * n * S, h, &kOne, DH.get(), h, Wt.get(), h, &kZero, R.get(), n));
@@ -459,12 +433,7 @@ struct Bench {
         HSI_CUDA_CHECK(cublasZgemm(b, CUBLAS_OP_C, CUBLAS_OP_N, 6 * n * S, n, h, &kOne, Wt.get(), h, DH.get(), h, &kZero, R.get(), 6 * n * S));
         break;
       case kReduced:
-        HSI_CUDA_CHECK(cublasDgemmStridedBatched(b, CUBLAS_OP_N, CUBLAS_OP_N, 4 * n, m, 4 * n, &kOneD, Hv.get(), 4 * n,
-                                                 static_cast<long long>(16 * nz * nz), Tc.get(), 4 * n, 0, &kZeroD, Y.get(), 4 * n,
-                                                 static_cast<long long>(4 * nz * mz), S));
-        HSI_CUDA_CHECK(cublasDgemmStridedBatched(b, CUBLAS_OP_T, CUBLAS_OP_N, m, m, 4 * n, &kOneD, Tc.get(), 4 * n, 0, Y.get(), 4 * n,
-                                                 static_cast<long long>(4 * nz * mz), &kZeroD, Hr.get(), m,
-                                                 static_cast<long long>(mz * mz), S));
+        reduced_system(b, 0, S, true);
         break;
       case kFactor:
         HSI_CUDA_CHECK(cudaMemcpyAsync(Hr.get(), A0.get(), A0.bytes(), cudaMemcpyDeviceToDevice, st));
@@ -479,7 +448,7 @@ struct Bench {
   // all in lockstep): timed separately and taken off.
   double restore_us(bool batched, int reps) {
     const size_t mz = size_t(m);
-    return median_us(main, reps, [&] {
+    return median_us(main, reps, {}, [&] {
       if (batched) HSI_CUDA_CHECK(cudaMemcpyAsync(Hr.get(), A0.get(), A0.bytes(), cudaMemcpyDeviceToDevice, main));
       else
         for (int s = 0; s < S; ++s)
@@ -540,9 +509,9 @@ int main(int argc, char** argv) {
       double sum_each[2] = {0, 0}, sum_spread[2] = {0, 0}, sum_lock[2] = {0, 0};  // [over G, over H]
       for (int st = 0; st < kStages; ++st) {
         const Stage stage = static_cast<Stage>(st);
-        double e = median_us(b.main, reps, [&] { b.each(stage); });
-        double k = median_us(b.main, reps, [&] { b.spread(stage); });
-        double l = median_us(b.main, reps, [&] { b.lockstep(stage); });
+        double e = median_us(b.main, reps, {}, [&] { b.each(stage); });
+        double k = median_us(b.main, reps, {}, [&] { b.spread(stage); });
+        double l = median_us(b.main, reps, {}, [&] { b.lockstep(stage); });
         e /= S;
         k /= S;
         l /= S;
