@@ -22,6 +22,7 @@
 
 #include "hsi/cuda/certifier.h"
 #include "hsi/cuda/mesh_evaluator.h"
+#include "cuda_test.h"
 #include "hsi/cuda/newton_core.h"
 #include "device.h"
 #include "dense_cholesky.h"
@@ -40,15 +41,6 @@ using namespace hsi;
 namespace sm = hsi::cuda::sample;
 
 namespace {
-
-#define HSI_REQUIRE_GPU()                            \
-  do {                                               \
-    std::string why_;                                \
-    if (!hsi::cuda::device_available(&why_)) {       \
-      WARN("skipped: " << why_);                     \
-      return;                                        \
-    }                                                \
-  } while (0)
 
 constexpr HessianProjection kProjections[] = {HessianProjection::Delete, HessianProjection::FullProj, HessianProjection::PartProj};
 
@@ -525,6 +517,35 @@ TEST_CASE("sequences solved on the GPU match the CPU on every bundled scene", "[
     for (const ExactSamples e : {ExactSamples::Subset, ExactSamples::All}) compare_sequences(p, 40, 10000, e);
 }
 
+namespace {
+
+// An asset's keyframe maps, then each keyframe with its vertex coefficients perturbed by
+// Gaussian noise at each amplitude (relative to its largest |φ|; seeded), then an affine
+// map with |f_zbar| > |f_z|, which reverses orientation: maps on both sides of the fold
+// boundary for the certificate tests.
+std::vector<HarmonicMap> certificate_test_maps(const AssetCores& ac, std::initializer_list<double> amplitudes, unsigned seed) {
+  std::vector<HarmonicMap> maps;
+  for (const Keyframe& k : ac.scene.keyframes)
+    if (k.coefficients) maps.push_back(*k.coefficients);
+  std::mt19937 rng(seed);
+  std::normal_distribution<double> g(0, 1);
+  const size_t keys = maps.size();
+  for (size_t k = 0; k < keys; ++k)
+    for (double amp : amplitudes) {
+      HarmonicMap m = maps[k];
+      const double scale = amp * m.phi.cwiseAbs().maxCoeff();
+      for (Eigen::Index j = 0; j < m.phi.size() - ac.setup->cage.hole_count(); ++j) {
+        m.phi(j) += scale * cd(g(rng), g(rng));
+        m.psi(j) += scale * cd(g(rng), g(rng));
+      }
+      maps.push_back(m);
+    }
+  maps.push_back(affine_map(ac.setup->cage, 0.5, 1.0, 0));
+  return maps;
+}
+
+}  // namespace
+
 TEST_CASE("the GPU certificate agrees with the CPU certificate", "[cuda][certify]") {
   HSI_REQUIRE_GPU();
   int certified = 0, refused = 0;
@@ -532,25 +553,9 @@ TEST_CASE("the GPU certificate agrees with the CPU certificate", "[cuda][certify
     INFO(path.filename().string());
     AssetCores ac(path);
     hsi::cuda::Certifier gpu(*ac.setup);
-    std::vector<HarmonicMap> maps;
-    for (const Keyframe& k : ac.scene.keyframes)
-      if (k.coefficients) maps.push_back(*k.coefficients);
     // Random coefficient perturbations of the keyframes, swept across the fold
     // boundary (small ones certify, large ones fold), plus an orientation reversal.
-    std::mt19937 rng(11);
-    std::normal_distribution<double> g(0, 1);
-    const size_t keys = maps.size();
-    for (size_t k = 0; k < keys; ++k)
-      for (double amp : {1e-3, 1e-2, 3e-2, 1e-1, 3e-1}) {
-        HarmonicMap m = maps[k];
-        const double scale = amp * m.phi.cwiseAbs().maxCoeff();
-        for (Eigen::Index j = 0; j < m.phi.size() - ac.setup->cage.hole_count(); ++j) {
-          m.phi(j) += scale * cd(g(rng), g(rng));
-          m.psi(j) += scale * cd(g(rng), g(rng));
-        }
-        maps.push_back(m);
-      }
-    maps.push_back(affine_map(ac.setup->cage, 0.5, 1.0, 0));  // |f_zbar| > |f_z|: reverses orientation
+    const std::vector<HarmonicMap> maps = certificate_test_maps(ac, {1e-3, 1e-2, 3e-2, 1e-1, 3e-1}, 11);
     for (size_t i = 0; i < maps.size(); ++i) {
       INFO("map " << i);
       const CertificateResult c = ac.setup->certifier.certify(maps[i]);
@@ -589,23 +594,8 @@ TEST_CASE("the GPU certificate of a batch of maps gives each map's verdict", "[c
   for (size_t si = 0; si < std::min<size_t>(3, scenes.size()); ++si) {
     INFO(scenes[si].filename().string());
     AssetCores ac(scenes[si]);
-    std::vector<HarmonicMap> maps;
-    for (const Keyframe& k : ac.scene.keyframes)
-      if (k.coefficients) maps.push_back(*k.coefficients);
-    std::mt19937 rng(5);
-    std::normal_distribution<double> g(0, 1);
-    const size_t keys = maps.size();
-    for (size_t k = 0; k < keys; ++k)
-      for (double amp : {1e-3, 3e-2, 3e-1}) {  // certified, near the fold boundary, folded
-        HarmonicMap m = maps[k];
-        const double scale = amp * m.phi.cwiseAbs().maxCoeff();
-        for (Eigen::Index j = 0; j < m.phi.size() - ac.setup->cage.hole_count(); ++j) {
-          m.phi(j) += scale * cd(g(rng), g(rng));
-          m.psi(j) += scale * cd(g(rng), g(rng));
-        }
-        maps.push_back(m);
-      }
-    maps.push_back(affine_map(ac.setup->cage, 0.5, 1.0, 0));  // reverses orientation
+    // Certified, near the fold boundary and folded perturbations, and a reversal.
+    const std::vector<HarmonicMap> maps = certificate_test_maps(ac, {1e-3, 3e-2, 3e-1}, 5);
     const int count = static_cast<int>(maps.size());
     hsi::cuda::Stream stream;
     hsi::cuda::BlasHandle blas(stream);

@@ -18,21 +18,13 @@
 
 #include "dense_cholesky.h"
 #include "device.h"
+#include "cuda_test.h"
 #include "hsi/cuda/newton_core.h"
 
 namespace hc = hsi::cuda;
 namespace hk = hsi::cuda::kernels;
 
 namespace {
-
-#define HSI_REQUIRE_GPU()                            \
-  do {                                               \
-    std::string why_;                                \
-    if (!hsi::cuda::device_available(&why_)) {       \
-      WARN("skipped: " << why_);                     \
-      return;                                        \
-    }                                                \
-  } while (0)
 
 constexpr int kOrders[] = {1, 2, 3, 31, 32, 33, 63, 64, 65, 100, 255, 256, 257, 305, 400, 700, 1200};
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();

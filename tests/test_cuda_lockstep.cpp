@@ -16,6 +16,7 @@
 #include <cuda_runtime.h>
 
 #include "device.h"
+#include "cuda_test.h"
 #include "hsi/cuda/newton_core.h"
 #include "newton_kernels.h"
 
@@ -23,15 +24,6 @@ namespace hc = hsi::cuda;
 namespace hk = hsi::cuda::kernels;
 
 namespace {
-
-#define HSI_REQUIRE_GPU()                            \
-  do {                                               \
-    std::string why_;                                \
-    if (!hsi::cuda::device_available(&why_)) {       \
-      WARN("skipped: " << why_);                     \
-      return;                                        \
-    }                                                \
-  } while (0)
 
 template <class T>
 hc::DeviceArray<T> upload(const std::vector<T>& v) {

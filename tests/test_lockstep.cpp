@@ -120,33 +120,30 @@ TEST_CASE("a lockstep group gives every system the solve it gets alone", "[locks
 
 namespace {
 
-// A stepper whose start() throws (the other calls are never reached in this test).
-struct ThrowingStepper final : NewtonStepper {
-  double start(const Eigen::VectorXd&) override { throw std::runtime_error("this system's start failed"); }
+// A stepper whose start() gives the sum of x0, or throws (the other calls are never
+// reached in this test).
+struct StartOnlyStepper final : NewtonStepper {
+  explicit StartOnlyStepper(bool throws) : throws_(throws) {}
+  double start(const Eigen::VectorXd& x0) override {
+    if (throws_) throw std::runtime_error("this system's start failed");
+    return x0.sum();
+  }
   void linearize(const HessianChoice&) override {}
   NewtonSystem solve(double) override { return {}; }
   void trial_energies(std::span<const double>, std::span<double>) override {}
   CertificateResult certify(double, bool) override { return {}; }
   void accept(double) override {}
   Eigen::VectorXd x() override { return {}; }
-};
-struct ConstantStepper final : NewtonStepper {
-  double start(const Eigen::VectorXd& x0) override { return x0.sum(); }
-  void linearize(const HessianChoice&) override {}
-  NewtonSystem solve(double) override { return {}; }
-  void trial_energies(std::span<const double>, std::span<double>) override {}
-  CertificateResult certify(double, bool) override { return {}; }
-  void accept(double) override {}
-  Eigen::VectorXd x() override { return {}; }
+
+ private:
+  bool throws_;
 };
 
 }  // namespace
 
 TEST_CASE("a lockstep group: one system's failing call reaches its own loop alone", "[lockstep]") {
   std::vector<std::unique_ptr<NewtonStepper>> steppers;
-  steppers.push_back(std::make_unique<ConstantStepper>());
-  steppers.push_back(std::make_unique<ThrowingStepper>());
-  steppers.push_back(std::make_unique<ConstantStepper>());
+  for (const bool throws : {false, true, false}) steppers.push_back(std::make_unique<StartOnlyStepper>(throws));
   SerialBatchStepper batch(std::move(steppers));
   LockstepGroup group(batch);
   std::vector<double> energy(3, 0);
