@@ -121,8 +121,7 @@ kernels::CageView DeviceCertifier::cage_view() const {
 kernels::SegmentsView DeviceCertifier::segments_view() const { return {rows_->points.get(), rows_->next.get(), S_}; }
 
 void DeviceCertifier::enqueue(const double2* coef, const CertificateOptions& options, int maps) {
-  if (maps < 1 || maps > capacity_)
-    throw InputError("hsi::cuda certificate: " + std::to_string(maps) + " maps for a certifier of " + std::to_string(capacity_));
+  check_maps(maps);
   if (options.max_depth > kernels::kMaxCertifyDepth)
     throw InputError("hsi::cuda certificate: max_depth " + std::to_string(options.max_depth) + " exceeds the GPU's " +
                      std::to_string(kernels::kMaxCertifyDepth));
@@ -147,14 +146,18 @@ void DeviceCertifier::enqueue(const double2* coef, const CertificateOptions& opt
                                                      summary_down_.get(), s));
 }
 
+void DeviceCertifier::check_maps(int maps) const {
+  if (maps < 1 || maps > capacity_)
+    throw InputError("hsi::cuda certificate: " + std::to_string(maps) + " maps for a certifier of " + std::to_string(capacity_));
+}
+
 CertificateResult DeviceCertifier::fetch() {
   HSI_CUDA_CHECK(cudaStreamSynchronize(stream_));
   return result(summary_down_[0]);
 }
 
 std::vector<CertificateResult> DeviceCertifier::fetch_all(int maps) {
-  if (maps < 1 || maps > capacity_)
-    throw InputError("hsi::cuda certificate: " + std::to_string(maps) + " maps for a certifier of " + std::to_string(capacity_));
+  check_maps(maps);
   HSI_CUDA_CHECK(cudaStreamSynchronize(stream_));
   std::vector<CertificateResult> out;
   out.reserve(sz(maps));

@@ -63,6 +63,7 @@ class DeviceCertifier {
   // Checks the sizes, sets the counts and makes this certifier's own buffers.
   void set_up(const Cage& cage, const CertificateSegments& seg, const MatrixXcd& D, const MatrixXcd& E, const CertificateWeights& w);
   CertificateResult result(const kernels::CertifySummary& k) const;
+  void check_maps(int maps) const;  // InputError unless 1 ≤ maps ≤ capacity()
 
   int m_ = 0, N_ = 0, M_ = 0, S_ = 0, capacity_ = 1;
   cudaStream_t stream_;
