@@ -15,6 +15,7 @@
 #include "frame_compare.h"
 #include "hsi/batch.h"
 #include "hsi/keyframes.h"
+#include "hsi/lockstep.h"
 #include "hsi/runtime/backend.h"
 
 using namespace hsi;
@@ -120,6 +121,63 @@ TEST_CASE("a batch gives every sequence's frames bit-identical to Interpolator::
     }
     CHECK(calls == frames);
     CHECK(last_total == frames);
+  }
+}
+
+TEST_CASE("a lockstep batch gives every sequence's frames bit-identical to Interpolator::sequence", "[batch][lockstep]") {
+  // The serial backend (each system's own CPU core and stepper, a batch's calls one after
+  // another): the loop and the group's gathering of calls change nothing in a frame.
+  std::vector<BatchSequence> sequences;
+  sequences.push_back(sequence_of("annulus", {KeyTiming::Linear, KeyTiming::Hold, KeyTiming::Linear}, frame_times({0, 1, 2}, 4)));
+  sequences.push_back(sequence_of("glyph_8", {KeyTiming::Smooth}, frame_times({0, 1, 2}, 5)));
+  sequences.push_back(sequence_of("annulus", {}, sequence_times({0, 2}, 7)));  // the first's setup: one group
+  sequences.push_back(sequence_of("glyph_8", {}, frame_times({0, 1, 2}, 4)));
+  sequences.back().options.exact_samples = ExactSamples::All;
+  std::vector<std::vector<FrameResult>> reference;
+  {
+    const OneThread one;
+    for (const BatchSequence& q : sequences) {
+      Interpolator I(*q.setup, q.key_times, q.keyframes, q.options);
+      reference.push_back(I.sequence(q.times));
+    }
+  }
+  for (int systems : {1, 3, 16}) {  // 16: more systems than a setup's runs
+    INFO("lockstep systems = " << systems);
+    BatchOptions o;
+    o.lockstep_systems = systems;
+    o.make_lockstep = [](const ShapeSetup& setup, int n) {
+      return make_serial_lockstep_backend(setup, n, [&setup] { return make_cpu_newton_core(setup.D_G, setup.H); });
+    };
+    std::atomic<size_t> calls{0};
+    const BatchResult r = solve_batch(sequences, o, [&](const FrameResult&, int, int, size_t, size_t) {
+      ++calls;
+      return true;
+    });
+    for (const auto& q : r.sequences) CHECK(q.error == "");
+    REQUIRE(r.failed() == 0);
+    CHECK(r.stats.cores_made == 2);  // one backend per setup
+    size_t frames = 0;
+    for (size_t s = 0; s < sequences.size(); ++s) {
+      REQUIRE(r.sequences[s].frames.size() == reference[s].size());
+      for (size_t i = 0; i < reference[s].size(); ++i) require_same(r.sequences[s].frames[i], reference[s][i]);
+      frames += reference[s].size();
+    }
+    CHECK(calls.load() == frames);
+  }
+  SECTION("a backend that cannot be made fails its setup's sequences alone, named") {
+    BatchOptions o;
+    o.make_lockstep = [](const ShapeSetup& setup, int n) -> std::unique_ptr<LockstepBackend> {
+      if (&setup == bundled("glyph_8").setup.get()) throw InputError("no backend for this shape");
+      return make_serial_lockstep_backend(setup, n, [&setup] { return make_cpu_newton_core(setup.D_G, setup.H); });
+    };
+    const BatchResult r = solve_batch(sequences, o);
+    CHECK(r.failed() == 2);
+    CHECK(r.sequences[0].error == "");
+    CHECK_THAT(r.sequences[1].error, Contains("glyph_8") && Contains("no backend for this shape"));
+    CHECK_THAT(r.sequences[3].error, Contains("no backend for this shape"));
+    for (size_t i = 0; i < reference[2].size(); ++i) require_same(r.sequences[2].frames[i], reference[2][i]);
+    o.lockstep_systems = 0;
+    CHECK_THROWS_WITH(solve_batch(sequences, o), Contains("at least 1 system"));
   }
 }
 

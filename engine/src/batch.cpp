@@ -2,6 +2,8 @@
 // sequence handed out to threads that keep their own Newton cores and interpolators.
 #include "hsi/batch.h"
 
+#include "hsi/lockstep.h"
+
 #include <algorithm>
 #include <atomic>
 #include <chrono>
@@ -270,9 +272,136 @@ BatchResult solve_batch(const std::vector<BatchSequence>& sequences, const Batch
     stats.set_up_s += set_up_s;
     stats.core_set_up_s += core_set_up_s;
   };
+  // Lockstep: one group of threads per setup, each thread a system of its group's
+  // batched stepper; a thread takes the group's next run (runs in sequence order), keeps
+  // its Interpolator while the runs stay in one sequence, and leaves the group when none
+  // is left (or the batch is cancelled).
+  struct LockGroup {
+    const ShapeSetup* setup = nullptr;
+    std::vector<int> runs;
+    size_t next = 0;
+    std::unique_ptr<LockstepBackend> backend;
+    std::unique_ptr<LockstepGroup> group;
+  };
+  std::vector<LockGroup> lock_groups;
+  std::vector<char> seq_failed(sequences.size(), 0);  // guarded by `mutex`
+  std::string thread_error;                           // likewise: a lockstep thread that could not start
+  const auto lockstep_thread = [&](LockGroup& lg, int system) {
+#ifdef _OPENMP
+    if (options.threads_per_worker > 0) omp_set_num_threads(options.threads_per_worker);
+#endif
+    std::unique_ptr<MeshEvaluator> boundary;
+    std::unique_ptr<Interpolator> interp;
+    int interp_sequence = -1, built = 0;
+    double set_up_s = 0, core_set_up_s = 0;
+    std::unique_ptr<NewtonCore> core;
+    try {
+      core = make_lockstep_core(*lg.setup, *lg.backend, *lg.group, system);
+      const auto tb = Clock::now();
+      if (options.make_boundary) boundary = options.make_boundary(*lg.setup);
+      core_set_up_s += seconds_since(tb);
+      set_up_s += seconds_since(tb);
+    } catch (...) {
+      lg.group->done();
+      throw;
+    }
+    for (;;) {
+      int r = -1;
+      {
+        std::lock_guard<std::mutex> lock(mutex);
+        while (lg.next < lg.runs.size() && seq_failed[static_cast<size_t>(runs[static_cast<size_t>(lg.runs[lg.next])].sequence)]) ++lg.next;
+        if (!cancel.load() && lg.next < lg.runs.size()) r = lg.runs[lg.next++];
+      }
+      if (r < 0) break;
+      const Run& run = runs[static_cast<size_t>(r)];
+      const BatchSequence& q = sequences[static_cast<size_t>(run.sequence)];
+      try {
+        if (interp_sequence != run.sequence) {
+          interp.reset();
+          interp_sequence = -1;
+          const auto ts = Clock::now();
+          interp = std::make_unique<Interpolator>(*q.setup, q.key_times, q.keyframes, q.options, borrow_core(*core),
+                                                  boundary ? borrow_evaluator(*boundary) : nullptr);
+          interp_sequence = run.sequence;
+          ++built;
+          set_up_s += seconds_since(ts);
+        }
+        const std::vector<double> times(q.times.begin() + run.begin, q.times.begin() + run.end);
+        std::vector<FrameResult> frames = interp->sequence(times, [&](const FrameResult& f, int i, int) {
+          const size_t d = ++done;
+          if (!progress) return;
+          std::lock_guard<std::mutex> lock(mutex);
+          if (!cancel.load() && !progress(f, run.sequence, run.begin + i, d, total)) cancel = true;
+          if (cancel.load()) throw Cancelled{};
+        });
+        std::move(frames.begin(), frames.end(), out.sequences[static_cast<size_t>(run.sequence)].frames.begin() + run.begin);
+        run_done[static_cast<size_t>(r)] = 1;
+      } catch (const Cancelled&) {
+        break;
+      } catch (const std::exception& e) {
+        fail(r, run.sequence, e.what());
+        std::lock_guard<std::mutex> lock(mutex);
+        seq_failed[static_cast<size_t>(run.sequence)] = 1;
+      } catch (...) {
+        fail(r, run.sequence, "unknown error");
+        std::lock_guard<std::mutex> lock(mutex);
+        seq_failed[static_cast<size_t>(run.sequence)] = 1;
+      }
+    }
+    interp.reset();
+    lg.group->done();
+    std::lock_guard<std::mutex> lock(mutex);
+    stats.interpolators_built += built;
+    stats.set_up_s += set_up_s;
+    stats.core_set_up_s += core_set_up_s;
+  };
+
   std::vector<std::thread> pool;
-  for (int w = 0; w < stats.workers; ++w) pool.emplace_back(work);
+  if (options.make_lockstep) {
+    if (options.lockstep_systems < 1)
+      throw InputError("a lockstep group needs at least 1 system (got " + std::to_string(options.lockstep_systems) + ")");
+    std::map<const ShapeSetup*, size_t> group_of;
+    for (size_t r = 0; r < runs.size(); ++r) {
+      const ShapeSetup* setup = sequences[static_cast<size_t>(runs[r].sequence)].setup;
+      const auto [it, added] = group_of.emplace(setup, lock_groups.size());
+      if (added) lock_groups.push_back(LockGroup{setup, {}, 0, nullptr, nullptr});
+      lock_groups[it->second].runs.push_back(static_cast<int>(r));
+    }
+    stats.workers = 0;
+    for (LockGroup& lg : lock_groups) {
+      const int systems = static_cast<int>(std::min<size_t>(static_cast<size_t>(options.lockstep_systems), lg.runs.size()));
+      try {
+        const auto ts = Clock::now();
+        lg.backend = options.make_lockstep(*lg.setup, systems);
+        if (!lg.backend) throw InputError("the lockstep factory made no backend");
+        lg.group = std::make_unique<LockstepGroup>(lg.backend->batch());
+        stats.cores_made += 1;
+        stats.core_set_up_s += seconds_since(ts);
+        stats.set_up_s += seconds_since(ts);
+      } catch (const std::exception& e) {
+        for (int r : lg.runs) fail(r, runs[static_cast<size_t>(r)].sequence, e.what());
+        lg.runs.clear();
+        continue;
+      }
+      for (int t = 0; t < systems; ++t) {
+        ++stats.workers;
+        pool.emplace_back([&, t, g = &lg] {
+          try {
+            lockstep_thread(*g, t);
+          } catch (const std::exception& e) {
+            // The thread's core or evaluator could not be made: its group's runs go on
+            // without it; runs no thread was left to solve get this message.
+            std::lock_guard<std::mutex> lock(mutex);
+            if (thread_error.empty()) thread_error = e.what();
+          }
+        });
+      }
+    }
+  } else {
+    for (int w = 0; w < stats.workers; ++w) pool.emplace_back(work);
+  }
   for (std::thread& t : pool) t.join();
+  lock_groups.clear();  // the groups' backends before the results are read (device work finished)
 
   stats.cancelled = cancel.load();
   std::vector<char> complete(sequences.size(), 1);
@@ -284,6 +413,9 @@ BatchResult solve_batch(const std::vector<BatchSequence>& sequences, const Batch
     if (run_error[s].run >= 0) {
       r.error = sequences[s].name + ": " + run_error[s].message;
       r.exception = run_error[s].exception;
+    } else if (!complete[s] && !stats.cancelled && !thread_error.empty()) {
+      r.error = sequences[s].name + ": " + thread_error;
+      r.exception = std::make_exception_ptr(std::runtime_error(r.error));
     } else if (!complete[s]) {
       r.error = sequences[s].name + ": cancelled before it was finished";
       r.cancelled = true;

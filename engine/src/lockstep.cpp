@@ -153,4 +153,74 @@ std::unique_ptr<NewtonStepper> LockstepGroup::stepper(int system) {
   return std::make_unique<ProxyStepper>(gate_, system);
 }
 
+namespace {
+
+class SerialLockstepBackend final : public LockstepBackend {
+ public:
+  SerialLockstepBackend(const ShapeSetup& setup, int systems, const std::function<std::unique_ptr<NewtonCore>()>& make_core) {
+    if (systems < 1) throw InputError("a lockstep group needs at least 1 system (got " + std::to_string(systems) + ")");
+    std::vector<std::unique_ptr<NewtonStepper>> steppers;
+    for (int s = 0; s < systems; ++s) {
+      cores_.push_back(make_core());
+      if (!cores_.back()) throw InputError("the core factory made no core");
+      std::unique_ptr<NewtonStepper> st = cores_.back()->make_stepper(setup.metric_space, &setup.certifier, nullptr);
+      steppers.push_back(st ? std::move(st) : make_host_stepper(*cores_.back(), setup.metric_space, &setup.certifier, nullptr));
+    }
+    batch_ = std::make_unique<SerialBatchStepper>(std::move(steppers));
+  }
+  BatchStepper& batch() override { return *batch_; }
+  void set_targets(int system, const std::vector<Metric>& g) override { cores_.at(static_cast<size_t>(system))->set_targets(g); }
+  ExactSamples preferred_exact_samples() const override { return cores_.front()->preferred_exact_samples(); }
+
+ private:
+  std::vector<std::unique_ptr<NewtonCore>> cores_;
+  std::unique_ptr<SerialBatchStepper> batch_;
+};
+
+class LockstepCore final : public NewtonCore {
+ public:
+  LockstepCore(const ShapeSetup& setup, LockstepBackend& backend, LockstepGroup& group, int system)
+      : setup_(setup), backend_(backend), group_(group), system_(system) {}
+  int n() const override { return static_cast<int>(setup_.D_G.cols()); }
+  const char* name() const override { return "lockstep"; }
+  ExactSamples preferred_exact_samples() const override { return backend_.preferred_exact_samples(); }
+  void set_targets(const std::vector<Metric>& g) override { backend_.set_targets(system_, g); }
+  std::unique_ptr<NewtonStepper> make_stepper(const MapSpace& space, const Certifier* certifier, const QuadraticTerm* quad) override {
+    if (&space != &setup_.metric_space || quad || (certifier && certifier != &setup_.certifier)) return nullptr;
+    return group_.stepper(system_);
+  }
+  std::optional<CertificateResult> certify_map(const Certifier& certifier, const HarmonicMap& map) override {
+    return backend_.certify_map(certifier, map);
+  }
+  void set_coefficients(const Eigen::VectorXd&) override { only_steps(); }
+  double energy() override { only_steps(); }
+  Eigen::VectorXd gradient() override { only_steps(); }
+  Eigen::MatrixXd hessian(HessianProjection, bool, bool) override { only_steps(); }
+  void set_direction(const Eigen::VectorXd&) override { only_steps(); }
+  double max_safe_step() override { only_steps(); }
+  double energy_at(double) override { only_steps(); }
+
+ private:
+  [[noreturn]] static void only_steps() {
+    throw std::logic_error("a lockstep core only steps its interpolation space's solves (per-call NewtonCore methods are not served)");
+  }
+  const ShapeSetup& setup_;
+  LockstepBackend& backend_;
+  LockstepGroup& group_;
+  int system_;
+};
+
+}  // namespace
+
+std::unique_ptr<LockstepBackend> make_serial_lockstep_backend(const ShapeSetup& setup, int systems,
+                                                              const std::function<std::unique_ptr<NewtonCore>()>& make_core) {
+  return std::make_unique<SerialLockstepBackend>(setup, systems, make_core);
+}
+
+std::unique_ptr<NewtonCore> make_lockstep_core(const ShapeSetup& setup, LockstepBackend& backend, LockstepGroup& group, int system) {
+  if (system < 0 || system >= backend.batch().systems())
+    throw std::invalid_argument("make_lockstep_core: system " + std::to_string(system) + " of " + std::to_string(backend.batch().systems()));
+  return std::make_unique<LockstepCore>(setup, backend, group, system);
+}
+
 }  // namespace hsi

@@ -21,6 +21,8 @@
 
 namespace hsi {
 
+class LockstepBackend;  // hsi/lockstep.h
+
 struct BatchSequence {
   std::string name;                   // names the sequence in errors (e.g. its scene file)
   const ShapeSetup* setup = nullptr;  // read-only, shared by the workers; must outlive solve_batch
@@ -49,6 +51,15 @@ struct BatchOptions {
   int threads_per_worker = 1;
   BatchCoreFactory make_core;  // empty: the CPU core (make_cpu_newton_core)
   BatchBoundaryFactory make_boundary;  // empty: every Interpolator uses the setup's CPU evaluator
+  // Lockstep (issue #23): with make_lockstep, each setup's runs are solved by a group of
+  // up to `lockstep_systems` threads (instead of the W workers) whose Newton loops are
+  // stepped together: each thread's stepper calls are gathered with its group's and
+  // served as one batch by the backend's batched stepper (hsi/lockstep.h; on CUDA one
+  // launch per stage for the group). Each thread keeps its sequence's Interpolator as a
+  // worker does, over a core that is the group's system (make_lockstep_core). The groups
+  // of different setups run side by side. threads_per_worker applies to each thread.
+  std::function<std::unique_ptr<LockstepBackend>(const ShapeSetup& setup, int systems)> make_lockstep;
+  int lockstep_systems = 16;
 };
 
 // After each frame: the frame, its sequence's index, its index there, and how many
@@ -64,7 +75,7 @@ struct BatchSequenceResult {
 };
 
 struct BatchStats {
-  int workers = 0;               // threads started (at most the number of runs)
+  int workers = 0;               // threads started (at most the number of runs; lockstep: every group's)
   int runs = 0;                  // work items: independent runs over all sequences
   int cores_made = 0;            // Newton cores made by the factory (one per worker and setup it met)
   int interpolators_built = 0;   // each certifies its sequence's keyframes (one per worker and sequence it met)

@@ -9,12 +9,15 @@
 #pragma once
 
 #include <exception>
+#include <functional>
+#include <optional>
 #include <memory>
 #include <span>
 #include <vector>
 
 #include "hsi/lockstep_gate.h"
 #include "hsi/newton.h"
+#include "hsi/shape_setup.h"
 
 namespace hsi {
 
@@ -92,5 +95,36 @@ class LockstepGroup {
   BatchStepper& batch_;
   LockstepGate<StepRequest> gate_;
 };
+
+// What a batch needs of a backend to step a setup's sequences in lockstep (solve_batch,
+// BatchOptions::make_lockstep): the batched stepper of `systems` systems and each
+// system's targets. set_targets(s, ·) is called from system s's own thread between its
+// solves (while other systems' calls are served). certify_map: a keyframe's
+// certificate on the backend where it can (NewtonCore::certify_map; called from any
+// of the group's threads, so it serialises itself), else nullopt (the host certifies).
+class LockstepBackend {
+ public:
+  virtual ~LockstepBackend() = default;
+  virtual BatchStepper& batch() = 0;
+  virtual void set_targets(int system, const std::vector<Metric>& g) = 0;
+  virtual ExactSamples preferred_exact_samples() const { return ExactSamples::Subset; }
+  virtual std::optional<CertificateResult> certify_map(const Certifier& /*certifier*/, const HarmonicMap& /*map*/) {
+    return std::nullopt;
+  }
+};
+
+// The reference backend: a core per system (made by `make_core`, e.g. the CPU core),
+// each system's stepper that core's own (or the host stepper over it) for the setup's
+// interpolation space and certifier, served one after another (SerialBatchStepper).
+std::unique_ptr<LockstepBackend> make_serial_lockstep_backend(const ShapeSetup& setup, int systems,
+                                                              const std::function<std::unique_ptr<NewtonCore>()>& make_core);
+
+// System s of a lockstep group as a NewtonCore for an Interpolator of `setup`: its
+// targets go to the backend's system s, its stepper for the setup's interpolation space
+// (with the setup's certifier or none, no quadratic term) is the group's proxy s. It
+// only steps: energy(), gradient() and the other per-call methods throw std::logic_error,
+// and make_stepper for any other space returns null (newton_solve would then drive it
+// through the host stepper, which calls them): an Interpolator solves only in that space.
+std::unique_ptr<NewtonCore> make_lockstep_core(const ShapeSetup& setup, LockstepBackend& backend, LockstepGroup& group, int system);
 
 }  // namespace hsi
