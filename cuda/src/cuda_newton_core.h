@@ -264,6 +264,7 @@ class CudaNewtonCore final : public NewtonCore {
 
  private:
   friend class DeviceStepper;
+  friend class BatchDeviceStepper;  // batch_stepper.cpp: the lockstep batch's stepper
   static constexpr cuDoubleComplex kOne{1, 0}, kZero{0, 0};
 
   // a = D φ, b = D ψ (or da, db) from v = (Re φ, Im φ, Re ψ, Im ψ): one GEMM D [φ | ψ].

@@ -75,6 +75,11 @@ HSI_LAZY(kCublas, cublasStatus_t, cublasDgemm_v2,
          (cublasHandle_t h, cublasOperation_t ta, cublasOperation_t tb, int m, int n, int k, const double* alpha, const double* A,
           int lda, const double* B, int ldb, const double* beta, double* C, int ldc),
          (h, ta, tb, m, n, k, alpha, A, lda, B, ldb, beta, C, ldc))
+HSI_LAZY(kCublas, cublasStatus_t, cublasDgemmStridedBatched,
+         (cublasHandle_t h, cublasOperation_t ta, cublasOperation_t tb, int m, int n, int k, const double* alpha, const double* A,
+          int lda, long long int sa, const double* B, int ldb, long long int sb, const double* beta, double* C, int ldc,
+          long long int sc, int batch),
+         (h, ta, tb, m, n, k, alpha, A, lda, sa, B, ldb, sb, beta, C, ldc, sc, batch))
 HSI_LAZY(kCublas, cublasStatus_t, cublasDgeam,
          (cublasHandle_t h, cublasOperation_t ta, cublasOperation_t tb, int m, int n, const double* alpha, const double* A, int lda,
           const double* beta, const double* B, int ldb, double* C, int ldc),

@@ -341,13 +341,24 @@ __global__ void __launch_bounds__(kBlock) dot_kernel(int n, const double* __rest
   if (threadIdx.x == 0) *out = sum;
 }
 
-__global__ void __launch_bounds__(kBlock) diag_max_kernel(int n, const double* __restrict__ A, double* __restrict__ out) {
+__global__ void __launch_bounds__(kBlock) diag_max_kernel(int n, const double* __restrict__ A, double* __restrict__ out,
+                                                          long long A_stride, long long out_stride) {
+  const long long sys = blockIdx.x;  // one block per system
+  A += sys * A_stride;
+  out += sys * out_stride;
   const double v = block_diag_abs_max(n, A);
   if (threadIdx.x == 0) *out = v;
 }
 
 __global__ void add_relative_ridge_kernel(int n, const double* __restrict__ A0, const double* __restrict__ relative,
-                                          const double* __restrict__ diag, double* __restrict__ diag_down, double* __restrict__ A) {
+                                          const double* __restrict__ diag, double* __restrict__ diag_down, double* __restrict__ A,
+                                          long long mat_stride, long long relative_stride, long long scalar_stride) {
+  const long long sys = blockIdx.y;
+  A0 += sys * mat_stride;
+  A += sys * mat_stride;
+  relative += sys * relative_stride;
+  diag += sys * scalar_stride;
+  diag_down += sys * scalar_stride;
   const double r = *relative * fmax(*diag, 1e-300);
   if (blockIdx.x == 0 && threadIdx.x == 0) *diag_down = *diag;
   const size_t total = static_cast<size_t>(n) * static_cast<size_t>(n);
@@ -357,7 +368,12 @@ __global__ void add_relative_ridge_kernel(int n, const double* __restrict__ A0, 
 }
 
 __global__ void trial_point_kernel(int n, const double* __restrict__ x, const double* __restrict__ d, const double* __restrict__ step,
-                                   double* __restrict__ out) {
+                                   double* __restrict__ out, long long vec_stride, long long step_stride) {
+  const long long sys = blockIdx.y;
+  x += sys * vec_stride;
+  d += sys * vec_stride;
+  out += sys * vec_stride;
+  step += sys * step_stride;
   const int i = static_cast<int>(blockIdx.x * blockDim.x + threadIdx.x);
   if (i < n) out[i] = x[i] + *step * d[i];
 }
@@ -365,7 +381,10 @@ __global__ void trial_point_kernel(int n, const double* __restrict__ x, const do
 // The leading dim × dim block of the exact system modulo the rotation (device_newton.cpp,
 // linearize): A_ij += −(a_i k_j + k_i a_j)/uu + c a_i a_j/uu², with k = column dim of A, c =
 // A_dim,dim and uu = a[dim]. Reads column dim, writes only the leading block.
-__global__ void horizontal_block_kernel(int dim, int m, double* __restrict__ A, const double* __restrict__ a) {
+__global__ void horizontal_block_kernel(int dim, int m, double* __restrict__ A, const double* __restrict__ a, long long mat_stride,
+                                        long long vec_stride) {
+  A += static_cast<long long>(blockIdx.z) * mat_stride;
+  a += static_cast<long long>(blockIdx.z) * vec_stride;
   const int i = static_cast<int>(blockIdx.x * blockDim.x + threadIdx.x), j = static_cast<int>(blockIdx.y * blockDim.y + threadIdx.y);
   if (i >= dim || j >= dim) return;
   const size_t M = static_cast<size_t>(m), D = static_cast<size_t>(dim);
@@ -517,7 +536,12 @@ __global__ void blend_metrics_kernel(int G, int K, const double* __restrict__ ke
 
 // The solve's right-hand side: d = −g (m entries), and both status words (the factor's,
 // the triangular solves') cleared, in one launch.
-__global__ void negate_kernel(int m, const double* __restrict__ g, double* __restrict__ d, int* __restrict__ info) {
+__global__ void negate_kernel(int m, const double* __restrict__ g, double* __restrict__ d, int* __restrict__ info, long long vec_stride,
+                              long long info_stride) {
+  const long long sys = blockIdx.y;
+  g += sys * vec_stride;
+  d += sys * vec_stride;
+  info += sys * info_stride;
   const int i = static_cast<int>(blockIdx.x * blockDim.x + threadIdx.x);
   if (i < m) d[i] = -g[i];
   if (i == 0) {
@@ -531,7 +555,14 @@ __global__ void negate_kernel(int m, const double* __restrict__ g, double* __res
 __global__ void __launch_bounds__(kBlock) step_scalars_kernel(int dim, int m, bool rotation, const double* __restrict__ a,
                                                               const double* __restrict__ g, double* __restrict__ d,
                                                               double* __restrict__ slope, double* __restrict__ gnorm2,
-                                                              const int* __restrict__ info, int* __restrict__ info_out) {
+                                                              const int* __restrict__ info, int* __restrict__ info_out,
+                                                              long long vec_stride, long long scalar_stride) {
+  const long long sys = blockIdx.x;  // one block per system (info, info_out: one system only)
+  a += sys * vec_stride;
+  g += sys * vec_stride;
+  d += sys * vec_stride;
+  slope += sys * scalar_stride;
+  gnorm2 += sys * scalar_stride;
   if (info_out && threadIdx.x < 2) info_out[threadIdx.x] = info[threadIdx.x];
   if (rotation) {
     const double ad = block_dot(dim, a, d);
@@ -548,7 +579,15 @@ __global__ void __launch_bounds__(kBlock) step_scalars_kernel(int dim, int m, bo
 __global__ void __launch_bounds__(kBlock) decrement_scalars_kernel(int dim, int m, const double* __restrict__ g,
                                                                    const double* __restrict__ y, double* __restrict__ slope,
                                                                    double* __restrict__ gnorm2, const int* __restrict__ info,
-                                                                   int* __restrict__ info_out) {
+                                                                   int* __restrict__ info_out, long long vec_stride,
+                                                                   long long scalar_stride, long long info_stride) {
+  const long long sys = blockIdx.x;  // one block per system
+  g += sys * vec_stride;
+  y += sys * vec_stride;
+  slope += sys * scalar_stride;
+  gnorm2 += sys * scalar_stride;
+  info += sys * info_stride;
+  info_out += sys * info_stride;
   if (threadIdx.x < 2) info_out[threadIdx.x] = info[threadIdx.x];
   const double yy = block_dot(m, y, y);
   if (threadIdx.x == 0) *slope = -yy;
@@ -557,12 +596,26 @@ __global__ void __launch_bounds__(kBlock) decrement_scalars_kernel(int dim, int 
   if (threadIdx.x == 0) *gnorm2 = gg;
 }
 
+// One block per system: the gradient made horizontal (block_horizontal_gradient).
+__global__ void __launch_bounds__(kBlock) horizontal_gradient_kernel(int dim, const double* __restrict__ a, double* __restrict__ g,
+                                                                     long long vec_stride) {
+  a += static_cast<long long>(blockIdx.x) * vec_stride;
+  g += static_cast<long long>(blockIdx.x) * vec_stride;
+  block_horizontal_gradient(dim, a, g);
+}
+
 // One block, after horizontal_block_kernel: g_i −= (g_dim/uu) a_i, row and column dim of
 // A and g_dim cleared, then max_i |A_ii| over the m × m system (diag_max_kernel's order)
 // into *diag and into A_dim,dim.
 __global__ void __launch_bounds__(kBlock) horizontal_clear_diag_kernel(int dim, int m, double* __restrict__ A,
                                                                        const double* __restrict__ a, double* __restrict__ g,
-                                                                       double* __restrict__ diag) {
+                                                                       double* __restrict__ diag, long long mat_stride,
+                                                                       long long vec_stride, long long diag_stride) {
+  const long long sys = blockIdx.x;  // one block per system
+  A += sys * mat_stride;
+  a += sys * vec_stride;
+  g += sys * vec_stride;
+  diag += sys * diag_stride;
   block_horizontal_gradient(dim, a, g);  // (m = dim + 1 entries)
   const size_t M = static_cast<size_t>(m), D = static_cast<size_t>(dim);
   for (int i = static_cast<int>(threadIdx.x); i < m; i += static_cast<int>(blockDim.x)) {
@@ -593,9 +646,19 @@ struct RealProduct {
 constexpr int kOneSlices = 32;
 __global__ void __launch_bounds__(kTallRows* kOneSlices)
     tall_times_one_kernel(RealProduct p0, RealProduct p1, int cols, const double* __restrict__ x0, const double* __restrict__ dx,
-                          const double* __restrict__ step, double* __restrict__ x_copy) {
+                          const double* __restrict__ step, double* __restrict__ x_copy, TallStrides bs) {
   __shared__ double part[kOneSlices][kTallRows];
-  const RealProduct& p = blockIdx.z == 0 ? p0 : p1;
+  const long long sys = blockIdx.y;  // the system of a batch (TallStrides)
+  RealProduct p = blockIdx.z == 0 ? p0 : p1;
+  p.A += sys * (blockIdx.z == 0 ? bs.A : bs.second_A);
+  p.y += sys * (blockIdx.z == 0 ? bs.y : bs.second_y);
+  if (p.y0) p.y0 += sys * bs.y0;
+  x0 += sys * bs.x;
+  if (dx) {
+    dx += sys * bs.dx;
+    step += sys * bs.step;
+  }
+  if (x_copy) x_copy += sys * bs.x_copy;
   const int tx = static_cast<int>(threadIdx.x), ty = static_cast<int>(threadIdx.y);
   const int i = static_cast<int>(blockIdx.x) * kTallRows + tx;
   const double s = dx ? *step : 0.0;
@@ -625,7 +688,9 @@ __global__ void copy_kernel(CopyList list) {
 // MapSpace::regauge on the device: rotate the image so that φ_r lies on the positive
 // imaginary axis, then read x off the primary rows (same arithmetic as the host).
 __global__ void regauge_kernel(int dim, int n, int r, const int* __restrict__ primary, const double* __restrict__ v,
-                               double* __restrict__ x) {
+                               double* __restrict__ x, long long v_stride, long long x_stride) {
+  v += static_cast<long long>(blockIdx.y) * v_stride;
+  x += static_cast<long long>(blockIdx.y) * x_stride;
   const int c = blockIdx.x * blockDim.x + threadIdx.x;
   if (c >= dim) return;
   const double px = v[r], py = v[n + r];
@@ -649,8 +714,14 @@ __global__ void regauge_kernel(int dim, int n, int r, const int* __restrict__ pr
 
 cudaError_t regauge(int dim, int n, int rotation_vertex, const int* primary_rows, const double* v, double* x,
                     cudaStream_t stream) {
-  regauge_kernel<<<static_cast<unsigned>((dim + kBlock - 1) / kBlock), kBlock, 0, stream>>>(dim, n, rotation_vertex,
-                                                                                            primary_rows, v, x);
+  return regauge_batched(1, dim, n, rotation_vertex, primary_rows, v, 0, x, 0, stream);
+}
+
+cudaError_t regauge_batched(int systems, int dim, int n, int rotation_vertex, const int* primary_rows, const double* v, long long v_stride,
+                            double* x, long long x_stride, cudaStream_t stream) {
+  if (systems < 1 || systems > kMaxBatchSystems) return cudaErrorInvalidValue;
+  regauge_kernel<<<dim3(static_cast<unsigned>((dim + kBlock - 1) / kBlock), static_cast<unsigned>(systems)), kBlock, 0, stream>>>(
+      dim, n, rotation_vertex, primary_rows, v, x, v_stride, x_stride);
   return cudaGetLastError();
 }
 
@@ -750,56 +821,121 @@ cudaError_t dot(int n, const double* a, const double* b, double* out, cudaStream
 }
 
 cudaError_t diag_abs_max(int n, const double* A, double* out, cudaStream_t stream) {
-  diag_max_kernel<<<1, kBlock, 0, stream>>>(n, A, out);
-  return cudaGetLastError();
+  return diag_abs_max_batched(1, n, A, 0, out, 0, stream);
 }
 
 cudaError_t add_relative_ridge(int n, const double* A0, const double* relative, const double* diag, double* diag_down, double* A,
                                cudaStream_t stream) {
-  const long long total = static_cast<long long>(n) * n;
-  add_relative_ridge_kernel<<<static_cast<unsigned>(std::min<long long>((total + 255) / 256, 4096)), 256, 0, stream>>>(
-      n, A0, relative, diag, diag_down, A);
-  return cudaGetLastError();
+  return add_relative_ridge_batched(1, n, A0, A, 0, relative, 0, diag, diag_down, 0, stream);
 }
 
 cudaError_t trial_point(int n, const double* x, const double* d, const double* step, double* out, cudaStream_t stream) {
-  trial_point_kernel<<<static_cast<unsigned>((n + kBlock - 1) / kBlock), kBlock, 0, stream>>>(n, x, d, step, out);
-  return cudaGetLastError();
+  return trial_point_batched(1, n, x, d, out, 0, step, 0, stream);
 }
 
 cudaError_t horizontal_system(int dim, double* A, const double* a, double* g, double* diag, cudaStream_t stream) {
-  const int m = dim + 1;
-  const dim3 block(32, 8), grid(blocks_for(dim, 32, 65535), blocks_for(dim, 8, 65535));
-  horizontal_block_kernel<<<grid, block, 0, stream>>>(dim, m, A, a);
-  if (const cudaError_t e = cudaGetLastError(); e != cudaSuccess) return e;
-  horizontal_clear_diag_kernel<<<1, kBlock, 0, stream>>>(dim, m, A, a, g, diag);
-  return cudaGetLastError();
+  return horizontal_system_batched(1, dim, A, 0, a, g, 0, diag, 0, stream);
 }
 
-cudaError_t negate(int m, const double* g, double* d, int* info, cudaStream_t stream) {
-  negate_kernel<<<blocks_for(m, kBlock, 1LL << 30), kBlock, 0, stream>>>(m, g, d, info);
-  return cudaGetLastError();
-}
+cudaError_t negate(int m, const double* g, double* d, int* info, cudaStream_t stream) { return negate_batched(1, m, g, d, 0, info, 0, stream); }
 
 cudaError_t step_scalars(int dim, int m, bool rotation, const double* a, const double* g, double* d, double* slope, double* gnorm2,
                          const int* info, int* info_out, cudaStream_t stream) {
-  step_scalars_kernel<<<1, kBlock, 0, stream>>>(dim, m, rotation, a, g, d, slope, gnorm2, info, info_out);
+  step_scalars_kernel<<<1, kBlock, 0, stream>>>(dim, m, rotation, a, g, d, slope, gnorm2, info, info_out, 0, 0);
   return cudaGetLastError();
 }
 
 cudaError_t decrement_scalars(int dim, int m, const double* g, const double* y, double* slope, double* gnorm2, const int* info,
                               int* info_out, cudaStream_t stream) {
-  decrement_scalars_kernel<<<1, kBlock, 0, stream>>>(dim, m, g, y, slope, gnorm2, info, info_out);
-  return cudaGetLastError();
+  return decrement_scalars_batched(1, dim, m, g, y, 0, slope, gnorm2, 0, info, info_out, 0, stream);
 }
 
 cudaError_t tall_times_one(int rows, int cols, const double* A, const double* x, double* y, cudaStream_t stream,
                            const TallOptions& o) {
+  return tall_times_one_batched(1, rows, cols, A, x, y, stream, o, TallStrides{});
+}
+
+namespace {
+bool bad_batch(int systems) { return systems < 1 || systems > kMaxBatchSystems; }
+}  // namespace
+
+cudaError_t diag_abs_max_batched(int systems, int n, const double* A, long long A_stride, double* out, long long out_stride,
+                                 cudaStream_t stream) {
+  if (bad_batch(systems)) return cudaErrorInvalidValue;
+  diag_max_kernel<<<static_cast<unsigned>(systems), kBlock, 0, stream>>>(n, A, out, A_stride, out_stride);
+  return cudaGetLastError();
+}
+
+cudaError_t add_relative_ridge_batched(int systems, int n, const double* A0, double* A, long long mat_stride, const double* relative,
+                                       long long relative_stride, const double* diag, double* diag_down, long long scalar_stride,
+                                       cudaStream_t stream) {
+  if (bad_batch(systems)) return cudaErrorInvalidValue;
+  const long long total = static_cast<long long>(n) * n;
+  const unsigned x = static_cast<unsigned>(std::min<long long>((total + 255) / 256, systems > 1 ? 512 : 4096));
+  add_relative_ridge_kernel<<<dim3(x, static_cast<unsigned>(systems)), 256, 0, stream>>>(n, A0, relative, diag, diag_down, A, mat_stride,
+                                                                                         relative_stride, scalar_stride);
+  return cudaGetLastError();
+}
+
+cudaError_t trial_point_batched(int systems, int n, const double* x, const double* d, double* out, long long vec_stride, const double* step,
+                                long long step_stride, cudaStream_t stream) {
+  if (bad_batch(systems)) return cudaErrorInvalidValue;
+  trial_point_kernel<<<dim3(static_cast<unsigned>((n + kBlock - 1) / kBlock), static_cast<unsigned>(systems)), kBlock, 0, stream>>>(
+      n, x, d, step, out, vec_stride, step_stride);
+  return cudaGetLastError();
+}
+
+cudaError_t horizontal_system_batched(int systems, int dim, double* A, long long mat_stride, const double* a, double* g,
+                                      long long vec_stride, double* diag, long long diag_stride, cudaStream_t stream) {
+  if (bad_batch(systems)) return cudaErrorInvalidValue;
+  const int m = dim + 1;
+  const dim3 block(32, 8), grid(blocks_for(dim, 32, 65535), blocks_for(dim, 8, 65535), static_cast<unsigned>(systems));
+  horizontal_block_kernel<<<grid, block, 0, stream>>>(dim, m, A, a, mat_stride, vec_stride);
+  if (const cudaError_t e = cudaGetLastError(); e != cudaSuccess) return e;
+  horizontal_clear_diag_kernel<<<static_cast<unsigned>(systems), kBlock, 0, stream>>>(dim, m, A, a, g, diag, mat_stride, vec_stride,
+                                                                                       diag_stride);
+  return cudaGetLastError();
+}
+
+cudaError_t horizontal_gradient_batched(int systems, int dim, const double* a, double* g, long long vec_stride, cudaStream_t stream) {
+  if (bad_batch(systems)) return cudaErrorInvalidValue;
+  horizontal_gradient_kernel<<<static_cast<unsigned>(systems), kBlock, 0, stream>>>(dim, a, g, vec_stride);
+  return cudaGetLastError();
+}
+
+cudaError_t negate_batched(int systems, int m, const double* g, double* d, long long vec_stride, int* info, long long info_stride,
+                           cudaStream_t stream) {
+  if (bad_batch(systems)) return cudaErrorInvalidValue;
+  negate_kernel<<<dim3(blocks_for(m, kBlock, 65535), static_cast<unsigned>(systems)), kBlock, 0, stream>>>(m, g, d, info, vec_stride,
+                                                                                                          info_stride);
+  return cudaGetLastError();
+}
+
+cudaError_t step_scalars_batched(int systems, int dim, int m, bool rotation, const double* a, const double* g, double* d,
+                                 long long vec_stride, double* slope, double* gnorm2, long long scalar_stride, cudaStream_t stream) {
+  if (bad_batch(systems)) return cudaErrorInvalidValue;
+  step_scalars_kernel<<<static_cast<unsigned>(systems), kBlock, 0, stream>>>(dim, m, rotation, a, g, d, slope, gnorm2, nullptr, nullptr,
+                                                                            vec_stride, scalar_stride);
+  return cudaGetLastError();
+}
+
+cudaError_t decrement_scalars_batched(int systems, int dim, int m, const double* g, const double* y, long long vec_stride, double* slope,
+                                      double* gnorm2, long long scalar_stride, const int* info, int* info_out, long long info_stride,
+                                      cudaStream_t stream) {
+  if (bad_batch(systems)) return cudaErrorInvalidValue;
+  decrement_scalars_kernel<<<static_cast<unsigned>(systems), kBlock, 0, stream>>>(dim, m, g, y, slope, gnorm2, info, info_out, vec_stride,
+                                                                                 scalar_stride, info_stride);
+  return cudaGetLastError();
+}
+
+cudaError_t tall_times_one_batched(int systems, int rows, int cols, const double* A, const double* x, double* y, cudaStream_t stream,
+                                   const TallOptions& o, const TallStrides& strides) {
+  if (bad_batch(systems)) return cudaErrorInvalidValue;
   const int rows1 = o.second_A ? o.second_rows : 0;
   const RealProduct p0{A, o.y0, y, rows}, p1{o.second_A ? o.second_A : A, nullptr, o.second_A ? o.second_y : y, rows1};
   const dim3 block(kTallRows, kOneSlices);
-  const dim3 grid(blocks_for(std::max(rows, rows1), kTallRows, 1LL << 30), 1, o.second_A ? 2 : 1);
-  tall_times_one_kernel<<<grid, block, 0, stream>>>(p0, p1, cols, x, o.dx, o.step, o.x_copy);
+  const dim3 grid(blocks_for(std::max(rows, rows1), kTallRows, 1LL << 30), static_cast<unsigned>(systems), o.second_A ? 2 : 1);
+  tall_times_one_kernel<<<grid, block, 0, stream>>>(p0, p1, cols, x, o.dx, o.step, o.x_copy, strides);
   return cudaGetLastError();
 }
 

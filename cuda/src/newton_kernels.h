@@ -174,4 +174,37 @@ cudaError_t copy(const CopyList& list, int entries, cudaStream_t stream);
 cudaError_t regauge(int dim, int n, int rotation_vertex, const int* primary_rows, const double* v, double* x,
                     cudaStream_t stream);
 
+// The small kernels above for a lockstep batch (hsi/cuda/batch_stepper.h): `systems`
+// systems (1 … kMaxBatchSystems, else cudaErrorInvalidValue) in one launch, system s's
+// arrays at the pointers given plus s times the stride named for them (in elements; 0:
+// shared by every system). Each system's result is bit for bit the one-system call's
+// (the one-system calls are these with one system). step_scalars_batched copies no
+// statuses (its one-system form's info, info_out).
+struct TallStrides {
+  long long A = 0, second_A = 0, x = 0, y = 0, second_y = 0, y0 = 0, dx = 0, step = 0, x_copy = 0;
+};
+cudaError_t tall_times_one_batched(int systems, int rows, int cols, const double* A, const double* x, double* y, cudaStream_t stream,
+                                   const TallOptions& options, const TallStrides& strides);
+cudaError_t diag_abs_max_batched(int systems, int n, const double* A, long long A_stride, double* out, long long out_stride,
+                                 cudaStream_t stream);
+cudaError_t add_relative_ridge_batched(int systems, int n, const double* A0, double* A, long long mat_stride, const double* relative,
+                                       long long relative_stride, const double* diag, double* diag_down, long long scalar_stride,
+                                       cudaStream_t stream);
+cudaError_t trial_point_batched(int systems, int n, const double* x, const double* d, double* out, long long vec_stride, const double* step,
+                                long long step_stride, cudaStream_t stream);
+cudaError_t horizontal_system_batched(int systems, int dim, double* A, long long mat_stride, const double* a, double* g,
+                                      long long vec_stride, double* diag, long long diag_stride, cudaStream_t stream);
+// g (dim + 1 entries) made horizontal in the kept system's frame: g_i −= (g_dim/a_dim) a_i for
+// i < dim, then g_dim = 0 (tall_adjoint_times_two's ReducedGradient::a, as a kernel of its own).
+cudaError_t horizontal_gradient_batched(int systems, int dim, const double* a, double* g, long long vec_stride, cudaStream_t stream);
+cudaError_t negate_batched(int systems, int m, const double* g, double* d, long long vec_stride, int* info, long long info_stride,
+                           cudaStream_t stream);
+cudaError_t step_scalars_batched(int systems, int dim, int m, bool rotation, const double* a, const double* g, double* d,
+                                 long long vec_stride, double* slope, double* gnorm2, long long scalar_stride, cudaStream_t stream);
+cudaError_t decrement_scalars_batched(int systems, int dim, int m, const double* g, const double* y, long long vec_stride, double* slope,
+                                      double* gnorm2, long long scalar_stride, const int* info, int* info_out, long long info_stride,
+                                      cudaStream_t stream);
+cudaError_t regauge_batched(int systems, int dim, int n, int rotation_vertex, const int* primary_rows, const double* v, long long v_stride,
+                            double* x, long long x_stride, cudaStream_t stream);
+
 }  // namespace hsi::cuda::kernels
