@@ -153,11 +153,16 @@ int main(int argc, char** argv) {
                  "Where every sequence's frames start (InterpolationOptions::predict_start: off, always, auto)")
       ->capture_default_str()
       ->check(CLI::IsMember(predict_start_names()));
+  std::string lockstep_list;
+  app.add_option("--lockstep", lockstep_list,
+                 "Lockstep group sizes, comma-separated: after the W rows, one row per size with each setup's runs solved by a group "
+                 "of that many threads stepped together (runtime::set_batch_lockstep; on CUDA the device's batched stepper)");
   app.add_flag("--skip-single", skip_single, "Leave out the one-at-a-time path (the speed-up column is then empty)");
   CLI11_PARSE(app, argc, argv);
-  std::vector<int> worker_counts;
+  std::vector<int> worker_counts, lockstep_counts;
   try {
     worker_counts = bench::parse_counts(workers_list, "--workers");
+    if (!lockstep_list.empty()) lockstep_counts = bench::parse_counts(lockstep_list, "--lockstep");
   } catch (const CLI::Error& e) {
     return app.exit(e);
   }
@@ -264,7 +269,9 @@ int main(int argc, char** argv) {
       for (BatchSequence& q : batch) q.options.exact_samples = parse_exact_samples(exact);
       std::vector<BatchSequenceResult> first;  // this setting's first batch row
       for (const std::string& wait : on_gpu ? waits : std::vector<std::string>{"-"})
-        for (int W : worker_counts) {
+        for (size_t config = 0; config < worker_counts.size() + lockstep_counts.size(); ++config) {
+          const bool lockstep = config >= worker_counts.size();
+          const int W = lockstep ? lockstep_counts[config - worker_counts.size()] : worker_counts[config];
           if (on_gpu)
             if (const std::string why = runtime::set_cuda_wait(wait); !why.empty()) {
               std::fprintf(stderr, "bench_batch: --cuda-wait %s: %s\n", wait.c_str(), why.c_str());
@@ -275,6 +282,7 @@ int main(int argc, char** argv) {
           o.threads_per_worker = threads_per_worker;
           o.make_core = factories.make_core;
           o.make_boundary = image == "host" ? nullptr : factories.make_boundary;
+          if (lockstep) runtime::set_batch_lockstep(o, choice.used, W);
           const double c0 = process_cpu_s();
           const BatchResult r = [&] {
             const bench::TraceRange range("batch W=" + std::to_string(W) + " wait " + wait + " exact " + exact + " image " + image);  // (bench/cuda_trace)
@@ -286,7 +294,7 @@ int main(int argc, char** argv) {
           }();
           std::fprintf(stderr, "\n");
           Row row;
-          row.path = "batch";
+          row.path = lockstep ? "lockstep " + std::to_string(W) : "batch";
           row.wait = wait;
           row.exact = exact;
           row.image = image;

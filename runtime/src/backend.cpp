@@ -7,7 +7,9 @@
 
 #include "built.h"
 #include "hsi/domain.h"
+#include "hsi/lockstep.h"
 #if HSI_RUNTIME_CUDA
+#include "hsi/cuda/batch_stepper.h"
 #include "hsi/cuda/clocks.h"
 #include "hsi/cuda/mesh_evaluator.h"
 #include "hsi/cuda/newton_core.h"
@@ -183,6 +185,22 @@ void set_batch_backend(BatchOptions& o, Backend used, const CudaStatus& cuda) {
   o.make_boundary = nullptr;
   if (used == Backend::Cuda)
     o.make_boundary = [](const ShapeSetup& setup) { return cuda_boundary_evaluator(setup); };
+}
+
+void set_batch_lockstep(BatchOptions& o, Backend used, int systems) {
+  o.lockstep_systems = systems;
+#if HSI_RUNTIME_CUDA
+  if (used == Backend::Cuda) {
+    o.make_lockstep = [](const ShapeSetup& setup, int n) -> std::unique_ptr<LockstepBackend> {
+      return hsi::cuda::make_batch_stepper(setup, n);
+    };
+    return;
+  }
+#endif
+  if (used == Backend::Cuda) throw InputError("this build has no CUDA backend for a lockstep batch");
+  o.make_lockstep = [](const ShapeSetup& setup, int n) {
+    return make_serial_lockstep_backend(setup, n, [&setup] { return make_cpu_newton_core(setup.D_G, setup.H); });
+  };
 }
 
 MeshEvaluatorChoice make_mesh_evaluator(const Cage& cage, std::span<const cd> points, Backend requested,

@@ -95,6 +95,12 @@ NewtonCoreChoice make_newton_core(const ShapeSetup& setup, Backend requested, co
 // and shape, its rows uploaded from the setup's CPU evaluator (on the CPU none: every
 // Interpolator uses the setup's own evaluator).
 void set_batch_backend(BatchOptions& options, Backend used, const CudaStatus& cuda);
+// The batch in lockstep (BatchOptions::make_lockstep, issue #23) with groups of up to
+// `systems` sequences per setup: on CUDA each group's calls served by the device's batched
+// stepper (hsi/cuda/batch_stepper.h); on the CPU by each system's own CPU core, one after
+// another (the reference: the same frames as the workers'). The boundary factory stays
+// set_batch_backend's.
+void set_batch_lockstep(BatchOptions& options, Backend used, int systems);
 
 // f at a fixed set of points (a mesh's vertices) from cached basis rows
 // (hsi/mesh_evaluator.h), on the backend a request gives, decided as for the Newton
