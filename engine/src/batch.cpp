@@ -206,11 +206,30 @@ BatchResult solve_batch(const std::vector<BatchSequence>& sequences, const Batch
 
   // A run failed: its sequence's other runs are dropped; the earliest run's message is kept
   // (which runs were tried before the drop depends on timing, the earliest failing one does not).
+  std::vector<char> seq_failed(sequences.size(), 0);  // guarded by `mutex` (the lockstep groups' drop)
   const auto fail = [&](int r, int sequence, const std::string& what) {
     scheduler.drop(sequence);
     std::lock_guard<std::mutex> lock(mutex);
+    seq_failed[static_cast<size_t>(sequence)] = 1;
     RunError& e = run_error[static_cast<size_t>(sequence)];
     if (e.run < 0 || r < e.run) e = {r, what, std::current_exception()};
+  };
+  // Run r's frames by `interp` (its sequence's), reported as they come; cancelling throws
+  // Cancelled out of it.
+  const auto solve_run = [&](int r, Interpolator& interp) {
+    const Run& run = runs[static_cast<size_t>(r)];
+    const BatchSequence& q = sequences[static_cast<size_t>(run.sequence)];
+    const std::vector<double> times(q.times.begin() + run.begin, q.times.begin() + run.end);
+    std::vector<FrameResult> frames = interp.sequence(times, [&](const FrameResult& f, int i, int) {
+      const size_t d = ++done;
+      if (!progress) return;
+      std::lock_guard<std::mutex> lock(mutex);
+      if (!cancel.load() && !progress(f, run.sequence, run.begin + i, d, total)) cancel = true;
+      if (cancel.load()) throw Cancelled{};
+    });
+    // Runs write disjoint ranges of a vector sized before the workers started.
+    std::move(frames.begin(), frames.end(), out.sequences[static_cast<size_t>(run.sequence)].frames.begin() + run.begin);
+    run_done[static_cast<size_t>(r)] = 1;
   };
   const auto work = [&] {
 #ifdef _OPENMP
@@ -246,17 +265,7 @@ BatchResult solve_batch(const std::vector<BatchSequence>& sequences, const Batch
           ++built;
           set_up_s += seconds_since(ts);
         }
-        const std::vector<double> times(q.times.begin() + run.begin, q.times.begin() + run.end);
-        std::vector<FrameResult> frames = interp->sequence(times, [&](const FrameResult& f, int i, int) {
-          const size_t d = ++done;
-          if (!progress) return;
-          std::lock_guard<std::mutex> lock(mutex);
-          if (!cancel.load() && !progress(f, run.sequence, run.begin + i, d, total)) cancel = true;
-          if (cancel.load()) throw Cancelled{};
-        });
-        // Runs write disjoint ranges of a vector sized before the workers started.
-        std::move(frames.begin(), frames.end(), out.sequences[static_cast<size_t>(run.sequence)].frames.begin() + run.begin);
-        run_done[static_cast<size_t>(r)] = 1;
+        solve_run(r, *interp);
       } catch (const Cancelled&) {
         // The sequence is left unfinished: reported as cancelled below.
       } catch (const std::exception& e) {
@@ -284,7 +293,6 @@ BatchResult solve_batch(const std::vector<BatchSequence>& sequences, const Batch
     std::unique_ptr<LockstepGroup> group;
   };
   std::vector<LockGroup> lock_groups;
-  std::vector<char> seq_failed(sequences.size(), 0);  // guarded by `mutex`
   std::string thread_error;                           // likewise: a lockstep thread that could not start
   const auto lockstep_thread = [&](LockGroup& lg, int system) {
 #ifdef _OPENMP
@@ -326,26 +334,13 @@ BatchResult solve_batch(const std::vector<BatchSequence>& sequences, const Batch
           ++built;
           set_up_s += seconds_since(ts);
         }
-        const std::vector<double> times(q.times.begin() + run.begin, q.times.begin() + run.end);
-        std::vector<FrameResult> frames = interp->sequence(times, [&](const FrameResult& f, int i, int) {
-          const size_t d = ++done;
-          if (!progress) return;
-          std::lock_guard<std::mutex> lock(mutex);
-          if (!cancel.load() && !progress(f, run.sequence, run.begin + i, d, total)) cancel = true;
-          if (cancel.load()) throw Cancelled{};
-        });
-        std::move(frames.begin(), frames.end(), out.sequences[static_cast<size_t>(run.sequence)].frames.begin() + run.begin);
-        run_done[static_cast<size_t>(r)] = 1;
+        solve_run(r, *interp);
       } catch (const Cancelled&) {
         break;
       } catch (const std::exception& e) {
         fail(r, run.sequence, e.what());
-        std::lock_guard<std::mutex> lock(mutex);
-        seq_failed[static_cast<size_t>(run.sequence)] = 1;
       } catch (...) {
         fail(r, run.sequence, "unknown error");
-        std::lock_guard<std::mutex> lock(mutex);
-        seq_failed[static_cast<size_t>(run.sequence)] = 1;
       }
     }
     interp.reset();
