@@ -193,9 +193,7 @@ int main(int argc, char** argv) {
     const auto rows = evaluate_basis(setup.cage, setup.G.points, kBasisD);
     auto metrics = [&](const HarmonicMap& m) {
       const MapValues v = evaluate_map(rows, m);
-      std::vector<Metric> g;
-      for (Eigen::Index i = 0; i < v.f_z.size(); ++i) g.push_back(pullback_metric(v.f_z(i), v.fzbar_conj(i)));
-      return g;
+      return pullback_metrics(v.f_z, v.fzbar_conj);
     };
     for (const std::string& en : exact_names) {
       for (const int S : systems) {

@@ -119,9 +119,7 @@ struct AssetCores {
   }
   std::vector<Metric> metrics_of(const Eigen::VectorXd& x) const {
     const MapValues v = evaluate_map(evaluate_basis(setup->cage, setup->G.points, kBasisD), space().expand(x));
-    std::vector<Metric> g;
-    for (Eigen::Index i = 0; i < v.f_z.size(); ++i) g.push_back(pullback_metric(v.f_z(i), v.fzbar_conj(i)));
-    return g;
+    return pullback_metrics(v.f_z, v.fzbar_conj);
   }
 };
 

@@ -22,9 +22,7 @@ namespace {
 
 std::vector<Metric> metrics_of(const ShapeSetup& setup, const Eigen::VectorXd& x) {
   const MapValues v = evaluate_map(evaluate_basis(setup.cage, setup.G.points, kBasisD), setup.metric_space.expand(x));
-  std::vector<Metric> g;
-  for (Eigen::Index i = 0; i < v.f_z.size(); ++i) g.push_back(pullback_metric(v.f_z(i), v.fzbar_conj(i)));
-  return g;
+  return pullback_metrics(v.f_z, v.fzbar_conj);
 }
 
 Eigen::VectorXd perturbed(const Eigen::VectorXd& x0, unsigned seed, double amp) {

@@ -32,9 +32,7 @@ struct Fixture {
   std::vector<Metric> metrics_of(const Eigen::VectorXd& x) const {
     const HarmonicMap m = space().expand(x);
     const MapValues v = evaluate_map(evaluate_basis(setup.cage, setup.G.points, kBasisD), m);
-    std::vector<Metric> g;
-    for (Eigen::Index i = 0; i < v.f_z.size(); ++i) g.push_back(pullback_metric(v.f_z(i), v.fzbar_conj(i)));
-    return g;
+    return pullback_metrics(v.f_z, v.fzbar_conj);
   }
   double E(const Eigen::VectorXd& x) {
     core->set_coefficients(space().T() * x);

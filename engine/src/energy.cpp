@@ -29,6 +29,12 @@ Metric pullback_metric(cd a, cd b) {
   return {S + 2 * A.real(), -2 * A.imag(), S - 2 * A.real()};
 }
 
+std::vector<Metric> pullback_metrics(const Eigen::VectorXcd& f_z, const Eigen::VectorXcd& fzbar_conj) {
+  std::vector<Metric> g(static_cast<size_t>(f_z.size()));
+  for (Eigen::Index i = 0; i < f_z.size(); ++i) g[static_cast<size_t>(i)] = pullback_metric(f_z(i), fzbar_conj(i));
+  return g;
+}
+
 const char* to_string(HessianProjection p) {
   switch (p) {
     case HessianProjection::Delete: return "delete";

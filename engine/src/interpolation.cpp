@@ -56,9 +56,7 @@ Interpolator::Interpolator(const ShapeSetup& setup, std::vector<double> times, s
     key_overlap_.push_back(overlap_of(keys_[k]));
     key_x_.push_back(setup_.metric_space.reduce(keys_[k]).x);
     const MapValues v = evaluate_map(D, keys_[k]);
-    std::vector<Metric> m(static_cast<size_t>(v.f_z.size()));
-    for (Eigen::Index i = 0; i < v.f_z.size(); ++i) m[static_cast<size_t>(i)] = pullback_metric(v.f_z(i), v.fzbar_conj(i));  // Eq. 5
-    key_metrics_.push_back(std::move(m));
+    key_metrics_.push_back(pullback_metrics(v.f_z, v.fzbar_conj));  // Eq. 5
     if (std::find(options_.timing.begin(), options_.timing.end(), KeyTiming::Smooth) != options_.timing.end()) {
       std::vector<Metric> l(key_metrics_.back().size());
       for (Eigen::Index i = 0; i < v.f_z.size(); ++i) l[static_cast<size_t>(i)] = metric_log(v.f_z(i), v.fzbar_conj(i));

@@ -8,6 +8,8 @@
 
 #include <Eigen/Core>
 #include <complex>
+#include <string>
+#include <vector>
 
 namespace hsi {
 
@@ -18,6 +20,8 @@ using Metric = Eigen::Vector3d;
 
 // Paper Eq. 5: the pull-back metric J^T J of the map with f_z = a, conj(f_zbar) = b.
 Metric pullback_metric(cd a, cd b);
+// The same at every point of a map's values (f_z and conj(f_zbar), as MapValues holds them).
+std::vector<Metric> pullback_metrics(const Eigen::VectorXcd& f_z, const Eigen::VectorXcd& fzbar_conj);
 
 // How the per-sample Hessian is made positive semi-definite (paper Table 1).
 enum class HessianProjection {
