@@ -148,3 +148,79 @@ TEST_CASE("a lockstep gate: a thread that leaves releases the others, and a serv
   CHECK_THROWS_WITH(gate.leave(), Catch::Contains("more leaves than participants"));
   CHECK_THROWS_WITH(hsi::LockstepGate<Call>(0, [](int, std::span<Call* const>) {}), Catch::Contains("at least one participant"));
 }
+
+TEST_CASE("a lockstep gate serves a chain in order in one round, common tails together; a failed request ends its chain",
+          "[lockstep]") {
+  // Three threads: chains [10, 3, 5], [3, 5] and [9, 5], where a request of value < 0 fails.
+  std::mutex log_mutex;
+  std::vector<std::pair<int, int>> log;  // (key, batch size) in serve order
+  std::vector<std::vector<int>> order(3);  // per thread: the values served, in order
+  hsi::LockstepGate<Call> gate(
+      3,
+      [&](int key, std::span<Call* const> batch) {
+        std::lock_guard lock(log_mutex);
+        log.push_back({key, static_cast<int>(batch.size())});
+        for (Call* c : batch) {
+          c->result = c->value * 2;
+          order[size_t(c->thread)].push_back(c->value);
+        }
+      },
+      [](const Call& c) { return c.value < 0; });
+  const std::vector<std::vector<int>> keys = {{10, 3, 5}, {3, 5}, {9, 5}};
+  std::vector<std::vector<Call>> calls(3);
+  std::vector<std::thread> threads;
+  for (int t = 0; t < 3; ++t)
+    threads.emplace_back([&, t] {
+      std::vector<Call>& cs = calls[size_t(t)];
+      for (size_t i = 0; i < keys[size_t(t)].size(); ++i) {
+        Call c;
+        c.thread = t;
+        c.value = 100 * t + static_cast<int>(i);
+        cs.push_back(c);
+      }
+      std::vector<Call*> chain;
+      for (Call& c : cs) chain.push_back(&c);
+      gate.call(std::span<Call* const>(chain), std::span<const int>(keys[size_t(t)]));
+      gate.leave();
+    });
+  for (auto& th : threads) th.join();
+  CHECK(gate.stats().rounds == 1);
+  for (int t = 0; t < 3; ++t) {
+    INFO("thread " << t);
+    std::vector<int> expected;
+    for (const Call& c : calls[size_t(t)]) {
+      CHECK(c.result == 2 * c.value);
+      expected.push_back(c.value);
+    }
+    CHECK(order[size_t(t)] == expected);  // each chain in its own order
+  }
+  // The longest chain first (key 10), then key 3 for both chains that have it next, then
+  // key 9 (the third chain, the last with two left), then key 5 for all three: 4 batches.
+  CHECK(log == std::vector<std::pair<int, int>>{{10, 1}, {3, 2}, {9, 1}, {5, 3}});
+
+  // A failed request: the rest of its chain is not served; the other chain goes on.
+  hsi::LockstepGate<Call> one(2, [&](int, std::span<Call* const> batch) {
+    for (Call* c : batch) c->result = 1;
+  }, [](const Call& c) { return c.value < 0; });
+  Call a1, a2, b1;
+  a1.value = -1;  // fails
+  a2.value = 7;
+  b1.value = 3;
+  std::thread other([&] {
+    Call* chain[] = {&b1};
+    const int k[] = {2};
+    one.call(std::span<Call* const>(chain), std::span<const int>(k));
+    one.leave();
+  });
+  Call* chain[] = {&a1, &a2};
+  const int k[] = {1, 2};
+  one.call(std::span<Call* const>(chain), std::span<const int>(k));
+  one.leave();
+  other.join();
+  CHECK(a1.result == 1);
+  CHECK(a2.result == 0);  // not served
+  CHECK(b1.result == 1);
+  Call* none[] = {&a1};
+  const int two_keys[] = {1, 2};
+  CHECK_THROWS_WITH(gate.call(std::span<Call* const>(none), std::span<const int>(two_keys)), Catch::Contains("one key per request"));
+}

@@ -1,6 +1,7 @@
 // The lockstep group's proxy stepper and the serial batch stepper (hsi/lockstep.h).
 #include "hsi/lockstep.h"
 
+#include <deque>
 #include <stdexcept>
 #include <string>
 
@@ -10,10 +11,25 @@ namespace {
 
 using Kind = StepRequest::Kind;
 
-// System s's NewtonStepper: each call a request through the group's gate.
+// System s's NewtonStepper: each call a request through the group's gate. The calls
+// whose results the loop does not wait for (start_deferred, linearize, certify_ahead,
+// accept: void) are held and posted as one chain with the next call that it does wait
+// for, so that they cost no round of their own; the system's calls are served in the
+// order it made them, and what a held call threw is rethrown by the call it travelled
+// with (the loop's next, before it could have used the held call's effect).
 class ProxyStepper final : public NewtonStepper {
  public:
   ProxyStepper(LockstepGate<StepRequest>& gate, int system) : gate_(gate), system_(system) {}
+  ~ProxyStepper() override {
+    // Held calls that no call followed (a loop that ended on one): served now, since
+    // the backend's state for this system carries over to its next stepper.
+    if (held_.empty()) return;
+    try {
+      flush(nullptr);
+    } catch (...) {
+      // (no loop is left to tell)
+    }
+  }
 
   double start(const Eigen::VectorXd& x0) override {
     StepRequest r = request(Kind::Start);
@@ -22,9 +38,9 @@ class ProxyStepper final : public NewtonStepper {
     return r.energy;
   }
   void start_deferred(const Eigen::VectorXd& x0) override {
-    StepRequest r = request(Kind::StartDeferred);
-    r.x0 = &x0;
-    post(r);
+    Held& h = hold(Kind::StartDeferred);
+    h.x0 = x0;
+    h.r.x0 = &h.x0;
   }
   double start_energy() override {
     StepRequest r = request(Kind::StartEnergy);
@@ -32,9 +48,9 @@ class ProxyStepper final : public NewtonStepper {
     return r.energy;
   }
   void linearize(const HessianChoice& choice) override {
-    StepRequest r = request(Kind::Linearize);
-    r.choice = &choice;
-    post(r);
+    Held& h = hold(Kind::Linearize);
+    h.choice = choice;
+    h.r.choice = &h.choice;
   }
   NewtonSystem solve(double ridge) override { return system_call(Kind::Solve, ridge); }
   NewtonSystem decrement(double ridge) override { return system_call(Kind::Decrement, ridge); }
@@ -52,16 +68,8 @@ class ProxyStepper final : public NewtonStepper {
     post(r);
     return std::move(r.certificate);
   }
-  void certify_ahead(double step) override {
-    StepRequest r = request(Kind::CertifyAhead);
-    r.number = step;
-    post(r);
-  }
-  void accept(double step) override {
-    StepRequest r = request(Kind::Accept);
-    r.number = step;
-    post(r);
-  }
+  void certify_ahead(double step) override { hold(Kind::CertifyAhead).r.number = step; }
+  void accept(double step) override { hold(Kind::Accept).r.number = step; }
   Eigen::VectorXd x() override {
     StepRequest r = request(Kind::X);
     post(r);
@@ -81,16 +89,43 @@ class ProxyStepper final : public NewtonStepper {
   }
 
  private:
+  // A held call and the arguments it keeps (the loop's may not outlive the call).
+  struct Held {
+    StepRequest r;
+    Eigen::VectorXd x0;
+    HessianChoice choice;
+  };
+
   StepRequest request(Kind kind) const {
     StepRequest r;
     r.kind = kind;
     r.system = system_;
     return r;
   }
-  void post(StepRequest& r) {
-    gate_.call(r, static_cast<int>(r.kind));
-    if (r.error) std::rethrow_exception(r.error);
+  Held& hold(Kind kind) {
+    held_.emplace_back();
+    held_.back().r = request(kind);
+    return held_.back();
   }
+  // The held calls, then `last` (if any), as one chain; the first error among them rethrown.
+  void flush(StepRequest* last) {
+    std::vector<StepRequest*> chain;
+    std::vector<int> keys;
+    for (Held& h : held_) {
+      chain.push_back(&h.r);
+      keys.push_back(static_cast<int>(h.r.kind));
+    }
+    if (last) {
+      chain.push_back(last);
+      keys.push_back(static_cast<int>(last->kind));
+    }
+    std::deque<Held> held;
+    held.swap(held_);
+    gate_.call(std::span<StepRequest* const>(chain), std::span<const int>(keys));
+    for (StepRequest* r : chain)
+      if (r->error) std::rethrow_exception(r->error);
+  }
+  void post(StepRequest& r) { flush(&r); }
   NewtonSystem system_call(Kind kind, double ridge) {
     StepRequest r = request(kind);
     r.number = ridge;
@@ -100,9 +135,30 @@ class ProxyStepper final : public NewtonStepper {
 
   LockstepGate<StepRequest>& gate_;
   int system_;
+  std::deque<Held> held_;  // (a deque: the requests' addresses stay put)
 };
 
 }  // namespace
+
+const char* to_string(StepRequest::Kind kind) {
+  switch (kind) {
+    case Kind::Start: return "start";
+    case Kind::StartDeferred: return "start_deferred";
+    case Kind::StartEnergy: return "start_energy";
+    case Kind::Linearize: return "linearize";
+    case Kind::Solve: return "solve";
+    case Kind::Decrement: return "decrement";
+    case Kind::Direction: return "direction";
+    case Kind::TrialEnergies: return "trial_energies";
+    case Kind::Certify: return "certify";
+    case Kind::CertifyAhead: return "certify_ahead";
+    case Kind::Accept: return "accept";
+    case Kind::X: return "x";
+    case Kind::Keep: return "keep";
+    case Kind::LinearizeKept: return "linearize_kept";
+  }
+  return "unknown";
+}
 
 SerialBatchStepper::SerialBatchStepper(std::vector<std::unique_ptr<NewtonStepper>> steppers) : steppers_(std::move(steppers)) {
   for (const auto& s : steppers_)
@@ -143,9 +199,11 @@ void SerialBatchStepper::serve_one(NewtonStepper& s, StepRequest& r) {
 }
 
 LockstepGroup::LockstepGroup(BatchStepper& batch)
-    : batch_(batch), gate_(batch.systems(), [this](int key, std::span<StepRequest* const> requests) {
-        batch_.serve(static_cast<StepRequest::Kind>(key), requests);
-      }) {}
+    : batch_(batch),
+      gate_(
+          batch.systems(),
+          [this](int key, std::span<StepRequest* const> requests) { batch_.serve(static_cast<StepRequest::Kind>(key), requests); },
+          [](const StepRequest& r) { return r.error != nullptr; }) {}
 
 std::unique_ptr<NewtonStepper> LockstepGroup::stepper(int system) {
   if (system < 0 || system >= batch_.systems())

@@ -2,10 +2,13 @@
 // system's loop (newton_run, unchanged) runs on its own thread against a proxy
 // NewtonStepper whose calls go through one LockstepGate per group; once every live
 // thread has posted, each kind of call is served as one batch by the group's
-// BatchStepper. A backend's batched stepper (one launch per kind of call for the whole
-// group) implements BatchStepper; SerialBatchStepper serves each system with its own
-// stepper, one after another: the reference it is tested against, and what the CPU uses.
-// The design and what it would reach on the GPU: bench/results/lockstep_stages_2026-12-07.md.
+// BatchStepper. The calls a loop does not wait for (start_deferred, linearize,
+// certify_ahead, accept) travel with its next call that it does wait for, as one chain
+// (LockstepGate::call): a round per waited-for call, not per call. A backend's batched
+// stepper (one launch per kind of call for the whole group) implements BatchStepper;
+// SerialBatchStepper serves each system with its own stepper, one after another: the
+// reference it is tested against, and what the CPU uses. The design and what it would
+// reach on the GPU: bench/results/lockstep_stages_2026-12-07.md.
 #pragma once
 
 #include <exception>
@@ -58,6 +61,9 @@ struct StepRequest {
   bool ok = false;                         // Keep, LinearizeKept
   std::exception_ptr error;                // what this system's call threw (rethrown to its loop alone)
 };
+
+// "start", "start_deferred", …, "linearize_kept": the NewtonStepper call's name.
+const char* to_string(StepRequest::Kind kind);
 
 // A group's steppers: serve() makes the calls of one batch (all of one kind, each for
 // its own system < systems()), writing each request's results.

@@ -9,6 +9,7 @@
 #pragma once
 
 #include <algorithm>
+#include <chrono>
 #include <condition_variable>
 #include <cstdint>
 #include <exception>
@@ -27,14 +28,21 @@ class LockstepGate {
   // Called by one thread at a time, never with an empty batch. What it throws reaches
   // every caller in that batch (and no other).
   using Serve = std::function<void(int key, std::span<Request* const> batch)>;
+  // Whether a served request failed (optional): the rest of its chain is then not served.
+  using Failed = std::function<bool(const Request&)>;
 
   struct Stats {
     std::uint64_t rounds = 0;   // times every live thread had posted
     std::uint64_t batches = 0;  // serve calls
     std::uint64_t calls = 0;    // requests served
+    double serve_s = 0;         // wall time inside serve, summed
+    // Per key (index = key, for keys ≥ 0): serve calls, requests and wall time in serve.
+    std::vector<std::uint64_t> key_batches, key_calls;
+    std::vector<double> key_serve_s;
   };
 
-  LockstepGate(int participants, Serve serve) : live_(participants), serve_(std::move(serve)) {
+  LockstepGate(int participants, Serve serve, Failed failed = nullptr)
+      : live_(participants), serve_(std::move(serve)), failed_(std::move(failed)) {
     if (participants < 1) throw std::invalid_argument("LockstepGate: at least one participant");
   }
   LockstepGate(const LockstepGate&) = delete;
@@ -43,7 +51,20 @@ class LockstepGate {
   // Posts `request` under `key` and returns once it has been served (rethrowing what
   // the serve threw for its batch). A participant makes one call at a time.
   void call(Request& request, int key) {
-    Slot slot{&request, key, false, nullptr};
+    Request* chain[1] = {&request};
+    const int keys[1] = {key};
+    call(std::span<Request* const>(chain), std::span<const int>(keys));
+  }
+
+  // Posts a chain: chain[i] under keys[i], served in that order within one round (so a
+  // thread's calls whose results it does not wait for travel with the next that it
+  // does), and returns once the chain has been served, or has stopped at a request that
+  // failed (Failed) or whose batch threw (rethrown here).
+  void call(std::span<Request* const> chain, std::span<const int> keys) {
+    if (chain.empty() || chain.size() != keys.size()) throw std::invalid_argument("LockstepGate: a chain needs one key per request");
+    Slot slot;
+    slot.chain = chain;
+    slot.keys = keys;
     std::unique_lock lock(mutex_);
     if (live_ <= 0) throw std::logic_error("LockstepGate: call after every participant left");
     pending_.push_back(&slot);
@@ -72,41 +93,79 @@ class LockstepGate {
 
  private:
   struct Slot {
-    Request* request;
-    int key;
+    std::span<Request* const> chain;
+    std::span<const int> keys;
+    size_t next = 0;  // the chain's first request not yet served
     bool done = false;
     std::exception_ptr error;
+    bool open() const { return !error && next < chain.size(); }
   };
 
   // Every live participant has posted (the lock is held, and no one posts until the
-  // round is served, since each waits on its own slot): the pending requests, grouped
-  // by key in increasing key order and by posting order within a key, are served
-  // outside the lock, then their threads are woken.
+  // round is served, since each waits on its own slot): the pending chains are served
+  // outside the lock, one batch per step, then their threads are woken. Each step takes
+  // the head key of the chain with the most requests left (ties: the smaller key) and
+  // serves every chain whose head has that key, in posting order: chains of different
+  // lengths that end alike (a result call after calls not waited for) meet at their
+  // common tail, and a round of single calls is one batch per key in key order.
   void serve_round(std::unique_lock<std::mutex>& lock) {
     std::vector<Slot*> round;
     round.swap(pending_);
     ++stats_.rounds;
     lock.unlock();
-    std::stable_sort(round.begin(), round.end(), [](const Slot* a, const Slot* b) { return a->key < b->key; });
     std::vector<Request*> batch;
-    std::uint64_t batches = 0;
-    for (size_t i = 0; i < round.size();) {
-      size_t j = i;
+    std::vector<Slot*> members;
+    struct Served {
+      int key;
+      std::uint64_t calls;
+      double s;
+    };
+    std::vector<Served> served;
+    for (;;) {
+      const Slot* pick = nullptr;
+      for (const Slot* s : round) {
+        if (!s->open()) continue;
+        const size_t left = s->chain.size() - s->next, pick_left = pick ? pick->chain.size() - pick->next : 0;
+        if (!pick || left > pick_left || (left == pick_left && s->keys[s->next] < pick->keys[pick->next])) pick = s;
+      }
+      if (!pick) break;
+      const int key = pick->keys[pick->next];
       batch.clear();
-      while (j < round.size() && round[j]->key == round[i]->key) batch.push_back(round[j++]->request);
+      members.clear();
+      for (Slot* s : round)
+        if (s->open() && s->keys[s->next] == key) {
+          batch.push_back(s->chain[s->next]);
+          members.push_back(s);
+        }
+      const auto t0 = std::chrono::steady_clock::now();
       try {
-        serve_(round[i]->key, std::span<Request* const>(batch));
+        serve_(key, std::span<Request* const>(batch));
+        for (Slot* s : members)
+          if (failed_ && failed_(*s->chain[s->next])) s->next = s->chain.size();  // the rest of its chain not served
+          else ++s->next;
       } catch (...) {
         const std::exception_ptr e = std::current_exception();
-        for (size_t k = i; k < j; ++k) round[k]->error = e;
+        for (Slot* s : members) s->error = e;
       }
-      ++batches;
-      i = j;
+      served.push_back({key, batch.size(), std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count()});
     }
     lock.lock();
     for (Slot* s : round) s->done = true;
-    stats_.batches += batches;
-    stats_.calls += round.size();
+    stats_.batches += served.size();
+    for (const Served& b : served) {
+      stats_.calls += b.calls;
+      stats_.serve_s += b.s;
+      if (b.key < 0) continue;
+      const size_t k = static_cast<size_t>(b.key);
+      if (stats_.key_batches.size() <= k) {
+        stats_.key_batches.resize(k + 1, 0);
+        stats_.key_calls.resize(k + 1, 0);
+        stats_.key_serve_s.resize(k + 1, 0.0);
+      }
+      ++stats_.key_batches[k];
+      stats_.key_calls[k] += b.calls;
+      stats_.key_serve_s[k] += b.s;
+    }
     served_.notify_all();
   }
 
@@ -115,6 +174,7 @@ class LockstepGate {
   std::vector<Slot*> pending_;
   int live_;
   Serve serve_;
+  Failed failed_;
   Stats stats_;
 };
 
