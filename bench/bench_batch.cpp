@@ -13,6 +13,7 @@
 // solves). Not a test.
 #include <CLI/CLI.hpp>
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
@@ -27,6 +28,7 @@
 #include "bench_args.h"
 #include "bench_scenes.h"
 #include "hsi/batch.h"
+#include "hsi/lockstep.h"
 #include "hsi/machine.h"
 #include "hsi/runtime/backend.h"
 #include "trace_range.h"
@@ -80,6 +82,8 @@ struct Row {
   std::string exact;       // the exact systems' samples (--exact-samples)
   std::string image;       // where the boundary's image is made (--image)
   std::string same;  // identical to the first batch row of the same --exact-samples
+  std::array<size_t, kNewtonStopCount> stops{};  // the frames not converged, by why their solve stopped
+  size_t differ_converged = 0, differ_iterations = 0;  // frames whose verdict / iterations differ from the first batch row's
 };
 
 void count(Row& row, const std::vector<FrameResult>& frames) {
@@ -87,8 +91,18 @@ void count(Row& row, const std::vector<FrameResult>& frames) {
   for (const FrameResult& f : frames) {
     row.certified += f.certified;
     row.converged += f.converged;
+    if (!f.converged) ++row.stops[static_cast<size_t>(f.stop)];
     row.parts.add(f);
   }
+}
+
+// Frames whose convergence verdict, and whose iteration count, differ between a and b.
+void count_differences(Row& row, const std::vector<BatchSequenceResult>& a, const std::vector<BatchSequenceResult>& b) {
+  for (size_t s = 0; s < std::min(a.size(), b.size()); ++s)
+    for (size_t i = 0; i < std::min(a[s].frames.size(), b[s].frames.size()); ++i) {
+      row.differ_converged += a[s].frames[i].converged != b[s].frames[i].converged;
+      row.differ_iterations += a[s].frames[i].iterations != b[s].frames[i].iterations;
+    }
 }
 
 // Every frame's coefficients and flags alike (the time each took aside).
@@ -153,16 +167,21 @@ int main(int argc, char** argv) {
                  "Where every sequence's frames start (InterpolationOptions::predict_start: off, always, auto)")
       ->capture_default_str()
       ->check(CLI::IsMember(predict_start_names()));
-  std::string lockstep_list;
+  std::string lockstep_list, serial_list;
   app.add_option("--lockstep", lockstep_list,
                  "Lockstep group sizes, comma-separated: after the W rows, one row per size with each setup's runs solved by a group "
                  "of that many threads stepped together (runtime::set_batch_lockstep; on CUDA the device's batched stepper)");
+  app.add_option("--lockstep-serial", serial_list,
+                 "Lockstep group sizes for the reference backend, comma-separated: each system its own core of the backend (on "
+                 "CUDA a CUDA core and its own stepper), a group's calls served one after another (make_serial_lockstep_backend); "
+                 "the same loops as --lockstep without the batched stepper");
   app.add_flag("--skip-single", skip_single, "Leave out the one-at-a-time path (the speed-up column is then empty)");
   CLI11_PARSE(app, argc, argv);
-  std::vector<int> worker_counts, lockstep_counts;
+  std::vector<int> worker_counts, lockstep_counts, serial_counts;
   try {
     worker_counts = bench::parse_counts(workers_list, "--workers");
     if (!lockstep_list.empty()) lockstep_counts = bench::parse_counts(lockstep_list, "--lockstep");
+    if (!serial_list.empty()) serial_counts = bench::parse_counts(serial_list, "--lockstep-serial");
   } catch (const CLI::Error& e) {
     return app.exit(e);
   }
@@ -269,9 +288,10 @@ int main(int argc, char** argv) {
       for (BatchSequence& q : batch) q.options.exact_samples = parse_exact_samples(exact);
       std::vector<BatchSequenceResult> first;  // this setting's first batch row
       for (const std::string& wait : on_gpu ? waits : std::vector<std::string>{"-"})
-        for (size_t config = 0; config < worker_counts.size() + lockstep_counts.size(); ++config) {
-          const bool lockstep = config >= worker_counts.size();
-          const int W = lockstep ? lockstep_counts[config - worker_counts.size()] : worker_counts[config];
+        for (size_t config = 0; config < worker_counts.size() + lockstep_counts.size() + serial_counts.size(); ++config) {
+          const size_t nw = worker_counts.size(), nl = lockstep_counts.size();
+          const bool serial = config >= nw + nl, lockstep = config >= nw;
+          const int W = serial ? serial_counts[config - nw - nl] : lockstep ? lockstep_counts[config - nw] : worker_counts[config];
           if (on_gpu)
             if (const std::string why = runtime::set_cuda_wait(wait); !why.empty()) {
               std::fprintf(stderr, "bench_batch: --cuda-wait %s: %s\n", wait.c_str(), why.c_str());
@@ -283,6 +303,12 @@ int main(int argc, char** argv) {
           o.make_core = factories.make_core;
           o.make_boundary = image == "host" ? nullptr : factories.make_boundary;
           if (lockstep) runtime::set_batch_lockstep(o, choice.used, W);
+          if (serial) {
+            o.lockstep_systems = W;
+            o.make_lockstep = [make_core = factories.make_core](const ShapeSetup& setup, int n) {
+              return make_serial_lockstep_backend(setup, n, [&] { return make_core(setup); });
+            };
+          }
           const double c0 = process_cpu_s();
           const BatchResult r = [&] {
             const bench::TraceRange range("batch W=" + std::to_string(W) + " wait " + wait + " exact " + exact + " image " + image);  // (bench/cuda_trace)
@@ -294,7 +320,7 @@ int main(int argc, char** argv) {
           }();
           std::fprintf(stderr, "\n");
           Row row;
-          row.path = lockstep ? "lockstep " + std::to_string(W) : "batch";
+          row.path = serial ? "lockstep serial " + std::to_string(W) : lockstep ? "lockstep " + std::to_string(W) : "batch";
           row.wait = wait;
           row.exact = exact;
           row.image = image;
@@ -318,6 +344,7 @@ int main(int argc, char** argv) {
             row.same = "(first)";
           } else {
             row.same = same_frames(first, r.sequences) ? "yes" : "NO";
+            count_differences(row, first, r.sequences);
           }
           rows.push_back(row);
         }
@@ -356,6 +383,20 @@ int main(int argc, char** argv) {
                 r.path.c_str(), r.exact.c_str(), r.image.c_str(), r.wait.c_str(), r.workers, p.solved, p.iterations * k, p.ms * k, p.targets * k,
                 p.solve * k, p.t.energy_gradient * k, p.t.hessian * k, p.t.solve * k, p.t.line_search * k, p.t.certificate * k,
                 p.pose * k, p.image * k, p.crossings * k, p.crossings_wait * k, p.distortion * k);
+  }
+  // The frames not converged, by why their solve stopped, and how a row's frames differ
+  // from its setting's first batch row's.
+  bool any = false;
+  for (const Row& r : rows) {
+    std::string why;
+    for (int k = 0; k < kNewtonStopCount; ++k)
+      if (r.stops[static_cast<size_t>(k)])
+        why += (why.empty() ? "" : ", ") + std::to_string(r.stops[static_cast<size_t>(k)]) + " " + to_string(static_cast<NewtonStop>(k));
+    if (why.empty() && r.differ_converged == 0 && r.differ_iterations == 0) continue;
+    if (!any) std::printf("\nFrames NOT CONVERGED, by why their solve stopped; frames differing from the setting's first batch row:\n\n");
+    any = true;
+    std::printf("- %s (exact %s, W %d): %s; verdict differs in %zu frames, iterations in %zu\n", r.path.c_str(), r.exact.c_str(), r.workers,
+                why.empty() ? "every frame converged" : why.c_str(), r.differ_converged, r.differ_iterations);
   }
   std::printf("\n%s\n", all_certified ? "every frame of every path certified" : "SOME FRAMES NOT CERTIFIED (or sequences failed): see the table");
   return all_certified ? 0 : 3;

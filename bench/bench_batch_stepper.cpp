@@ -38,6 +38,7 @@ using Clock = std::chrono::steady_clock;
 struct Frames {
   std::vector<std::vector<NewtonResult>> results;  // [system][frame]
   double seconds = 0;
+  LockstepGate<StepRequest>::Stats stats;  // lockstep: the timed pass's rounds
 };
 
 struct Job {
@@ -132,6 +133,7 @@ Frames lockstep(const Job& job, size_t* bytes) {
   *bytes = batch->device_bytes();
   std::vector<KeptSystem> slots(size_t(job.S));
   std::vector<Eigen::VectorXd> x(size_t(job.S), job.x0);
+  LockstepGate<StepRequest>::Stats stats;
   auto pass = [&](int begin, int end, std::vector<std::vector<NewtonResult>>& into) {
     LockstepGroup group(*batch);
     std::vector<std::thread> threads;
@@ -150,13 +152,34 @@ Frames lockstep(const Job& job, size_t* bytes) {
     for (auto& t : threads) t.join();
     for (int s = 0; s < job.S; ++s)
       if (!failed[size_t(s)].empty()) throw std::runtime_error("lockstep system " + std::to_string(s) + ": " + failed[size_t(s)]);
+    stats = group.stats();
   };
   std::vector<std::vector<NewtonResult>> warm(size_t(job.S));
   pass(0, 1, warm);
   const auto t0 = Clock::now();
   pass(1, job.F, out.results);
   out.seconds = std::chrono::duration<double>(Clock::now() - t0).count();
+  out.stats = stats;
   return out;
+}
+
+// Where the lockstep row's wall time goes: each call kind's batches, their mean size
+// and the time the serving thread spent in them; the rest is the systems' threads (their
+// loops' own work and the hand-overs of every round).
+void print_rounds(const Frames& f) {
+  const LockstepGate<StepRequest>::Stats& s = f.stats;
+  std::printf("lockstep rounds (timed frames): %llu rounds, %llu batches, %llu calls; serving %.1f ms of %.1f ms wall (%.0f%%), "
+              "%.1f us per round outside serve\n\n",
+              static_cast<unsigned long long>(s.rounds), static_cast<unsigned long long>(s.batches), static_cast<unsigned long long>(s.calls),
+              1e3 * s.serve_s, 1e3 * f.seconds, 100 * s.serve_s / std::max(f.seconds, 1e-12),
+              1e6 * (f.seconds - s.serve_s) / std::max<double>(1, static_cast<double>(s.rounds)));
+  std::printf("| call | batches | mean batch | serve ms | us per batch |\n|---|---:|---:|---:|---:|\n");
+  for (size_t k = 0; k < s.key_batches.size(); ++k)
+    if (s.key_batches[k])
+      std::printf("| %s | %llu | %.1f | %.1f | %.0f |\n", to_string(static_cast<StepRequest::Kind>(k)),
+                  static_cast<unsigned long long>(s.key_batches[k]), double(s.key_calls[k]) / double(s.key_batches[k]),
+                  1e3 * s.key_serve_s[k], 1e6 * s.key_serve_s[k] / double(s.key_batches[k]));
+  std::printf("\n");
 }
 
 }  // namespace
@@ -239,6 +262,7 @@ int main(int argc, char** argv) {
                       certified == int(timed) ? "" : " (NOT all certified)", converged, diff, other);
         }
         std::printf("\nlockstep batch device memory: %.1f MB (%.2f MB per system)\n\n", double(bytes) / 1e6, double(bytes) / 1e6 / S);
+        print_rounds(rows_out.back().second);
         std::fflush(stdout);
       }
     }

@@ -5,9 +5,9 @@
 // (newton_kernels.h), the Hessians' products as one ZGEMM over every system's weighted
 // rows, the reduced systems as strided-batched GEMMs, the factors as cuSOLVER's
 // potrfBatched with our batched triangular solves (dense_cholesky.h), the certificates as
-// one DeviceCertifier with a capacity of S. The small per-system kernels (the ridge, the
-// step's scalars, the rotation's part of the exact system, the trial point) are still
-// one launch per system. Each system's loop stays newton_run's (LockstepGroup): every
+// one DeviceCertifier with a capacity of S; the small one-block kernels (the ridge, the
+// step's scalars, the rotation's part of the exact system, the trial point) in their
+// batched forms, one launch for neighbouring systems. Each system's loop stays newton_run's (LockstepGroup): every
 // decision is the system's own, so a frame's result does not depend on its batch except
 // in the last bits of the products' sums (cuBLAS may sum a batch in another order).
 //
