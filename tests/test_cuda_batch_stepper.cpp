@@ -9,10 +9,16 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
+#include <map>
+#include <mutex>
 #include <random>
+#include <string>
 #include <thread>
 
+#include "bench_scenes.h"
 #include "cuda_test.h"
+#include "hsi/batch.h"
 #include "hsi/cage.h"
 #include "hsi/cuda/batch_stepper.h"
 #include "hsi/cuda/newton_core.h"
@@ -144,5 +150,207 @@ TEST_CASE("systems solved together by the batch's device stepper get their solve
       INFO("rounds " << stats.rounds << ", batches " << stats.batches << ", calls " << stats.calls);
       CHECK(stats.rounds < stats.calls);  // some calls of several systems served together
     }
+  }
+}
+
+namespace {
+
+using Kind = StepRequest::Kind;
+
+// What a tee saw: per call kind and result, the largest relative difference between the
+// device batch's result and the reference's, and every verdict that differed.
+struct TeeLog {
+  std::mutex mutex;
+  std::map<std::string, double> largest;  // "kind field" → max |a − b| / max(|a|, |b|)
+  std::vector<std::string> verdicts;       // the first verdicts that differed
+  size_t verdicts_differing = 0, calls = 0;
+  void number(Kind k, const char* field, double device, double ref) {
+    const double scale = std::max({std::abs(device), std::abs(ref), 1e-300});
+    double d = std::isnan(device) && std::isnan(ref) ? 0.0 : std::abs(device - ref) / scale;
+    if (std::isnan(d)) d = 1;
+    double& m = largest[std::string(to_string(k)) + " " + field];
+    m = std::max(m, d);
+  }
+  void verdict(Kind k, int system, const char* field, bool device, bool ref) {
+    if (device == ref) return;
+    ++verdicts_differing;
+    if (verdicts.size() < 20)
+      verdicts.push_back(std::string("call ") + std::to_string(calls) + " " + to_string(k) + " system " + std::to_string(system) + ": " +
+                         field + " device " + (device ? "true" : "false") + ", reference " + (ref ? "true" : "false"));
+  }
+};
+
+// The device batch and, beside it, the reference for the same calls: each system its own
+// CUDA core and that core's own stepper (make_serial_lockstep_backend), a batch served
+// one call after another. The loops follow the device's results; after every accepted
+// step the reference restarts at the device's x, so that each call compares the two on
+// the same point.
+class TeeBackend final : public LockstepBackend, public BatchStepper {
+ public:
+  TeeBackend(const ShapeSetup& setup, int systems, TeeLog& log)
+      : device_(cuda::make_batch_stepper(setup, systems)),
+        ref_(make_serial_lockstep_backend(setup, systems, [&setup] { return cuda::make_newton_core(setup); })),
+        log_(log) {}
+  BatchStepper& batch() override { return *this; }
+  int systems() const override { return device_->systems(); }
+  void set_targets(int system, const std::vector<Metric>& g) override {
+    device_->set_targets(system, g);
+    ref_->set_targets(system, g);
+  }
+  ExactSamples preferred_exact_samples() const override { return device_->preferred_exact_samples(); }
+  std::optional<CertificateResult> certify_map(const Certifier& certifier, const HarmonicMap& map) override {
+    return device_->certify_map(certifier, map);
+  }
+
+  void serve(Kind kind, std::span<StepRequest* const> batch) override {
+    std::vector<StepRequest> ref(batch.size());
+    std::vector<std::vector<double>> energies(batch.size());
+    std::vector<StepRequest*> ref_ptrs;
+    for (size_t i = 0; i < batch.size(); ++i) {
+      const StepRequest& r = *batch[i];
+      StepRequest& c = ref[i];
+      c.kind = r.kind;
+      c.system = r.system;
+      c.x0 = r.x0;
+      c.choice = r.choice;
+      c.number = r.number;
+      c.full = r.full;
+      c.steps = r.steps;
+      energies[i].assign(r.energies.size(), 0.0);
+      c.energies = energies[i];
+      if (r.slot) c.slot = &slots_[r.slot];
+      if (r.kept) {
+        const auto it = slots_.find(r.kept);
+        c.kept = it == slots_.end() ? &none_ : &it->second;
+      }
+      ref_ptrs.push_back(&c);
+    }
+    ref_->batch().serve(kind, ref_ptrs);
+    device_->serve(kind, batch);
+    std::lock_guard<std::mutex> lock(log_.mutex);
+    for (size_t i = 0; i < batch.size(); ++i) {
+      const StepRequest &d = *batch[i], &c = ref[i];
+      ++log_.calls;
+      log_.verdict(kind, d.system, "threw", d.error != nullptr, c.error != nullptr);
+      if (d.error || c.error) continue;
+      switch (kind) {
+        case Kind::Start:
+        case Kind::StartEnergy: log_.number(kind, "energy", d.energy, c.energy); break;
+        case Kind::Solve:
+        case Kind::Decrement:
+        case Kind::Direction: {
+          const NewtonSystem &a = d.system_result, &b = c.system_result;
+          log_.verdict(kind, d.system, "factored", a.factored, b.factored);
+          log_.verdict(kind, d.system, "has_direction", a.has_direction, b.has_direction);
+          log_.number(kind, "slope", a.slope, b.slope);
+          log_.number(kind, "gradient_norm", a.gradient_norm, b.gradient_norm);
+          log_.number(kind, "diagonal_max", a.diagonal_max, b.diagonal_max);
+          if (a.has_direction) log_.number(kind, "max_safe_step", a.max_safe_step, b.max_safe_step);
+          break;
+        }
+        case Kind::TrialEnergies:
+          for (size_t j = 0; j < d.energies.size(); ++j) log_.number(kind, "energy", d.energies[j], energies[i][j]);
+          break;
+        case Kind::Certify:
+          log_.verdict(kind, d.system, "certified", d.certificate.certified, c.certificate.certified);
+          if (d.certificate.certified && c.certificate.certified) log_.number(kind, "k_max", d.certificate.k_max, c.certificate.k_max);
+          break;
+        case Kind::Keep:
+        case Kind::LinearizeKept: log_.verdict(kind, d.system, "ok", d.ok, c.ok); break;
+        default: break;
+      }
+      if (kind == Kind::X && d.x.size() == c.x.size())
+        log_.largest["x relative"] = std::max(log_.largest["x relative"], (d.x - c.x).lpNorm<Eigen::Infinity>() /
+                                                                              std::max(d.x.lpNorm<Eigen::Infinity>(), 1e-300));
+    }
+    if (kind == Kind::Accept) resync(batch);
+  }
+
+ private:
+  // The reference restarted at the device's x for the systems of an accept.
+  void resync(std::span<StepRequest* const> batch) {
+    std::vector<StepRequest> xs(batch.size()), starts(batch.size());
+    std::vector<StepRequest*> xp, sp;
+    for (size_t i = 0; i < batch.size(); ++i) {
+      if (batch[i]->error) continue;
+      xs[i].kind = Kind::X;
+      xs[i].system = batch[i]->system;
+      xp.push_back(&xs[i]);
+    }
+    if (xp.empty()) return;
+    device_->serve(Kind::X, xp);
+    for (size_t i = 0; i < batch.size(); ++i) {
+      if (batch[i]->error || xs[i].error) continue;
+      starts[i].kind = Kind::Start;
+      starts[i].system = batch[i]->system;
+      starts[i].x0 = &xs[i].x;
+      sp.push_back(&starts[i]);
+    }
+    if (!sp.empty()) ref_->batch().serve(Kind::Start, sp);
+  }
+
+  std::unique_ptr<cuda::DeviceBatchStepper> device_;
+  std::unique_ptr<LockstepBackend> ref_;
+  TeeLog& log_;
+  std::map<const KeptSystem*, KeptSystem> slots_;  // the caller's slot → the reference's
+  KeptSystem none_;
+};
+
+}  // namespace
+
+TEST_CASE("solve_batch in lockstep on the device's batched stepper: every call as the CUDA core's own stepper serves it",
+          "[cuda][lockstep][batch][tee]") {
+  HSI_REQUIRE_GPU();
+  // The bundled scenes at their own |G|, four sequences each (bench_batch's: uniform
+  // frames, and every keyframe time a frame), in groups of 16 systems.
+  std::vector<bench::Loaded> scenes = bench::load_folder(HSI_ASSETS_DIR, 0, 0, "test");
+  REQUIRE(!scenes.empty());
+  std::vector<BatchSequence> sequences;
+  for (int repeat = 0; repeat < 4; ++repeat)
+    for (const bench::Loaded& L : scenes) {
+      BatchSequence q;
+      q.name = L.name + " #" + std::to_string(repeat);
+      q.setup = L.setup.get();
+      q.key_times = L.times;
+      q.keyframes = L.maps;
+      for (const Keyframe& k : L.scene.keyframes) q.options.timing.push_back(k.timing);
+      const int intervals = static_cast<int>(L.times.size()) - 1;
+      q.times = repeat % 2 == 0 ? sequence_times(L.times, 24 + repeat) : frame_times(L.times, std::max(1, 24 / intervals));
+      sequences.push_back(std::move(q));
+    }
+  TeeLog log;
+  BatchOptions o;
+  o.lockstep_systems = 16;
+  o.make_lockstep = [&log](const ShapeSetup& setup, int n) { return std::make_unique<TeeBackend>(setup, n, log); };
+  const BatchResult tee = solve_batch(sequences, o);
+  // The reference backend alone: the loops follow its own results.
+  o.make_lockstep = [](const ShapeSetup& setup, int n) {
+    return make_serial_lockstep_backend(setup, n, [&setup] { return cuda::make_newton_core(setup); });
+  };
+  const BatchResult ref = solve_batch(sequences, o);
+  size_t frames = 0, converged = 0, converged_ref = 0, certified = 0;
+  for (size_t s = 0; s < sequences.size(); ++s) {
+    INFO(sequences[s].name);
+    CHECK(tee.sequences[s].error == "");
+    CHECK(ref.sequences[s].error == "");
+    for (const FrameResult& f : tee.sequences[s].frames) {
+      ++frames;
+      converged += f.converged;
+      certified += f.certified;
+      if (!f.converged) std::printf("  device batch: %s t = %.4f not converged (%s, %d iterations)\n", sequences[s].name.c_str(), f.t, to_string(f.stop), f.iterations);
+    }
+    for (const FrameResult& f : ref.sequences[s].frames) converged_ref += f.converged;
+  }
+  std::printf("tee over %zu calls: %zu frames, %zu certified, %zu converged (reference alone: %zu); %zu verdicts differ\n", log.calls, frames,
+              certified, converged, converged_ref, log.verdicts_differing);
+  for (const std::string& v : log.verdicts) std::printf("  %s\n", v.c_str());
+  for (const auto& [what, d] : log.largest) std::printf("  largest relative difference, %s: %.3g\n", what.c_str(), d);
+  CHECK(certified == frames);
+  CHECK(log.verdicts_differing == 0);
+  CHECK(converged == converged_ref);
+  CHECK(converged == frames);
+  for (const char* what : {"start energy", "trial_energies energy", "x relative"}) {
+    INFO(what);
+    CHECK(log.largest[what] < 1e-8);
   }
 }
