@@ -171,6 +171,12 @@ int main(int argc, char** argv) {
   app.add_option("--lockstep", lockstep_list,
                  "Lockstep group sizes, comma-separated: after the W rows, one row per size with each setup's runs solved by a group "
                  "of that many threads stepped together (runtime::set_batch_lockstep; on CUDA the device's batched stepper)");
+  int window_us = 0;
+  app.add_option("--lockstep-window", window_us,
+                 "Microseconds a lockstep group's call waits for the group's threads that are away before its round is served "
+                 "without them (BatchOptions::lockstep_window; 0: every round waits for every live thread)")
+      ->capture_default_str()
+      ->check(CLI::Range(0, 10000000));
   app.add_option("--lockstep-serial", serial_list,
                  "Lockstep group sizes for the reference backend, comma-separated: each system its own core of the backend (on "
                  "CUDA a CUDA core and its own stepper), a group's calls served one after another (make_serial_lockstep_backend); "
@@ -303,6 +309,7 @@ int main(int argc, char** argv) {
           o.make_core = factories.make_core;
           o.make_boundary = image == "host" ? nullptr : factories.make_boundary;
           if (lockstep) runtime::set_batch_lockstep(o, choice.used, W);
+          o.lockstep_window = std::chrono::microseconds(window_us);
           if (serial) {
             o.lockstep_systems = W;
             o.make_lockstep = [make_core = factories.make_core](const ShapeSetup& setup, int n) {
@@ -321,6 +328,7 @@ int main(int argc, char** argv) {
           std::fprintf(stderr, "\n");
           Row row;
           row.path = serial ? "lockstep serial " + std::to_string(W) : lockstep ? "lockstep " + std::to_string(W) : "batch";
+          if (lockstep && window_us > 0) row.path += " (window " + std::to_string(window_us) + " us)";
           row.wait = wait;
           row.exact = exact;
           row.image = image;

@@ -141,10 +141,11 @@ TEST_CASE("a lockstep batch gives every sequence's frames bit-identical to Inter
       reference.push_back(I.sequence(q.times));
     }
   }
-  for (int systems : {1, 3, 16}) {  // 16: more systems than a setup's runs
-    INFO("lockstep systems = " << systems);
+  for (const auto& [systems, window_us] : {std::pair{1, 0}, {3, 0}, {16, 0}, {3, 300}}) {  // 16: more systems than a setup's runs
+    INFO("lockstep systems = " << systems << ", window " << window_us << " us");
     BatchOptions o;
     o.lockstep_systems = systems;
+    o.lockstep_window = std::chrono::microseconds(window_us);  // rounds served without the threads away: the same frames
     o.make_lockstep = [](const ShapeSetup& setup, int n) {
       return make_serial_lockstep_backend(setup, n, [&setup] { return make_cpu_newton_core(setup.D_G, setup.H); });
     };
@@ -178,6 +179,9 @@ TEST_CASE("a lockstep batch gives every sequence's frames bit-identical to Inter
     for (size_t i = 0; i < reference[2].size(); ++i) require_same(r.sequences[2].frames[i], reference[2][i]);
     o.lockstep_systems = 0;
     CHECK_THROWS_WITH(solve_batch(sequences, o), Contains("at least 1 system"));
+    o.lockstep_systems = 2;
+    o.lockstep_window = std::chrono::microseconds(-1);
+    CHECK_THROWS_WITH(solve_batch(sequences, o), Contains("lockstep window cannot be negative (got -1 us)"));
   }
 }
 

@@ -224,3 +224,41 @@ TEST_CASE("a lockstep gate serves a chain in order in one round, common tails to
   const int two_keys[] = {1, 2};
   CHECK_THROWS_WITH(gate.call(std::span<Call* const>(none), std::span<const int>(two_keys)), Catch::Contains("one key per request"));
 }
+
+TEST_CASE("a lockstep gate with a window serves a call without a thread that stays away", "[lockstep]") {
+  // Two threads; the second posts only 300 ms later. With a 5 ms window the first
+  // thread's two calls are served long before that, each a round of its own.
+  std::atomic<bool> second_posted{false};
+  std::atomic<int> served_before_second{0};
+  hsi::LockstepGate<Call> gate(
+      2,
+      [&](int, std::span<Call* const> batch) {
+        for (Call* c : batch) {
+          c->result = c->value + 1;
+          if (!second_posted.load()) ++served_before_second;
+        }
+      },
+      nullptr, std::chrono::milliseconds(5));
+  std::thread away([&] {
+    std::this_thread::sleep_for(std::chrono::milliseconds(300));
+    Call c;
+    c.value = 10;
+    second_posted = true;
+    gate.call(c, 0);
+    gate.leave();
+  });
+  for (int i = 0; i < 2; ++i) {
+    Call c;
+    c.value = i;
+    gate.call(c, 0);
+    CHECK(c.result == i + 1);
+  }
+  CHECK(served_before_second.load() == 2);
+  gate.leave();
+  away.join();
+  const auto stats = gate.stats();
+  CHECK(stats.rounds == 3);
+  CHECK(stats.window_rounds == 2);
+  CHECK_THROWS_WITH(hsi::LockstepGate<Call>(1, [](int, std::span<Call* const>) {}, nullptr, std::chrono::milliseconds(-1)),
+                    Catch::Contains("negative window"));
+}

@@ -355,6 +355,8 @@ BatchResult solve_batch(const std::vector<BatchSequence>& sequences, const Batch
   if (options.make_lockstep) {
     if (options.lockstep_systems < 1)
       throw InputError("a lockstep group needs at least 1 system (got " + std::to_string(options.lockstep_systems) + ")");
+    if (options.lockstep_window.count() < 0)
+      throw InputError("a lockstep window cannot be negative (got " + std::to_string(options.lockstep_window.count()) + " us)");
     std::map<const ShapeSetup*, size_t> group_of;
     for (size_t r = 0; r < runs.size(); ++r) {
       const ShapeSetup* setup = sequences[static_cast<size_t>(runs[r].sequence)].setup;
@@ -369,7 +371,7 @@ BatchResult solve_batch(const std::vector<BatchSequence>& sequences, const Batch
         const auto ts = Clock::now();
         lg.backend = options.make_lockstep(*lg.setup, systems);
         if (!lg.backend) throw InputError("the lockstep factory made no backend");
-        lg.group = std::make_unique<LockstepGroup>(lg.backend->batch());
+        lg.group = std::make_unique<LockstepGroup>(lg.backend->batch(), options.lockstep_window);
         stats.cores_made += 1;
         stats.core_set_up_s += seconds_since(ts);
         stats.set_up_s += seconds_since(ts);

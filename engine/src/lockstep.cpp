@@ -198,12 +198,12 @@ void SerialBatchStepper::serve_one(NewtonStepper& s, StepRequest& r) {
   }
 }
 
-LockstepGroup::LockstepGroup(BatchStepper& batch)
+LockstepGroup::LockstepGroup(BatchStepper& batch, std::chrono::microseconds window)
     : batch_(batch),
       gate_(
           batch.systems(),
           [this](int key, std::span<StepRequest* const> requests) { batch_.serve(static_cast<StepRequest::Kind>(key), requests); },
-          [](const StepRequest& r) { return r.error != nullptr; }) {}
+          [](const StepRequest& r) { return r.error != nullptr; }, window) {}
 
 std::unique_ptr<NewtonStepper> LockstepGroup::stepper(int system) {
   if (system < 0 || system >= batch_.systems())

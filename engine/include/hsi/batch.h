@@ -9,6 +9,7 @@
 // thread count, whatever the number of workers.
 #pragma once
 
+#include <chrono>
 #include <cstddef>
 #include <exception>
 #include <functional>
@@ -60,6 +61,10 @@ struct BatchOptions {
   // of different setups run side by side. threads_per_worker applies to each thread.
   std::function<std::unique_ptr<LockstepBackend>(const ShapeSetup& setup, int systems)> make_lockstep;
   int lockstep_systems = 16;
+  // How long a group's posted call waits for the group's other threads (e.g. one building
+  // its next sequence's Interpolator) before its round is served without them
+  // (LockstepGroup); zero: every round waits for every live thread.
+  std::chrono::microseconds lockstep_window{0};
 };
 
 // After each frame: the frame, its sequence's index, its index there, and how many

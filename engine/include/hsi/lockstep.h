@@ -11,6 +11,7 @@
 // reach on the GPU: bench/results/lockstep_stages_2026-12-07.md.
 #pragma once
 
+#include <chrono>
 #include <exception>
 #include <functional>
 #include <optional>
@@ -92,7 +93,9 @@ class SerialBatchStepper final : public BatchStepper {
 // its loop and call done() or just call done().
 class LockstepGroup {
  public:
-  explicit LockstepGroup(BatchStepper& batch);
+  // window: how long a call waits for the systems not yet at the gate before its round
+  // is served without them (LockstepGate; zero: until every live system has posted).
+  explicit LockstepGroup(BatchStepper& batch, std::chrono::microseconds window = std::chrono::microseconds::zero());
   std::unique_ptr<NewtonStepper> stepper(int system);
   void done() { gate_.leave(); }
   LockstepGate<StepRequest>::Stats stats() const { return gate_.stats(); }

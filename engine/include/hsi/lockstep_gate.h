@@ -3,9 +3,13 @@
 // and once every thread still in the group has posted, the calls are served together,
 // one batch per kind of call (its key), so that a batched backend makes each kind's
 // launches once for the whole group. A thread blocks in call() until its batch has been
-// served; the last thread to post serves every pending batch itself (no dispatcher
-// thread, no extra hand-over). Threads whose loops end leave(), and the others stop
-// waiting for them. The design it belongs to: bench/results/lockstep_stages_2026-12-07.md.
+// served; a thread that finds the round ready serves it itself (no dispatcher thread,
+// no extra hand-over). Threads whose loops end leave(), and the others stop waiting for
+// them. With a window, a round is also served once its oldest call has waited that
+// long, without the threads still away (a thread building its next Interpolator or
+// checking a frame's overlap does not hold the others up): the systems are independent,
+// so which calls share a batch changes only how fast they are served, never a result.
+// The design it belongs to: bench/results/lockstep_stages_2026-12-07.md.
 #pragma once
 
 #include <algorithm>
@@ -32,7 +36,8 @@ class LockstepGate {
   using Failed = std::function<bool(const Request&)>;
 
   struct Stats {
-    std::uint64_t rounds = 0;   // times every live thread had posted
+    std::uint64_t rounds = 0;   // rounds served (every live thread had posted, or the window ran out)
+    std::uint64_t window_rounds = 0;  // of them, served when the window ran out
     std::uint64_t batches = 0;  // serve calls
     std::uint64_t calls = 0;    // requests served
     double serve_s = 0;         // wall time inside serve, summed
@@ -41,9 +46,13 @@ class LockstepGate {
     std::vector<double> key_serve_s;
   };
 
-  LockstepGate(int participants, Serve serve, Failed failed = nullptr)
-      : live_(participants), serve_(std::move(serve)), failed_(std::move(failed)) {
+  // window: how long a posted call waits for the threads that have not posted before
+  // its round is served without them (zero: until every live thread has posted).
+  LockstepGate(int participants, Serve serve, Failed failed = nullptr,
+               std::chrono::steady_clock::duration window = std::chrono::steady_clock::duration::zero())
+      : live_(participants), serve_(std::move(serve)), failed_(std::move(failed)), window_(window) {
     if (participants < 1) throw std::invalid_argument("LockstepGate: at least one participant");
+    if (window < std::chrono::steady_clock::duration::zero()) throw std::invalid_argument("LockstepGate: a negative window");
   }
   LockstepGate(const LockstepGate&) = delete;
   LockstepGate& operator=(const LockstepGate&) = delete;
@@ -67,9 +76,18 @@ class LockstepGate {
     slot.keys = keys;
     std::unique_lock lock(mutex_);
     if (live_ <= 0) throw std::logic_error("LockstepGate: call after every participant left");
+    slot.posted = std::chrono::steady_clock::now();
     pending_.push_back(&slot);
-    if (static_cast<int>(pending_.size()) == live_) serve_round(lock);
-    else served_.wait(lock, [&] { return slot.done; });
+    while (!slot.done) {
+      if (!serving_ && ready(std::chrono::steady_clock::now())) {
+        serve_round(lock);
+        continue;
+      }
+      if (serving_ || window_ == std::chrono::steady_clock::duration::zero() || pending_.empty())
+        served_.wait(lock);
+      else
+        served_.wait_until(lock, pending_.front()->posted + window_);
+    }
     if (slot.error) std::rethrow_exception(slot.error);
   }
 
@@ -79,7 +97,7 @@ class LockstepGate {
     std::unique_lock lock(mutex_);
     if (live_ <= 0) throw std::logic_error("LockstepGate: more leaves than participants");
     --live_;
-    if (live_ > 0 && !pending_.empty() && static_cast<int>(pending_.size()) == live_) serve_round(lock);
+    if (live_ > 0 && !serving_ && !pending_.empty() && static_cast<int>(pending_.size()) == live_) serve_round(lock);
   }
 
   int live() const {
@@ -96,14 +114,23 @@ class LockstepGate {
     std::span<Request* const> chain;
     std::span<const int> keys;
     size_t next = 0;  // the chain's first request not yet served
+    std::chrono::steady_clock::time_point posted;
     bool done = false;
     std::exception_ptr error;
     bool open() const { return !error && next < chain.size(); }
   };
 
-  // Every live participant has posted (the lock is held, and no one posts until the
-  // round is served, since each waits on its own slot): the pending chains are served
-  // outside the lock, one batch per step, then their threads are woken. Each step takes
+  // Whether the pending calls are to be served now: every live participant has posted,
+  // or the oldest has waited the window out.
+  bool ready(std::chrono::steady_clock::time_point now) const {
+    if (pending_.empty()) return false;
+    if (static_cast<int>(pending_.size()) >= live_) return true;
+    return window_ > std::chrono::steady_clock::duration::zero() && now - pending_.front()->posted >= window_;
+  }
+
+  // The pending chains (the lock is held; no other round is being served) are served
+  // outside the lock, one batch per step, then their threads are woken; calls posted
+  // meanwhile wait for the next round. Each step takes
   // the head key of the chain with the most requests left (ties: the smaller key) and
   // serves every chain whose head has that key, in posting order: chains of different
   // lengths that end alike (a result call after calls not waited for) meet at their
@@ -112,6 +139,8 @@ class LockstepGate {
     std::vector<Slot*> round;
     round.swap(pending_);
     ++stats_.rounds;
+    if (static_cast<int>(round.size()) < live_) ++stats_.window_rounds;
+    serving_ = true;
     lock.unlock();
     std::vector<Request*> batch;
     std::vector<Slot*> members;
@@ -150,6 +179,7 @@ class LockstepGate {
       served.push_back({key, batch.size(), std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count()});
     }
     lock.lock();
+    serving_ = false;
     for (Slot* s : round) s->done = true;
     stats_.batches += served.size();
     for (const Served& b : served) {
@@ -173,8 +203,10 @@ class LockstepGate {
   std::condition_variable served_;
   std::vector<Slot*> pending_;
   int live_;
+  bool serving_ = false;  // a round is being served (outside the lock)
   Serve serve_;
   Failed failed_;
+  std::chrono::steady_clock::duration window_;
   Stats stats_;
 };
 
