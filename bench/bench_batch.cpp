@@ -220,17 +220,7 @@ int main(int argc, char** argv) {
   for (int i = 0; i < sequences; ++i) {
     const bench::Loaded& L = scenes[static_cast<size_t>(i) % scenes.size()];
     const int repeat = i / static_cast<int>(scenes.size());
-    const int F = frames + 7 * repeat;
-    BatchSequence q;
-    q.name = L.name + " #" + std::to_string(repeat);
-    q.setup = L.setup.get();
-    q.key_times = L.times;
-    q.keyframes = L.maps;
-    for (const Keyframe& k : L.scene.keyframes) q.options.timing.push_back(k.timing);
-    // Even repeats: F frames uniform over the range (interior keyframe times mostly
-    // missed: one run); odd: every keyframe time a frame (a run per interval).
-    const int intervals = static_cast<int>(L.times.size()) - 1;
-    q.times = repeat % 2 == 0 ? sequence_times(L.times, F) : frame_times(L.times, std::max(1, (F - 1) / intervals));
+    BatchSequence q = bench::batch_sequence(L, repeat, frames + 7 * repeat);
     q.options.exact_samples = parse_exact_samples(exacts.front());
     q.options.predict_start = parse_predict_start(predict);
     batch.push_back(std::move(q));

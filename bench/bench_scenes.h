@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "hsi/batch.h"
 #include "hsi/interpolation.h"
 #include "hsi/keyframes.h"
 #include "hsi/overlap.h"
@@ -55,6 +56,22 @@ inline std::vector<Loaded> load_folder(const std::string& folder, int samples, d
     }
   }
   return scenes;
+}
+
+// Sequence `repeat` of scene L as bench_batch makes its batch (named "<scene> #<repeat>",
+// the scene's keyframe timings): even repeats F frames uniform over the keyframes'
+// range (interior keyframe times mostly missed: one run), odd ones every keyframe time a
+// frame and about F frames in all (a run per interval).
+inline BatchSequence batch_sequence(const Loaded& L, int repeat, int F) {
+  BatchSequence q;
+  q.name = L.name + " #" + std::to_string(repeat);
+  q.setup = L.setup.get();
+  q.key_times = L.times;
+  q.keyframes = L.maps;
+  for (const Keyframe& k : L.scene.keyframes) q.options.timing.push_back(k.timing);
+  const int intervals = static_cast<int>(L.times.size()) - 1;
+  q.times = repeat % 2 == 0 ? sequence_times(L.times, F) : frame_times(L.times, std::max(1, (F - 1) / intervals));
+  return q;
 }
 
 // Where the frames' time went (FrameResult::parts): the first solved frame apart (what

@@ -307,17 +307,7 @@ TEST_CASE("solve_batch in lockstep on the device's batched stepper: every call a
   REQUIRE(!scenes.empty());
   std::vector<BatchSequence> sequences;
   for (int repeat = 0; repeat < 4; ++repeat)
-    for (const bench::Loaded& L : scenes) {
-      BatchSequence q;
-      q.name = L.name + " #" + std::to_string(repeat);
-      q.setup = L.setup.get();
-      q.key_times = L.times;
-      q.keyframes = L.maps;
-      for (const Keyframe& k : L.scene.keyframes) q.options.timing.push_back(k.timing);
-      const int intervals = static_cast<int>(L.times.size()) - 1;
-      q.times = repeat % 2 == 0 ? sequence_times(L.times, 24 + repeat) : frame_times(L.times, std::max(1, 24 / intervals));
-      sequences.push_back(std::move(q));
-    }
+    for (const bench::Loaded& L : scenes) sequences.push_back(bench::batch_sequence(L, repeat, 25 + repeat));
   TeeLog log;
   BatchOptions o;
   o.lockstep_systems = 16;
