@@ -21,6 +21,7 @@
 #include "hsi/batch.h"
 #include "hsi/cage.h"
 #include "hsi/cuda/batch_stepper.h"
+#include "hsi/cuda/mesh_evaluator.h"
 #include "hsi/cuda/newton_core.h"
 #include "hsi/lockstep.h"
 #include "hsi/newton.h"
@@ -136,11 +137,17 @@ TEST_CASE("systems solved together by the batch's device stepper get their solve
           CHECK(b.certified == a.certified);
           CHECK(b.stop == a.stop);
           CHECK(b.iterations == a.iterations);
-          // Both stop at the Newton tolerances, from products summed in other orders: x
-          // agrees to what the stop tests leave (bench_batch_stepper, H100: ≤ 3.2e-6 of
-          // |x|∞ over 704 frames), the energy closer.
-          const double scale = a.x.cwiseAbs().maxCoeff();
-          CHECK((b.x - a.x).cwiseAbs().maxCoeff() <= 1e-4 * scale);
+          // Both stop at the Newton tolerances, from products summed in other orders: the
+          // maps agree to what the stop tests leave, compared through their metrics at the
+          // samples (x itself may differ along the free global rotation: an H100 run saw
+          // 1.2e-2 of |x|∞ with the same iterations and energies), the energy closer.
+          const std::vector<Metric> ma = metrics_at(setup, a.x), mb = metrics_at(setup, b.x);
+          double metric_diff = 0, metric_scale = 0;
+          for (size_t i = 0; i < ma.size(); ++i) {
+            metric_diff = std::max(metric_diff, (mb[i] - ma[i]).cwiseAbs().maxCoeff());
+            metric_scale = std::max(metric_scale, ma[i].cwiseAbs().maxCoeff());
+          }
+          CHECK(metric_diff <= 1e-4 * metric_scale);
           CHECK(std::abs(b.energy - a.energy) <= 1e-8 * std::abs(a.energy));
           iterations += a.iterations;
         }
@@ -307,10 +314,14 @@ TEST_CASE("solve_batch in lockstep on the device's batched stepper: every call a
   REQUIRE(!scenes.empty());
   std::vector<BatchSequence> sequences;
   for (int repeat = 0; repeat < 4; ++repeat)
-    for (const bench::Loaded& L : scenes) sequences.push_back(bench::batch_sequence(L, repeat, 25 + repeat));
+    for (const bench::Loaded& L : scenes) sequences.push_back(bench::batch_sequence(L, repeat, 60 + 7 * repeat));
   TeeLog log;
   BatchOptions o;
   o.lockstep_systems = 16;
+  // Each thread's boundary image on the GPU, as hsi bake and bench_batch make it.
+  o.make_boundary = [](const ShapeSetup& setup) -> std::unique_ptr<MeshEvaluator> {
+    return std::make_unique<cuda::MeshEvaluator>(setup.overlap.evaluator());
+  };
   o.make_lockstep = [&log](const ShapeSetup& setup, int n) { return std::make_unique<TeeBackend>(setup, n, log); };
   const BatchResult tee = solve_batch(sequences, o);
   // The reference backend alone: the loops follow its own results.
@@ -318,6 +329,19 @@ TEST_CASE("solve_batch in lockstep on the device's batched stepper: every call a
     return make_serial_lockstep_backend(setup, n, [&setup] { return cuda::make_newton_core(setup); });
   };
   const BatchResult ref = solve_batch(sequences, o);
+  // The device batch alone, as bench_batch --lockstep runs it.
+  o.make_lockstep = [](const ShapeSetup& setup, int n) -> std::unique_ptr<LockstepBackend> { return cuda::make_batch_stepper(setup, n); };
+  const BatchResult alone = solve_batch(sequences, o);
+  size_t converged_alone = 0;
+  for (size_t q = 0; q < alone.sequences.size(); ++q) {
+    CHECK(alone.sequences[q].error == "");
+    for (const FrameResult& f : alone.sequences[q].frames) {
+      converged_alone += f.converged;
+      if (!f.converged)
+        std::printf("  device batch alone: %s t = %.4f not converged (%s, %d iterations)\n", sequences[q].name.c_str(), f.t,
+                    to_string(f.stop), f.iterations);
+    }
+  }
   size_t frames = 0, converged = 0, converged_ref = 0, certified = 0;
   for (size_t s = 0; s < sequences.size(); ++s) {
     INFO(sequences[s].name);
@@ -331,16 +355,19 @@ TEST_CASE("solve_batch in lockstep on the device's batched stepper: every call a
     }
     for (const FrameResult& f : ref.sequences[s].frames) converged_ref += f.converged;
   }
-  std::printf("tee over %zu calls: %zu frames, %zu certified, %zu converged (reference alone: %zu); %zu verdicts differ\n", log.calls, frames,
-              certified, converged, converged_ref, log.verdicts_differing);
+  std::printf("tee over %zu calls: %zu frames, %zu certified, %zu converged (reference alone: %zu, device batch alone: %zu); %zu verdicts differ\n",
+              log.calls, frames, certified, converged, converged_ref, converged_alone, log.verdicts_differing);
   for (const std::string& v : log.verdicts) std::printf("  %s\n", v.c_str());
   for (const auto& [what, d] : log.largest) std::printf("  largest relative difference, %s: %.3g\n", what.c_str(), d);
   CHECK(certified == frames);
   CHECK(log.verdicts_differing == 0);
   CHECK(converged == converged_ref);
   CHECK(converged == frames);
-  for (const char* what : {"start energy", "trial_energies energy", "x relative"}) {
-    INFO(what);
-    CHECK(log.largest[what] < 1e-8);
-  }
+  CHECK(converged_alone == frames);
+  // The same points (the reference restarted at the device's x): energies there alike to
+  // the sums' order; along d, which the two factorisations (potrfBatched, the core's own)
+  // give alike to ~1e-5, the trial energies to ~1e-6.
+  CHECK(log.largest["start energy"] < 1e-12);
+  CHECK(log.largest["x relative"] < 1e-12);
+  CHECK(log.largest["trial_energies energy"] < 1e-5);
 }
