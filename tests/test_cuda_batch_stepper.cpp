@@ -137,10 +137,14 @@ TEST_CASE("systems solved together by the batch's device stepper get their solve
           CHECK(b.certified == a.certified);
           CHECK(b.stop == a.stop);
           CHECK(b.iterations == a.iterations);
-          // Both stop at the Newton tolerances, from products summed in other orders: the
-          // maps agree to what the stop tests leave, compared through their metrics at the
-          // samples (x itself may differ along the free global rotation: an H100 run saw
-          // 1.2e-2 of |x|∞ with the same iterations and energies), the energy closer.
+          // Both stop at the Newton tolerances, from products summed in other orders: x
+          // agrees to what the stop tests leave (bench_batch_stepper, H100: ≤ 3.2e-6 of
+          // |x|∞ over 704 frames), and so do the maps' metrics at the samples; the energy
+          // closer. (An H100 run of 2026-12-08 saw x 1.2e-2 of |x|∞ apart with the same
+          // iterations and energies: the batch's start left the rotation slot of [x; 0]
+          // to whatever the pinned staging held, so its trial points moved along u.)
+          const double scale = a.x.cwiseAbs().maxCoeff();
+          CHECK((b.x - a.x).cwiseAbs().maxCoeff() <= 1e-4 * scale);
           const std::vector<Metric> ma = metrics_at(setup, a.x), mb = metrics_at(setup, b.x);
           double metric_diff = 0, metric_scale = 0;
           for (size_t i = 0; i < ma.size(); ++i) {

@@ -13,8 +13,10 @@
 #include <cstdlib>
 #include <cstdint>
 #include <cstdio>
+#include <cstring>
 #include <mutex>
 #include <optional>
+#include <type_traits>
 #include <set>
 #include <shared_mutex>
 #include <string>
@@ -137,15 +139,21 @@ class DeviceArray {
   size_t count_ = 0;
 };
 
-// Page-locked host memory (fast, truly asynchronous copies).
+// Page-locked host memory (fast, truly asynchronous copies), zero-filled when made: the
+// driver hands back pinned memory freed earlier in the process with its old contents, so
+// a slot nobody has written yet (the batch stepper's [x; 0] staging, issue #23) must not
+// read whatever an earlier object left there.
 template <class T>
 class PinnedArray {
+  static_assert(std::is_trivially_copyable_v<T>, "PinnedArray holds plain values");
+
  public:
   PinnedArray() = default;
   explicit PinnedArray(size_t count) : count_(count) {
     if (!count) return;
     OutsideCaptures guard;
     HSI_CUDA_CHECK(cudaMallocHost(reinterpret_cast<void**>(&p_), count * sizeof(T)));
+    std::memset(static_cast<void*>(p_), 0, count * sizeof(T));
   }
   ~PinnedArray() {
     if (!p_) return;
