@@ -139,10 +139,10 @@ class DeviceArray {
   size_t count_ = 0;
 };
 
-// Page-locked host memory (fast, truly asynchronous copies), zero-filled when made: the
-// driver hands back pinned memory freed earlier in the process with its old contents, so
-// a slot nobody has written yet (the batch stepper's [x; 0] staging, issue #23) must not
-// read whatever an earlier object left there.
+// Page-locked host memory (fast, truly asynchronous copies), zero-filled when made:
+// cudaMallocHost does not clear what it hands out, and a slot nobody has written yet (the
+// batch stepper's [x; 0] staging, issue #23) must not read what pinned memory freed
+// earlier in the process held.
 template <class T>
 class PinnedArray {
   static_assert(std::is_trivially_copyable_v<T>, "PinnedArray holds plain values");
