@@ -291,8 +291,8 @@ class BatchDeviceStepper final : public DeviceBatchStepper {
       // [x0; 0]: the run's copy below takes m1 entries per system, and the last, the
       // freed rotation's slot, must be 0 (a trial point with the rotation freed is
       // Ta ([x; 0] + s d)). Left unwritten, it held whatever pinned memory the driver had
-      // handed out before: trial points off by that multiple of u, frames that stopped
-      // on "no decrease" in solve_batch (H100, 2026-12-08).
+      // handed out before: trial points off by that multiple of u (the likely cause of
+      // the frames that stopped on "no decrease" in solve_batch, H100, 2026-12-08).
       double* up = x_up_.get() + sz(r->system) * sz(m1_);
       std::copy(r->x0->data(), r->x0->data() + dim_, up);
       up[dim_] = 0;

@@ -16,10 +16,10 @@
 #include <cstring>
 #include <mutex>
 #include <optional>
-#include <type_traits>
 #include <set>
 #include <shared_mutex>
 #include <string>
+#include <type_traits>
 #include <unordered_map>
 #include <utility>
 #include <vector>
