@@ -12,7 +12,6 @@
 #include <cstdio>
 #include <map>
 #include <mutex>
-#include <random>
 #include <string>
 #include <thread>
 
@@ -27,25 +26,10 @@
 #include "hsi/newton.h"
 #include "hsi/shape_setup.h"
 #include "test_shapes.h"
+#include "test_targets.h"
 
 using namespace hsi;
-
-namespace {
-
-std::vector<Metric> metrics_at(const ShapeSetup& setup, const Eigen::VectorXd& x) {
-  const MapValues v = evaluate_map(evaluate_basis(setup.cage, setup.G.points, kBasisD), setup.metric_space.expand(x));
-  return pullback_metrics(v.f_z, v.fzbar_conj);
-}
-
-Eigen::VectorXd perturbed(const Eigen::VectorXd& x0, unsigned seed, double amp) {
-  std::mt19937 rng(seed);
-  std::normal_distribution<double> g(0, amp);
-  Eigen::VectorXd x = x0;
-  for (Eigen::Index i = 0; i < x.size(); ++i) x(i) += g(rng);
-  return x;
-}
-
-}  // namespace
+using hsi::test::perturbed;
 
 TEST_CASE("the batch's device stepper: bad sizes are refused", "[cuda][lockstep][batch]") {
   const Shape shape = test::annulus();
@@ -71,7 +55,7 @@ TEST_CASE("systems solved together by the batch's device stepper get their solve
     std::vector<std::vector<std::vector<Metric>>> targets(S);
     for (int s = 0; s < S; ++s)
       for (int f = 0; f < kFrames; ++f)
-        targets[size_t(s)].push_back(metrics_at(setup, perturbed(id, 31u * unsigned(s) + unsigned(f), (s == 3 ? 0.03 : 0.015) + 0.005 * f)));
+        targets[size_t(s)].push_back(test::metrics_of(setup, perturbed(id, 31u * unsigned(s) + unsigned(f), (s == 3 ? 0.03 : 0.015) + 0.005 * f)));
     for (const ExactSamples exact : {ExactSamples::Subset, ExactSamples::All}) {
       INFO("exact systems over " << to_string(exact));
       NewtonOptions options;
@@ -85,15 +69,8 @@ TEST_CASE("systems solved together by the batch's device stepper get their solve
         for (int s = 0; s < S; ++s) {
           auto stepper = core->make_stepper(space, &setup.certifier, nullptr);
           REQUIRE(stepper);
-          KeptSystem slot;
-          NewtonOptions o = options;
-          o.kept_system = &slot;
-          Eigen::VectorXd x = id;
-          for (int f = 0; f < kFrames; ++f) {
-            core->set_targets(targets[size_t(s)][size_t(f)]);
-            alone[size_t(s)].push_back(newton_run(*stepper, true, rotation_invariant, x, o));
-            x = alone[size_t(s)].back().x;
-          }
+          alone[size_t(s)] = test::solve_frames(*stepper, [&](const std::vector<Metric>& g) { core->set_targets(g); },
+                                                targets[size_t(s)], id, options, rotation_invariant);
         }
       }
 
@@ -107,15 +84,8 @@ TEST_CASE("systems solved together by the batch's device stepper get their solve
         threads.emplace_back([&, s] {
           try {
             auto proxy = group.stepper(s);
-            KeptSystem slot;
-            NewtonOptions o = options;
-            o.kept_system = &slot;
-            Eigen::VectorXd x = id;
-            for (int f = 0; f < kFrames; ++f) {
-              batch->set_targets(s, targets[size_t(s)][size_t(f)]);
-              together[size_t(s)].push_back(newton_run(*proxy, true, rotation_invariant, x, o));
-              x = together[size_t(s)].back().x;
-            }
+            together[size_t(s)] = test::solve_frames(*proxy, [&](const std::vector<Metric>& g) { batch->set_targets(s, g); },
+                                                     targets[size_t(s)], id, options, rotation_invariant);
           } catch (const std::exception& e) {
             failed[size_t(s)] = e.what();
           }
@@ -145,7 +115,7 @@ TEST_CASE("systems solved together by the batch's device stepper get their solve
           // to whatever the pinned staging held, so its trial points moved along u.)
           const double scale = a.x.cwiseAbs().maxCoeff();
           CHECK((b.x - a.x).cwiseAbs().maxCoeff() <= 1e-4 * scale);
-          const std::vector<Metric> ma = metrics_at(setup, a.x), mb = metrics_at(setup, b.x);
+          const std::vector<Metric> ma = test::metrics_of(setup, a.x), mb = test::metrics_of(setup, b.x);
           double metric_diff = 0, metric_scale = 0;
           for (size_t i = 0; i < ma.size(); ++i) {
             metric_diff = std::max(metric_diff, (mb[i] - ma[i]).cwiseAbs().maxCoeff());

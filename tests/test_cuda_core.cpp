@@ -36,6 +36,7 @@
 #include "frame_compare.h"
 #include "split_solve.h"
 #include "test_shapes.h"
+#include "test_targets.h"
 
 using namespace hsi;
 namespace sm = hsi::cuda::sample;
@@ -107,20 +108,14 @@ struct AssetCores {
   Eigen::VectorXd perturbed_identity(unsigned seed, double amp) {
     const Eigen::VectorXd x0 = space().reduce(identity_map(setup->cage)).x;
     for (; amp > 1e-8; amp /= 2) {
-      std::mt19937 rng(seed);
-      std::normal_distribution<double> g(0, amp);
-      Eigen::VectorXd x = x0;
-      for (Eigen::Index i = 0; i < x.size(); ++i) x(i) += g(rng);
+      const Eigen::VectorXd x = test::perturbed(x0, seed, amp);
       cpu->set_targets(std::vector<Metric>(setup->G.size(), Metric(1, 0, 1)));
       cpu->set_coefficients(space().T() * x);
       if (std::isfinite(cpu->energy())) return x;
     }
     return x0;
   }
-  std::vector<Metric> metrics_of(const Eigen::VectorXd& x) const {
-    const MapValues v = evaluate_map(evaluate_basis(setup->cage, setup->G.points, kBasisD), space().expand(x));
-    return pullback_metrics(v.f_z, v.fzbar_conj);
-  }
+  std::vector<Metric> metrics_of(const Eigen::VectorXd& x) const { return test::metrics_of(*setup, x); }
 };
 
 }  // namespace

@@ -6,7 +6,6 @@
 // own loop alone.
 #include <catch2/catch.hpp>
 
-#include <random>
 #include <stdexcept>
 #include <thread>
 
@@ -15,25 +14,11 @@
 #include "hsi/newton.h"
 #include "hsi/shape_setup.h"
 #include "test_shapes.h"
+#include "test_targets.h"
 
 using namespace hsi;
-
-namespace {
-
-std::vector<Metric> metrics_of(const ShapeSetup& setup, const Eigen::VectorXd& x) {
-  const MapValues v = evaluate_map(evaluate_basis(setup.cage, setup.G.points, kBasisD), setup.metric_space.expand(x));
-  return pullback_metrics(v.f_z, v.fzbar_conj);
-}
-
-Eigen::VectorXd perturbed(const Eigen::VectorXd& x0, unsigned seed, double amp) {
-  std::mt19937 rng(seed);
-  std::normal_distribution<double> g(0, amp);
-  Eigen::VectorXd x = x0;
-  for (Eigen::Index i = 0; i < x.size(); ++i) x(i) += g(rng);
-  return x;
-}
-
-}  // namespace
+using hsi::test::metrics_of;
+using hsi::test::perturbed;
 
 TEST_CASE("a lockstep group gives every system the solve it gets alone", "[lockstep]") {
   for (const Shape& shape : {test::annulus(), test::bar_with_holes()}) {
@@ -55,15 +40,8 @@ TEST_CASE("a lockstep group gives every system the solve it gets alone", "[locks
     for (int s = 0; s < S; ++s) {
       auto core = make_cpu_newton_core(setup.D_G, setup.H);
       auto stepper = make_host_stepper(*core, space, &setup.certifier, nullptr);
-      KeptSystem slot;
-      NewtonOptions o = options;
-      o.kept_system = &slot;
-      Eigen::VectorXd x = id;
-      for (int f = 0; f < kSolves; ++f) {
-        core->set_targets(targets[size_t(s)][size_t(f)]);
-        alone[size_t(s)].push_back(newton_run(*stepper, true, rotation_invariant, x, o));
-        x = alone[size_t(s)].back().x;
-      }
+      alone[size_t(s)] = test::solve_frames(*stepper, [&](const std::vector<Metric>& g) { core->set_targets(g); }, targets[size_t(s)], id,
+                                            options, rotation_invariant);
     }
 
     // Together: the same cores and steppers behind one group, each loop on its thread.
@@ -80,17 +58,10 @@ TEST_CASE("a lockstep group gives every system the solve it gets alone", "[locks
     for (int s = 0; s < S; ++s)
       threads.emplace_back([&, s] {
         auto proxy = group.stepper(s);
-        KeptSystem slot;
-        NewtonOptions o = options;
-        o.kept_system = &slot;
-        Eigen::VectorXd x = id;
-        for (int f = 0; f < kSolves; ++f) {
-          // Targets are each system's own data (not stepper calls): set between its solves,
-          // while the other threads wait at the gate or run.
-          cores[size_t(s)]->set_targets(targets[size_t(s)][size_t(f)]);
-          together[size_t(s)].push_back(newton_run(*proxy, true, rotation_invariant, x, o));
-          x = together[size_t(s)].back().x;
-        }
+        // Targets are each system's own data (not stepper calls): set between its solves,
+        // while the other threads wait at the gate or run.
+        together[size_t(s)] = test::solve_frames(*proxy, [&](const std::vector<Metric>& g) { cores[size_t(s)]->set_targets(g); },
+                                                 targets[size_t(s)], id, options, rotation_invariant);
         group.done();
       });
     for (auto& t : threads) t.join();

@@ -10,6 +10,7 @@
 #include "hsi/shape_setup.h"
 #include "split_solve.h"
 #include "test_shapes.h"
+#include "test_targets.h"
 
 using namespace hsi;
 
@@ -22,18 +23,10 @@ struct Fixture {
       : setup(s, build_cage(s), samples, ratio), core(make_cpu_newton_core(setup.D_G, setup.H)) {}
   const MapSpace& space() const { return setup.metric_space; }
   Eigen::VectorXd perturbed_identity(unsigned seed, double amp) const {
-    Eigen::VectorXd x = space().reduce(identity_map(setup.cage)).x;
-    std::mt19937 rng(seed);
-    std::normal_distribution<double> g(0, amp);
-    for (Eigen::Index i = 0; i < x.size(); ++i) x(i) += g(rng);
-    return x;
+    return test::perturbed(space().reduce(identity_map(setup.cage)).x, seed, amp);
   }
   // Target metrics: the pull-back metric of a map at every sample.
-  std::vector<Metric> metrics_of(const Eigen::VectorXd& x) const {
-    const HarmonicMap m = space().expand(x);
-    const MapValues v = evaluate_map(evaluate_basis(setup.cage, setup.G.points, kBasisD), m);
-    return pullback_metrics(v.f_z, v.fzbar_conj);
-  }
+  std::vector<Metric> metrics_of(const Eigen::VectorXd& x) const { return test::metrics_of(setup, x); }
   double E(const Eigen::VectorXd& x) {
     core->set_coefficients(space().T() * x);
     return core->energy();
