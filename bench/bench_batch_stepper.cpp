@@ -96,6 +96,17 @@ Frames one_core(const Job& job) {
   return out;
 }
 
+// Every system's first frame (a warm-up, untimed), then the rest into `into`, by `pass`
+// (begin, end, results): the seconds of the timed pass.
+template <class Pass>
+double warm_then_timed(const Job& job, Pass& pass, std::vector<std::vector<NewtonResult>>& into) {
+  std::vector<std::vector<NewtonResult>> warm(size_t(job.S));
+  pass(0, 1, warm);
+  const auto t0 = Clock::now();
+  pass(1, job.F, into);
+  return std::chrono::duration<double>(Clock::now() - t0).count();
+}
+
 Frames workers(const Job& job, int W) {
   Frames out;
   out.results.resize(size_t(job.S));
@@ -118,11 +129,7 @@ Frames workers(const Job& job, int W) {
       });
     for (auto& t : threads) t.join();
   };
-  std::vector<std::vector<NewtonResult>> warm(size_t(job.S));
-  pass(0, 1, warm);
-  const auto t0 = Clock::now();
-  pass(1, job.F, out.results);
-  out.seconds = std::chrono::duration<double>(Clock::now() - t0).count();
+  out.seconds = warm_then_timed(job, pass, out.results);
   return out;
 }
 
@@ -154,11 +161,7 @@ Frames lockstep(const Job& job, size_t* bytes) {
       if (!failed[size_t(s)].empty()) throw std::runtime_error("lockstep system " + std::to_string(s) + ": " + failed[size_t(s)]);
     stats = group.stats();
   };
-  std::vector<std::vector<NewtonResult>> warm(size_t(job.S));
-  pass(0, 1, warm);
-  const auto t0 = Clock::now();
-  pass(1, job.F, out.results);
-  out.seconds = std::chrono::duration<double>(Clock::now() - t0).count();
+  out.seconds = warm_then_timed(job, pass, out.results);
   out.stats = stats;
   return out;
 }
