@@ -20,10 +20,10 @@
 #include "hsi/batch.h"
 #include "hsi/cage.h"
 #include "hsi/cuda/batch_stepper.h"
-#include "hsi/cuda/mesh_evaluator.h"
 #include "hsi/cuda/newton_core.h"
 #include "hsi/lockstep.h"
 #include "hsi/newton.h"
+#include "hsi/runtime/backend.h"
 #include "hsi/shape_setup.h"
 #include "test_shapes.h"
 #include "test_targets.h"
@@ -291,11 +291,8 @@ TEST_CASE("solve_batch in lockstep on the device's batched stepper: every call a
     for (const bench::Loaded& L : scenes) sequences.push_back(bench::batch_sequence(L, repeat, 60 + 7 * repeat));
   TeeLog log;
   BatchOptions o;
+  runtime::set_batch_backend(o, runtime::Backend::Cuda, runtime::cuda_status());  // each thread's boundary image on the GPU, as hsi bake
   o.lockstep_systems = 16;
-  // Each thread's boundary image on the GPU, as hsi bake and bench_batch make it.
-  o.make_boundary = [](const ShapeSetup& setup) -> std::unique_ptr<MeshEvaluator> {
-    return std::make_unique<cuda::MeshEvaluator>(setup.overlap.evaluator());
-  };
   o.make_lockstep = [&log](const ShapeSetup& setup, int n) { return std::make_unique<TeeBackend>(setup, n, log); };
   const BatchResult tee = solve_batch(sequences, o);
   // The reference backend alone: the loops follow its own results.
@@ -304,7 +301,7 @@ TEST_CASE("solve_batch in lockstep on the device's batched stepper: every call a
   };
   const BatchResult ref = solve_batch(sequences, o);
   // The device batch alone, as bench_batch --lockstep runs it.
-  o.make_lockstep = [](const ShapeSetup& setup, int n) -> std::unique_ptr<LockstepBackend> { return cuda::make_batch_stepper(setup, n); };
+  runtime::set_batch_lockstep(o, runtime::Backend::Cuda, 16);
   const BatchResult alone = solve_batch(sequences, o);
   size_t converged_alone = 0;
   for (size_t q = 0; q < alone.sequences.size(); ++q) {
